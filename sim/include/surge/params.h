@@ -1,0 +1,126 @@
+/* The parameter set of a run and the one registry that describes it.
+ * The registry (name, type, unit, default, range, live-changeable, doc) serves the case-file parser,
+ * command-line overrides (-s section.key=value), the control socket and docs/parameters.md. */
+#ifndef SURGE_PARAMS_H
+#define SURGE_PARAMS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdio.h>
+
+typedef enum surge_shifting_form {
+    SURGE_SHIFT_NONE = 0,
+    SURGE_SHIFT_VELOCITY = 1, /* Skillen et al. 2013: dr = -A h |u| dt grad C */
+    SURGE_SHIFT_LIND = 2,     /* Lind et al. 2012: dr = -(A/2) h c0 dt grad C, none in the surface layer */
+} surge_shifting_form;
+
+typedef struct surge_params {
+    struct {
+        double length_m;  /* x extent; the period when periodic */
+        double height_m;  /* y extent of the box; top wall position when there is one */
+        bool periodic_x;
+    } domain;
+    struct {
+        double density_kgpm3;
+        double viscosity_m2ps; /* kinematic viscosity nu0 */
+        double x0_m, x1_m;     /* initial fluid block, along x */
+        double depth_m;        /* initial fluid block depth from the bed (y = 0) */
+    } fluid;
+    struct {
+        int layers;
+        bool bottom, top, left, right;
+        bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
+        double upstream_x_m;
+        double upstream_height_m;
+        double bottom_speed_mps;  /* target x velocity of the bottom wall (the belt; negative = upstream) */
+        double top_speed_mps;     /* target x velocity of the top wall (a lid) */
+        double ramp_s;            /* time to reach the target wall speeds from rest (smooth ramp) */
+    } walls;
+    struct {
+        double gravity_mps2;
+        double slope_deg;    /* gravity tilted by this angle so that the bed stays along x */
+        double force_x_mps2; /* constant body force along x (pressure-driven channels) */
+    } body;
+    struct {
+        double dp_m;
+        double ch;                /* h = ch sqrt(2) dp */
+        double cfl;
+        double c0_mps;            /* 0: derived from the scene's scales */
+        double c0_factor;         /* c0 = c0_factor * largest expected speed when derived */
+        double density_diffusion; /* Fourtakas delta */
+        bool viscous_dt_limit;
+        double dt_fixed_s;        /* 0: variable time step */
+    } numerics;
+    struct {
+        int form;                    /* surge_shifting_form */
+        double velocity_coefficient; /* A of the velocity-proportional form */
+        double lind_coefficient;     /* A_L of Lind's form */
+        double surface_threshold;    /* div r below this marks a free-surface particle (2D bulk: 2) */
+        double max_shift_dp;         /* largest shift in one step, in units of dp */
+    } shifting;
+    struct {
+        double end_s;
+    } time;
+    struct {
+        double snapshot_interval_s;    /* 0: no snapshots but the final one */
+        double diagnostics_interval_s; /* 0: every step */
+        double checkpoint_interval_s;  /* 0: only the final checkpoint */
+        double progress_interval_s;    /* wall-clock seconds between progress lines; 0: none */
+    } output;
+    struct {
+        double max_density_deviation; /* |rho/rho0 - 1| above this is a failure */
+        double min_dt_ratio;          /* dt below this fraction of the first step's dt is a failure */
+    } health;
+} surge_params;
+
+typedef enum surge_param_type {
+    SURGE_PARAM_REAL,
+    SURGE_PARAM_INT,
+    SURGE_PARAM_BOOL,
+    SURGE_PARAM_ENUM,
+} surge_param_type;
+
+typedef struct surge_param_info {
+    const char *section;
+    const char *key;
+    surge_param_type type;
+    const char *unit;
+    double default_value;
+    double min_value, max_value; /* inclusive; for ENUM the index range */
+    bool live;                   /* may change while the simulation runs */
+    const char *enum_names;      /* "a|b|c" for ENUM, NULL otherwise */
+    const char *doc;
+    size_t offset;               /* into surge_params */
+} surge_param_info;
+
+surge_params surge_default_params(void);
+
+int surge_param_count(void);
+const surge_param_info *surge_param_at(int index);
+/* "section.key"; NULL when unknown. */
+const surge_param_info *surge_param_find(const char *name);
+
+/* Parses and range-checks value; on error returns -1 and writes a message naming the parameter and its
+ * allowed range/values to err. */
+int surge_param_set(surge_params *p, const surge_param_info *info, const char *value, char *err, size_t err_len);
+/* Current value as text, formatted so that surge_param_set reads it back exactly. */
+void surge_param_format(const surge_params *p, const surge_param_info *info, char *buf, size_t len);
+double surge_param_get_number(const surge_params *p, const surge_param_info *info);
+
+/* Reads an INI-style case file over p. Errors name path:line. */
+int surge_params_load(surge_params *p, const char *path, char *err, size_t err_len);
+/* Same from text in memory; source names it in errors. */
+int surge_params_load_text(surge_params *p, const char *text, const char *source, char *err, size_t err_len);
+/* "section.key=value" from the command line. */
+int surge_params_override(surge_params *p, const char *assignment, bool live_only, char *err, size_t err_len);
+/* walls.layers, or the automatic value (ceil(2h/dp)) when it is 0. */
+int surge_params_wall_layers(const surge_params *p);
+/* Checks that the parameters together describe a scene that can be built (block inside the box...). */
+int surge_params_validate(const surge_params *p, char *err, size_t err_len);
+
+/* The full resolved set as a case file that reloads to the same values. */
+void surge_params_write(const surge_params *p, FILE *out);
+/* The parameter reference (docs/parameters.md). */
+void surge_params_write_reference(FILE *out);
+
+#endif

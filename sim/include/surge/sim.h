@@ -1,0 +1,84 @@
+/* The solver: a 2D weakly-compressible SPH simulation behind an opaque handle. */
+#ifndef SURGE_SIM_H
+#define SURGE_SIM_H
+
+#include <stdint.h>
+
+#include "surge/params.h"
+#include "surge/snapshot.h"
+
+typedef struct surge_sim surge_sim;
+
+/* Quantities derived from the parameters (c0, h, ...), fixed for the run. */
+typedef struct surge_derived {
+    double h_m;            /* smoothing length */
+    double c0_mps;         /* speed of sound actually used */
+    double expected_speed_mps; /* the scene's largest expected speed c0 was derived from */
+    double particle_mass_kg;   /* per metre of width (2D) */
+    int32_t fluid_count;
+    int32_t wall_count;
+} surge_derived;
+
+typedef enum surge_health_check {
+    SURGE_HEALTHY = 0,
+    SURGE_CHECK_NOT_FINITE,   /* NaN or Inf in position, velocity or density */
+    SURGE_CHECK_DENSITY,      /* |rho/rho0 - 1| above health.max_density_deviation */
+    SURGE_CHECK_LEFT_DOMAIN,  /* outside the domain box */
+    SURGE_CHECK_CROSSED_WALL, /* inside a wall, past its first layer */
+    SURGE_CHECK_DT_COLLAPSE,  /* dt below health.min_dt_ratio of the first dt */
+} surge_health_check;
+
+typedef struct surge_health {
+    surge_health_check check;
+    int32_t particle_id; /* -1 when the failure is not about one particle */
+    int64_t step;
+    double time_s;
+    double value;        /* the offending value (density ratio, position, dt, ...) */
+    char message[256];
+} surge_health;
+
+/* Builds the scene described by params. NULL on error, with the reason in err. */
+surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_len);
+void surge_sim_destroy(surge_sim *sim);
+
+/* Advances one symplectic step. Returns 0, or -1 when the health monitor fails the new state; the state is
+ * then rolled back to the last good one (the start of the step) and surge_sim_health says why. */
+int surge_sim_step(surge_sim *sim);
+
+double surge_sim_time(const surge_sim *sim);
+int64_t surge_sim_step_count(const surge_sim *sim);
+double surge_sim_last_dt(const surge_sim *sim);
+const surge_params *surge_sim_params(const surge_sim *sim);
+const surge_derived *surge_sim_derived(const surge_sim *sim);
+const surge_health *surge_sim_health(const surge_sim *sim);
+
+/* Changes a parameter marked live between steps; -1 with a message if not live or out of range. */
+int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, char *err, size_t err_len);
+
+/* Copies the current state (all particles, ordered by id). */
+int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap);
+
+typedef struct surge_diagnostics {
+    double time_s, dt_s;
+    int64_t step;
+    double kinetic_energy_jpm;     /* fluid, per metre of width */
+    double max_speed_mps;
+    double max_density_deviation;  /* max |rho/rho0 - 1| over fluid */
+    double fluid_volume_m2;        /* sum m/rho (per metre of width) */
+    double mean_vx_mps;            /* fluid mean x velocity */
+    double bottom_wall_speed_mps;  /* current belt velocity */
+} surge_diagnostics;
+
+surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
+
+/* 64-bit FNV-1a hash of positions, velocities, densities (in id order), step and time: equal hashes mean
+ * bit-identical states. */
+uint64_t surge_sim_state_hash(const surge_sim *sim);
+
+/* Checkpoint: everything needed to continue bit-for-bit. */
+int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err, size_t err_len);
+/* Restores a checkpoint; overrides are "section.key=value" of live parameters (may be NULL/0). */
+surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overrides, int override_count,
+                                     char *err, size_t err_len);
+
+#endif

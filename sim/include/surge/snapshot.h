@@ -1,0 +1,35 @@
+/* The one narrow interface between the solver and its consumers (files, stream, renderer).
+ * A snapshot is an owned copy of the particle state at a step boundary, in fixed types that do not
+ * depend on the solver's internal precision. */
+#ifndef SURGE_SNAPSHOT_H
+#define SURGE_SNAPSHOT_H
+
+#include <stdint.h>
+
+typedef enum surge_particle_kind {
+    SURGE_KIND_FLUID = 0,
+    SURGE_KIND_WALL = 1,        /* fixed wall */
+    SURGE_KIND_MOVING_WALL = 2, /* wall with a prescribed velocity (belt, lid) */
+} surge_particle_kind;
+
+typedef struct surge_snapshot {
+    int64_t step;
+    double time_s;
+    double dt_s;
+    int32_t count;        /* particles, fluid and wall */
+    double *x_m;          /* position, along the (tilted) bed */
+    double *y_m;          /* position, normal to the bed */
+    float *vx_mps;
+    float *vy_mps;
+    float *density_kgpm3;
+    float *pressure_pa;
+    uint8_t *kind;        /* surge_particle_kind */
+    int32_t *id;          /* stable particle id, 0..count-1 at creation */
+    int32_t capacity;     /* allocated length of the arrays */
+} surge_snapshot;
+
+/* Resizes the arrays to hold count particles (keeps the allocation when large enough). Returns 0 on success. */
+int surge_snapshot_reserve(surge_snapshot *snap, int32_t count);
+void surge_snapshot_free(surge_snapshot *snap);
+
+#endif

@@ -1,0 +1,142 @@
+/* Checkpoints: the resolved parameters and the fluid state in its current (cell-sorted) order, so that a
+ * restarted run repeats the uninterrupted one bit for bit. Little-endian, native real size recorded.
+ *
+ * Layout: "SURGECK1" | u32 version | u32 sizeof(real) | u64 params length | params text |
+ *         i64 step | f64 time_s | f64 dt_s | f64 first_dt_s | i32 count | i32 wall_count |
+ *         fluid x[f64] y[f64] vx[real] vy[real] rho[real] id[i32] | u64 state hash */
+#define _POSIX_C_SOURCE 200809L
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+#define CHECKPOINT_MAGIC "SURGECK1"
+#define CHECKPOINT_VERSION 1u
+
+static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
+static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len, f) == len ? 0 : -1; }
+
+int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err, size_t err_len)
+{
+    char *params_text = NULL;
+    size_t params_len = 0;
+    FILE *mem = open_memstream(&params_text, &params_len);
+    if (!mem) {
+        snprintf(err, err_len, "out of memory writing checkpoint");
+        return -1;
+    }
+    surge_params_write(&sim->params, mem);
+    fclose(mem);
+
+    char tmp[4096];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        snprintf(err, err_len, "cannot write checkpoint '%s': %s", tmp, strerror(errno));
+        free(params_text);
+        return -1;
+    }
+    const uint32_t version = CHECKPOINT_VERSION, real_size = sizeof(real);
+    const uint64_t plen = params_len;
+    const size_t w = (size_t)sim->wall_count, nf = (size_t)(sim->count - sim->wall_count);
+    const uint64_t hash = surge_sim_state_hash(sim);
+    int rc = write_all(f, CHECKPOINT_MAGIC, 8) | write_all(f, &version, 4) | write_all(f, &real_size, 4) |
+             write_all(f, &plen, 8) | write_all(f, params_text, params_len) |
+             write_all(f, &sim->step, 8) | write_all(f, &sim->time_s, 8) | write_all(f, &sim->dt_s, 8) |
+             write_all(f, &sim->first_dt_s, 8) | write_all(f, &sim->count, 4) | write_all(f, &sim->wall_count, 4) |
+             write_all(f, sim->x + w, nf * sizeof(double)) | write_all(f, sim->y + w, nf * sizeof(double)) |
+             write_all(f, sim->vx + w, nf * sizeof(real)) | write_all(f, sim->vy + w, nf * sizeof(real)) |
+             write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
+             write_all(f, &hash, 8);
+    free(params_text);
+    if (fclose(f) != 0 || rc != 0 || rename(tmp, path) != 0) {
+        snprintf(err, err_len, "cannot write checkpoint '%s': %s", path, strerror(errno));
+        remove(tmp);
+        return -1;
+    }
+    return 0;
+}
+
+surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overrides, int override_count,
+                                     char *err, size_t err_len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        snprintf(err, err_len, "cannot open checkpoint '%s': %s", path, strerror(errno));
+        return NULL;
+    }
+    surge_sim *sim = NULL;
+    char *text = NULL;
+    char magic[8];
+    uint32_t version = 0, real_size = 0;
+    uint64_t plen = 0;
+    if (read_all(f, magic, 8) || memcmp(magic, CHECKPOINT_MAGIC, 8) || read_all(f, &version, 4) ||
+        read_all(f, &real_size, 4) || read_all(f, &plen, 8)) {
+        snprintf(err, err_len, "%s: not a surge checkpoint", path);
+        goto done;
+    }
+    if (version != CHECKPOINT_VERSION || real_size != sizeof(real)) {
+        snprintf(err, err_len, "%s: checkpoint version %u with %u-byte reals; this build reads version %u with "
+                 "%zu-byte reals", path, version, real_size, CHECKPOINT_VERSION, sizeof(real));
+        goto done;
+    }
+    if (plen > (1u << 20) || !(text = malloc(plen + 1)) || read_all(f, text, plen)) {
+        snprintf(err, err_len, "%s: truncated or corrupt parameter block", path);
+        goto done;
+    }
+    text[plen] = '\0';
+    surge_params params = surge_default_params();
+    char msg[512];
+    if (surge_params_load_text(&params, text, path, msg, sizeof msg) != 0) {
+        snprintf(err, err_len, "%s: bad parameters in checkpoint: %s", path, msg);
+        goto done;
+    }
+    for (int i = 0; i < override_count; i++)
+        if (surge_params_override(&params, overrides[i], true, err, err_len) != 0)
+            goto done;
+    sim = surge_sim_create(&params, err, err_len);
+    if (!sim)
+        goto done;
+    int32_t count = 0, wall_count = 0;
+    int64_t step = 0;
+    double t = 0, dt = 0, first_dt = 0;
+    if (read_all(f, &step, 8) || read_all(f, &t, 8) || read_all(f, &dt, 8) || read_all(f, &first_dt, 8) ||
+        read_all(f, &count, 4) || read_all(f, &wall_count, 4) || count != sim->count ||
+        wall_count != sim->wall_count) {
+        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe", path);
+        goto fail;
+    }
+    const size_t w = (size_t)wall_count, nf = (size_t)(count - wall_count);
+    uint64_t hash = 0;
+    if (read_all(f, sim->x + w, nf * sizeof(double)) || read_all(f, sim->y + w, nf * sizeof(double)) ||
+        read_all(f, sim->vx + w, nf * sizeof(real)) || read_all(f, sim->vy + w, nf * sizeof(real)) ||
+        read_all(f, sim->rho + w, nf * sizeof(real)) || read_all(f, sim->id + w, nf * sizeof(int32_t)) ||
+        read_all(f, &hash, 8)) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        goto fail;
+    }
+    sim->step = step;
+    sim->time_s = t;
+    sim->dt_s = dt;
+    sim->first_dt_s = first_dt;
+    for (size_t i = w; i < (size_t)count; i++) {
+        if (sim->id[i] < wall_count || sim->id[i] >= count) {
+            snprintf(err, err_len, "%s: corrupt particle ids", path);
+            goto fail;
+        }
+    }
+    if (surge_sim_state_hash(sim) != hash) {
+        snprintf(err, err_len, "%s: state hash mismatch (corrupt checkpoint)", path);
+        goto fail;
+    }
+    boundary_wall_speeds(sim, t);
+    goto done;
+fail:
+    surge_sim_destroy(sim);
+    sim = NULL;
+done:
+    free(text);
+    fclose(f);
+    return sim;
+}

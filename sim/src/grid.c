@@ -1,0 +1,159 @@
+/* Cell-linked lists with particles sorted by cell: wall particles once, fluid particles every step. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+int grid_init(surge_sim *sim, char *err, size_t err_len)
+{
+    const surge_params *p = &sim->params;
+    cell_grid *g = &sim->grid;
+    const double support = 2.0 * sim->derived.h_m;
+    const double wall_depth = p->walls.layers * p->numerics.dp_m;
+    if (p->domain.periodic_x) {
+        g->period_m = p->domain.length_m;
+        g->x0 = 0;
+        g->ncx = (int)floor(p->domain.length_m / support);
+        g->cell_w = p->domain.length_m / g->ncx;
+    } else {
+        g->period_m = 0;
+        g->x0 = -wall_depth - support;
+        g->ncx = (int)ceil((p->domain.length_m + 2.0 * (wall_depth + support)) / support);
+        g->cell_w = support;
+    }
+    g->y0 = -wall_depth - support;
+    g->cell_h = support;
+    g->ncy = (int)ceil((p->domain.height_m + 2.0 * (wall_depth + support)) / support);
+    if ((double)g->ncx * g->ncy > 2e8) {
+        snprintf(err, err_len, "the cell grid would have %.3g cells: domain too large for numerics.dp_m",
+                 (double)g->ncx * g->ncy);
+        return -1;
+    }
+    size_t ncells = (size_t)g->ncx * (size_t)g->ncy;
+    g->fluid_start = calloc(ncells + 1, sizeof(int));
+    g->wall_start = calloc(ncells + 1, sizeof(int));
+    if (!g->fluid_start || !g->wall_start) {
+        snprintf(err, err_len, "out of memory for %zu cells", ncells);
+        return -1;
+    }
+    return 0;
+}
+
+void grid_free(cell_grid *grid)
+{
+    free(grid->fluid_start);
+    free(grid->wall_start);
+    grid->fluid_start = grid->wall_start = NULL;
+}
+
+int grid_cell_x(const cell_grid *g, double x)
+{
+    int c = (int)floor((x - g->x0) / g->cell_w);
+    return c < 0 ? 0 : (c >= g->ncx ? g->ncx - 1 : c);
+}
+
+int grid_cell_y(const cell_grid *g, double y)
+{
+    int c = (int)floor((y - g->y0) / g->cell_h);
+    return c < 0 ? 0 : (c >= g->ncy ? g->ncy - 1 : c);
+}
+
+int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2])
+{
+    if (g->period_m <= 0) {
+        spans[0] = (cell_span){cx > 0 ? cx - 1 : 0, cx < g->ncx - 1 ? cx + 1 : g->ncx - 1, 0.0};
+        return 1;
+    }
+    if (cx == 0) {
+        spans[0] = (cell_span){0, 1, 0.0};
+        spans[1] = (cell_span){g->ncx - 1, g->ncx - 1, -g->period_m};
+        return 2;
+    }
+    if (cx == g->ncx - 1) {
+        spans[0] = (cell_span){g->ncx - 2, g->ncx - 1, 0.0};
+        spans[1] = (cell_span){0, 0, g->period_m};
+        return 2;
+    }
+    spans[0] = (cell_span){cx - 1, cx + 1, 0.0};
+    return 1;
+}
+
+/* Stable counting sort of particles [first, first+n) by cell; fills start (ncells+1 entries, indices absolute)
+ * and writes the gather order into order[0..n). */
+static void counting_sort(const surge_sim *sim, int first, int n, int *start, int32_t *key, int32_t *order)
+{
+    const cell_grid *g = &sim->grid;
+    const int ncells = g->ncx * g->ncy;
+    memset(start, 0, (size_t)(ncells + 1) * sizeof(int));
+    for (int i = 0; i < n; i++) {
+        int k = grid_cell_y(g, sim->y[first + i]) * g->ncx + grid_cell_x(g, sim->x[first + i]);
+        key[i] = k;
+        start[k + 1]++;
+    }
+    start[0] = first;
+    for (int c = 0; c < ncells; c++)
+        start[c + 1] += start[c];
+    for (int i = 0; i < n; i++)
+        order[start[key[i]]++ - first] = first + i;
+    /* start[c] now holds the end of cell c: shift back to beginnings */
+    for (int c = ncells; c > 0; c--)
+        start[c] = start[c - 1];
+    start[0] = first;
+}
+
+static void gather_d(double *a, double *scratch, const int32_t *order, int first, int n)
+{
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++)
+        scratch[i] = a[order[i]];
+    memcpy(a + first, scratch, (size_t)n * sizeof *a);
+}
+
+static void gather_r(real *a, real *scratch, const int32_t *order, int first, int n)
+{
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++)
+        scratch[i] = a[order[i]];
+    memcpy(a + first, scratch, (size_t)n * sizeof *a);
+}
+
+static void gather_i(int32_t *a, int32_t *scratch, const int32_t *order, int first, int n)
+{
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++)
+        scratch[i] = a[order[i]];
+    memcpy(a + first, scratch, (size_t)n * sizeof *a);
+}
+
+void grid_sort_walls(surge_sim *sim)
+{
+    const int n = sim->wall_count;
+    int32_t *order = sim->sort_key + sim->count; /* second half of the key buffer */
+    counting_sort(sim, 0, n, sim->grid.wall_start, sim->sort_key, order);
+    gather_d(sim->x, sim->sort_scratch_d, order, 0, n);
+    gather_d(sim->y, sim->sort_scratch_d, order, 0, n);
+    gather_r(sim->vx, sim->sort_scratch_r, order, 0, n);
+    gather_r(sim->vy, sim->sort_scratch_r, order, 0, n);
+    gather_r(sim->rho, sim->sort_scratch_r, order, 0, n);
+    gather_r(sim->ghost_dx, sim->sort_scratch_r, order, 0, n);
+    gather_r(sim->ghost_dy, sim->sort_scratch_r, order, 0, n);
+    gather_i(sim->id, sim->sort_scratch_i, order, 0, n);
+    for (int i = 0; i < n; i++)
+        sim->sort_scratch_i[i] = sim->wall_of[order[i]];
+    for (int i = 0; i < n; i++)
+        sim->wall_of[i] = (uint8_t)sim->sort_scratch_i[i];
+}
+
+void grid_sort_fluid(surge_sim *sim)
+{
+    const int first = sim->wall_count, n = sim->count - sim->wall_count;
+    int32_t *order = sim->sort_key + sim->count;
+    counting_sort(sim, first, n, sim->grid.fluid_start, sim->sort_key, order);
+    gather_d(sim->x, sim->sort_scratch_d, order, first, n);
+    gather_d(sim->y, sim->sort_scratch_d, order, first, n);
+    gather_r(sim->vx, sim->sort_scratch_r, order, first, n);
+    gather_r(sim->vy, sim->sort_scratch_r, order, first, n);
+    gather_r(sim->rho, sim->sort_scratch_r, order, first, n);
+    gather_i(sim->id, sim->sort_scratch_i, order, first, n);
+}

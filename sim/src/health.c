@@ -1,0 +1,100 @@
+/* The health monitor: every step, every fluid particle, the checks of surge_health_check. */
+#include <math.h>
+#include <stdio.h>
+
+#include "sim_internal.h"
+
+/* The first check that particle a fails, with the offending value. */
+static surge_health_check check_particle(const surge_sim *sim, int a, double *value)
+{
+    const surge_params *p = &sim->params;
+    const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
+    const double wall_depth = p->walls.layers * dp;
+    const double x = sim->x[a], y = sim->y[a];
+    if (!isfinite(x) || !isfinite(y) || !isfinite(sim->vx[a]) || !isfinite(sim->vy[a]) || !isfinite(sim->rho[a])) {
+        *value = !isfinite(x) ? x : !isfinite(y) ? y : !isfinite(sim->vx[a]) ? sim->vx[a]
+               : !isfinite(sim->vy[a]) ? sim->vy[a] : sim->rho[a];
+        return SURGE_CHECK_NOT_FINITE;
+    }
+    const double ratio = sim->rho[a] / sim->rho0;
+    if (fabs(ratio - 1.0) > p->health.max_density_deviation) {
+        *value = ratio;
+        return SURGE_CHECK_DENSITY;
+    }
+    *value = y;
+    if ((p->walls.bottom && y < -dp) || (p->walls.top && y > H + dp))
+        return SURGE_CHECK_CROSSED_WALL;
+    *value = x;
+    if ((p->walls.left && x < -dp) || (p->walls.right && x > L + dp))
+        return SURGE_CHECK_CROSSED_WALL;
+    if (p->walls.upstream && y < p->walls.upstream_height_m && x < p->walls.upstream_x_m - dp &&
+        x > p->walls.upstream_x_m - wall_depth)
+        return SURGE_CHECK_CROSSED_WALL;
+    *value = y;
+    if (y < -wall_depth || y > H + (p->walls.top ? wall_depth : 0.0))
+        return SURGE_CHECK_LEFT_DOMAIN;
+    *value = x;
+    if (!p->domain.periodic_x && (x < (p->walls.left ? -wall_depth : 0.0) || x > L + (p->walls.right ? wall_depth : 0.0)))
+        return SURGE_CHECK_LEFT_DOMAIN;
+    return SURGE_HEALTHY;
+}
+
+static const char *check_name(surge_health_check c)
+{
+    switch (c) {
+    case SURGE_HEALTHY: return "healthy";
+    case SURGE_CHECK_NOT_FINITE: return "non-finite value (NaN/Inf)";
+    case SURGE_CHECK_DENSITY: return "density far from rho0";
+    case SURGE_CHECK_LEFT_DOMAIN: return "particle left the domain";
+    case SURGE_CHECK_CROSSED_WALL: return "particle crossed a wall";
+    case SURGE_CHECK_DT_COLLAPSE: return "time step collapsed";
+    }
+    return "?";
+}
+
+int health_check(surge_sim *sim)
+{
+    surge_health *h = &sim->health;
+    h->check = SURGE_HEALTHY;
+    h->particle_id = -1;
+    h->step = sim->step;
+    h->time_s = sim->time_s;
+    int first_bad = sim->count;
+    #pragma omp parallel for schedule(static) reduction(min : first_bad)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        double v;
+        if (check_particle(sim, a, &v) != SURGE_HEALTHY && a < first_bad)
+            first_bad = a;
+    }
+    if (first_bad < sim->count) {
+        h->check = check_particle(sim, first_bad, &h->value);
+        h->particle_id = sim->id[first_bad];
+        const char *detail = "";
+        char extra[128] = "";
+        if (h->check == SURGE_CHECK_DENSITY) {
+            snprintf(extra, sizeof extra, "rho/rho0 = %.6g, allowed 1 +- %g", h->value,
+                     sim->params.health.max_density_deviation);
+            detail = extra;
+        } else {
+            snprintf(extra, sizeof extra, "x = %.6g m, y = %.6g m, v = (%.4g, %.4g) m/s, rho = %.6g kg/m3",
+                     sim->x[first_bad], sim->y[first_bad], (double)sim->vx[first_bad], (double)sim->vy[first_bad],
+                     (double)sim->rho[first_bad]);
+            detail = extra;
+        }
+        snprintf(h->message, sizeof h->message, "health check failed: %s at particle %d, step %lld, t = %.9g s (%s)",
+                 check_name(h->check), h->particle_id, (long long)h->step, h->time_s, detail);
+        return -1;
+    }
+    if (sim->params.numerics.dt_fixed_s == 0 && sim->first_dt_s > 0 &&
+        sim->dt_s < sim->params.health.min_dt_ratio * sim->first_dt_s) {
+        h->check = SURGE_CHECK_DT_COLLAPSE;
+        h->value = sim->dt_s;
+        snprintf(h->message, sizeof h->message,
+                 "health check failed: %s at step %lld, t = %.9g s (dt = %.3g s, below %g x first dt %.3g s)",
+                 check_name(h->check), (long long)h->step, h->time_s, sim->dt_s, sim->params.health.min_dt_ratio,
+                 sim->first_dt_s);
+        return -1;
+    }
+    h->message[0] = '\0';
+    return 0;
+}

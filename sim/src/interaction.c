@@ -1,0 +1,108 @@
+/* Rates of change of the fluid particles: continuity with Fourtakas density diffusion (GMD eq. 6), momentum
+ * with pressure, laminar viscosity and body force (eq. 7), plus what the time step and shifting need. */
+#include <math.h>
+
+#include "sim_internal.h"
+
+static void compute_pressure(surge_sim *sim)
+{
+    const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < sim->count; i++)
+        sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
+}
+
+void interaction_compute(surge_sim *sim, int corrector)
+{
+    compute_pressure(sim);
+    const cell_grid *g = &sim->grid;
+    const kernel2d kern = sim->kernel;
+    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = kern.h;
+    const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
+    const real ddt_coef = (real)(2.0 * sim->params.numerics.density_diffusion * sim->derived.h_m * sim->derived.c0_mps);
+    const real rho_h_per_m = (real)sim->rho_h_per_m;
+    const real gx = (real)sim->gx, gy = (real)sim->gy;
+    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
+    const real *restrict pres = sim->pressure;
+    const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
+    const uint8_t *restrict surface = sim->surface;
+
+    #pragma omp parallel for schedule(static)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double xa = x[a], ya = y[a];
+        const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a];
+        real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_rate = 0;
+        real grad_c_x = 0, grad_c_y = 0, div_r = 0;
+        int near_surface = surface[a];
+        const int cx = grid_cell_x(g, xa), cy = grid_cell_y(g, ya);
+        cell_span spans[2];
+        const int nspans = grid_row_spans(g, cx, spans);
+        for (int row = cy - 1; row <= cy + 1; row++) {
+            if (row < 0 || row >= g->ncy)
+                continue;
+            for (int s = 0; s < nspans; s++) {
+                const double xa_shifted = xa - spans[s].shift_x;
+                const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
+                /* fluid neighbours */
+                for (int b = g->fluid_start[c0]; b < g->fluid_start[c1]; b++) {
+                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                    const real r2 = dx * dx + dy * dy;
+                    if (r2 >= kern.support2 || r2 == 0)
+                        continue;
+                    const real f = kernel2d_grad_factor(&kern, REAL_SQRT(r2)); /* grad_a W = f r_ab */
+                    const real rhob = rho[b], vol = mass / rhob;
+                    const real dvx = vxa - vx[b], dvy = vya - vy[b];
+                    const real pressure_term = -mass * (pa + pres[b]) / (rhoa * rhob);          /* eq. 7 */
+                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rhob) * (r2 + eta2)); /* eq. 7 */
+                    acc_x += pressure_term * f * dx + viscous_term * dvx;
+                    acc_y += pressure_term * f * dy + viscous_term * dvy;
+                    div_v += vol * f * (dvx * dx + dvy * dy);                                  /* eq. 6 */
+                    diffusion -= (rhob - rhoa - rho_h_per_m * dy) * f * vol;                  /* Fourtakas */
+                    const real rate = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
+                    visc_rate = rate > visc_rate ? rate : visc_rate;
+                    grad_c_x += vol * f * dx;
+                    grad_c_y += vol * f * dy;
+                    div_r -= vol * f * r2;
+                    near_surface |= surface[b];
+                }
+                /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
+                 * continuity; no density diffusion across the wall */
+                for (int b = g->wall_start[c0]; b < g->wall_start[c1]; b++) {
+                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                    const real r2 = dx * dx + dy * dy;
+                    if (r2 >= kern.support2)
+                        continue;
+                    const real f = kernel2d_grad_factor(&kern, REAL_SQRT(r2));
+                    const real rhob = rho[b], vol = mass / rhob;
+                    const real pressure_term = -mass * (pa + pres[b]) / (rhoa * rhob);
+                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rhob) * (r2 + eta2));
+                    const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+                    acc_x += pressure_term * f * dx + viscous_term * nsx;
+                    acc_y += pressure_term * f * dy + viscous_term * nsy;
+                    const real dvx = vxa - vx[b], dvy = vya - vy[b];
+                    div_v += vol * f * (dvx * dx + dvy * dy);
+                    const real rate = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
+                    visc_rate = rate > visc_rate ? rate : visc_rate;
+                    grad_c_x += vol * f * dx;
+                    grad_c_y += vol * f * dy;
+                    div_r -= vol * f * r2;
+                }
+            }
+        }
+        sim->ax[a] = acc_x + gx;
+        sim->ay[a] = acc_y + gy;
+        sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
+        sim->visc_rate[a] = visc_rate;
+        sim->div_r[a] = div_r;
+        sim->grad_c_x[a] = grad_c_x;
+        sim->grad_c_y[a] = grad_c_y;
+        sim->near_surface[a] = (uint8_t)near_surface;
+    }
+    if (!corrector) {
+        const real threshold = (real)sim->params.shifting.surface_threshold;
+        #pragma omp parallel for schedule(static)
+        for (int a = sim->wall_count; a < sim->count; a++)
+            sim->surface[a] = sim->div_r[a] < threshold;
+    }
+}

@@ -1,0 +1,567 @@
+/* The parameter registry, the case-file parser and the resolved-parameter writer. */
+#include "surge/params.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define OFF(field) offsetof(surge_params, field)
+#define BIG 1e30
+
+static const surge_param_info registry[] = {
+    /* section, key, type, unit, default, min, max, live, enum names, doc, offset */
+    {"domain", "length_m", SURGE_PARAM_REAL, "m", 0.6, 1e-6, 1e4, false, NULL,
+     "Extent of the domain along x (the period when periodic).", OFF(domain.length_m)},
+    {"domain", "height_m", SURGE_PARAM_REAL, "m", 0.1, 1e-6, 1e4, false, NULL,
+     "Extent of the domain along y from the bed; the top wall sits here; particles above it have left the domain.",
+     OFF(domain.height_m)},
+    {"domain", "periodic_x", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
+     "Periodic in x (conveyor-belt and channel scenes).", OFF(domain.periodic_x)},
+
+    {"fluid", "density_kgpm3", SURGE_PARAM_REAL, "kg m^-3", 1383, 1e-3, 1e5, false, NULL,
+     "Reference density rho0.", OFF(fluid.density_kgpm3)},
+    {"fluid", "viscosity_m2ps", SURGE_PARAM_REAL, "m^2 s^-1", 5.6 / 1383.0, 0, 1e3, true, NULL,
+     "Kinematic viscosity nu0 (dynamic viscosity / density).", OFF(fluid.viscosity_m2ps)},
+    {"fluid", "x0_m", SURGE_PARAM_REAL, "m", 0.0, -1e4, 1e4, false, NULL,
+     "Upstream end of the initial fluid block.", OFF(fluid.x0_m)},
+    {"fluid", "x1_m", SURGE_PARAM_REAL, "m", 0.27, -1e4, 1e4, false, NULL,
+     "Downstream end of the initial fluid block.", OFF(fluid.x1_m)},
+    {"fluid", "depth_m", SURGE_PARAM_REAL, "m", 0.017, 1e-6, 1e4, false, NULL,
+     "Depth of the initial fluid block above the bed (y = 0).", OFF(fluid.depth_m)},
+
+    {"walls", "layers", SURGE_PARAM_INT, "-", 0, 0, 16, false, NULL,
+     "Layers of boundary particles in every wall; 0: ceil(2h/dp), just enough for the kernel support.",
+     OFF(walls.layers)},
+    {"walls", "bottom", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL, "No-slip bed below y = 0.", OFF(walls.bottom)},
+    {"walls", "top", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL, "No-slip lid above y = domain.height_m.",
+     OFF(walls.top)},
+    {"walls", "left", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL,
+     "Wall left of x = 0 (non-periodic domains only).", OFF(walls.left)},
+    {"walls", "right", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL,
+     "Wall right of x = domain.length_m (non-periodic domains only).", OFF(walls.right)},
+    {"walls", "upstream", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
+     "Fixed vertical wall at upstream_x_m inside a periodic domain, fluid on its downstream (+x) side.",
+     OFF(walls.upstream)},
+    {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.0, -1e4, 1e4, false, NULL,
+     "Position of the upstream wall's fluid face.", OFF(walls.upstream_x_m)},
+    {"walls", "upstream_height_m", SURGE_PARAM_REAL, "m", 0.06, 1e-6, 1e4, false, NULL,
+     "Height of the upstream wall above the bed.", OFF(walls.upstream_height_m)},
+    {"walls", "bottom_speed_mps", SURGE_PARAM_REAL, "m s^-1", -0.075, -1e3, 1e3, true, NULL,
+     "Target x velocity of the bed (the conveyor belt; negative moves upstream).", OFF(walls.bottom_speed_mps)},
+    {"walls", "top_speed_mps", SURGE_PARAM_REAL, "m s^-1", 0.0, -1e3, 1e3, true, NULL,
+     "Target x velocity of the lid.", OFF(walls.top_speed_mps)},
+    {"walls", "ramp_s", SURGE_PARAM_REAL, "s", 0.5, 0, 1e4, true, NULL,
+     "Time for moving walls to reach their target speed from rest (smooth cosine ramp; 0: at once).",
+     OFF(walls.ramp_s)},
+
+    {"body", "gravity_mps2", SURGE_PARAM_REAL, "m s^-2", 9.81, 0, 1e3, false, NULL, "Magnitude of gravity.",
+     OFF(body.gravity_mps2)},
+    {"body", "slope_deg", SURGE_PARAM_REAL, "deg", 15.3, -89, 89, true, NULL,
+     "Bed inclination theta: gravity = g (sin theta, -cos theta) so that the bed stays along x.",
+     OFF(body.slope_deg)},
+    {"body", "force_x_mps2", SURGE_PARAM_REAL, "m s^-2", 0.0, -1e4, 1e4, true, NULL,
+     "Constant body force per unit mass along x (a pressure gradient |dP/dx|/rho for channels).",
+     OFF(body.force_x_mps2)},
+
+    {"numerics", "dp_m", SURGE_PARAM_REAL, "m", 0.002, 1e-7, 1e2, false, NULL, "Initial particle spacing dp.",
+     OFF(numerics.dp_m)},
+    {"numerics", "ch", SURGE_PARAM_REAL, "-", 1.8, 0.5, 4, false, NULL,
+     "Smoothing coefficient C_h: h = C_h sqrt(2) dp; kernel support 2h.", OFF(numerics.ch)},
+    {"numerics", "cfl", SURGE_PARAM_REAL, "-", 0.2, 1e-4, 2, false, NULL,
+     "Courant coefficient C_CFL of the variable time step.", OFF(numerics.cfl)},
+    {"numerics", "c0_mps", SURGE_PARAM_REAL, "m s^-1", 0, 0, 1e5, false, NULL,
+     "Numerical speed of sound; 0 derives it as c0_factor times the scene's largest expected speed.",
+     OFF(numerics.c0_mps)},
+    {"numerics", "c0_factor", SURGE_PARAM_REAL, "-", 10, 1, 1e3, false, NULL,
+     "c0 / largest expected speed when c0 is derived (10 keeps density errors near 1 %).",
+     OFF(numerics.c0_factor)},
+    {"numerics", "density_diffusion", SURGE_PARAM_REAL, "-", 0.1, 0, 1, false, NULL,
+     "Fourtakas density-diffusion coefficient delta (0: off); fluid-fluid pairs only.",
+     OFF(numerics.density_diffusion)},
+    {"numerics", "viscous_dt_limit", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
+     "Include the viscous limit dt_nu = h^2/nu0 in the time step.", OFF(numerics.viscous_dt_limit)},
+    {"numerics", "dt_fixed_s", SURGE_PARAM_REAL, "s", 0, 0, 1e3, false, NULL,
+     "Fixed time step instead of the variable one (0: variable). For tests of the health monitor.",
+     OFF(numerics.dt_fixed_s)},
+
+    {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
+     "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",
+     OFF(shifting.form)},
+    {"shifting", "velocity_coefficient", SURGE_PARAM_REAL, "-", 2.0, 0, 100, true, NULL,
+     "A in dr = -A h |u| dt grad C (velocity form).", OFF(shifting.velocity_coefficient)},
+    {"shifting", "lind_coefficient", SURGE_PARAM_REAL, "-", 0.5, 0, 100, true, NULL,
+     "A_L in dr = -(A_L/2) h c0 dt grad C (Lind form).", OFF(shifting.lind_coefficient)},
+    {"shifting", "surface_threshold", SURGE_PARAM_REAL, "-", 1.5, 0, 2, true, NULL,
+     "Free-surface detection: a particle with div r below this is on the surface (2 in the 2D bulk).",
+     OFF(shifting.surface_threshold)},
+    {"shifting", "max_shift_dp", SURGE_PARAM_REAL, "dp", 0.1, 0, 1, true, NULL,
+     "Largest shift of a particle in one step, in units of dp.", OFF(shifting.max_shift_dp)},
+
+    {"time", "end_s", SURGE_PARAM_REAL, "s", 10, 0, 1e7, true, NULL, "Simulated time at which the run ends.",
+     OFF(time.end_s)},
+
+    {"output", "snapshot_interval_s", SURGE_PARAM_REAL, "s", 0.1, 0, 1e7, true, NULL,
+     "Simulated time between VTK snapshots (0: final snapshot only).", OFF(output.snapshot_interval_s)},
+    {"output", "diagnostics_interval_s", SURGE_PARAM_REAL, "s", 0.01, 0, 1e7, true, NULL,
+     "Simulated time between rows of diagnostics.csv (0: every step).", OFF(output.diagnostics_interval_s)},
+    {"output", "checkpoint_interval_s", SURGE_PARAM_REAL, "s", 0, 0, 1e7, true, NULL,
+     "Simulated time between checkpoints (0: only the final one).", OFF(output.checkpoint_interval_s)},
+    {"output", "progress_interval_s", SURGE_PARAM_REAL, "s (wall)", 2, 0, 1e5, true, NULL,
+     "Wall-clock seconds between progress lines on stderr (0: silent).", OFF(output.progress_interval_s)},
+
+    {"health", "max_density_deviation", SURGE_PARAM_REAL, "-", 0.1, 1e-4, 10, true, NULL,
+     "A fluid particle with |rho/rho0 - 1| above this fails the run.", OFF(health.max_density_deviation)},
+    {"health", "min_dt_ratio", SURGE_PARAM_REAL, "-", 1e-3, 0, 1, true, NULL,
+     "A time step below this fraction of the first step's fails the run (dt collapse).", OFF(health.min_dt_ratio)},
+};
+
+enum { REGISTRY_COUNT = sizeof registry / sizeof registry[0] };
+
+static void fail(char *err, size_t err_len, const char *fmt, ...)
+{
+    if (!err || err_len == 0)
+        return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(err, err_len, fmt, ap);
+    va_end(ap);
+}
+
+int surge_param_count(void) { return REGISTRY_COUNT; }
+
+const surge_param_info *surge_param_at(int index)
+{
+    return (index >= 0 && index < REGISTRY_COUNT) ? &registry[index] : NULL;
+}
+
+const surge_param_info *surge_param_find(const char *name)
+{
+    const char *dot = strchr(name, '.');
+    if (!dot)
+        return NULL;
+    size_t section_len = (size_t)(dot - name);
+    for (int i = 0; i < REGISTRY_COUNT; i++) {
+        const surge_param_info *r = &registry[i];
+        if (strlen(r->section) == section_len && strncmp(r->section, name, section_len) == 0 &&
+            strcmp(r->key, dot + 1) == 0)
+            return r;
+    }
+    return NULL;
+}
+
+static void *field(surge_params *p, const surge_param_info *info) { return (char *)p + info->offset; }
+static const void *cfield(const surge_params *p, const surge_param_info *info)
+{
+    return (const char *)p + info->offset;
+}
+
+surge_params surge_default_params(void)
+{
+    surge_params p;
+    memset(&p, 0, sizeof p);
+    for (int i = 0; i < REGISTRY_COUNT; i++) {
+        const surge_param_info *r = &registry[i];
+        switch (r->type) {
+        case SURGE_PARAM_REAL: *(double *)field(&p, r) = r->default_value; break;
+        case SURGE_PARAM_INT:
+        case SURGE_PARAM_ENUM: *(int *)field(&p, r) = (int)r->default_value; break;
+        case SURGE_PARAM_BOOL: *(bool *)field(&p, r) = r->default_value != 0; break;
+        }
+    }
+    return p;
+}
+
+double surge_param_get_number(const surge_params *p, const surge_param_info *info)
+{
+    switch (info->type) {
+    case SURGE_PARAM_REAL: return *(const double *)cfield(p, info);
+    case SURGE_PARAM_INT:
+    case SURGE_PARAM_ENUM: return *(const int *)cfield(p, info);
+    case SURGE_PARAM_BOOL: return *(const bool *)cfield(p, info) ? 1 : 0;
+    }
+    return 0;
+}
+
+/* The n-th name of "a|b|c" into buf; returns 0 when n is out of range. */
+static int enum_name(const char *names, int n, char *buf, size_t len)
+{
+    const char *s = names;
+    for (int i = 0; i < n; i++) {
+        s = strchr(s, '|');
+        if (!s)
+            return 0;
+        s++;
+    }
+    size_t l = strcspn(s, "|");
+    if (l + 1 > len)
+        l = len - 1;
+    memcpy(buf, s, l);
+    buf[l] = '\0';
+    return 1;
+}
+
+void surge_param_format(const surge_params *p, const surge_param_info *info, char *buf, size_t len)
+{
+    switch (info->type) {
+    case SURGE_PARAM_REAL: snprintf(buf, len, "%.17g", *(const double *)cfield(p, info)); break;
+    case SURGE_PARAM_INT: snprintf(buf, len, "%d", *(const int *)cfield(p, info)); break;
+    case SURGE_PARAM_BOOL: snprintf(buf, len, "%s", *(const bool *)cfield(p, info) ? "true" : "false"); break;
+    case SURGE_PARAM_ENUM:
+        if (!enum_name(info->enum_names, *(const int *)cfield(p, info), buf, len))
+            snprintf(buf, len, "?");
+        break;
+    }
+}
+
+static void describe_allowed(const surge_param_info *info, char *buf, size_t len)
+{
+    switch (info->type) {
+    case SURGE_PARAM_REAL: snprintf(buf, len, "a number in [%g, %g] %s", info->min_value, info->max_value, info->unit); break;
+    case SURGE_PARAM_INT: snprintf(buf, len, "an integer in [%d, %d]", (int)info->min_value, (int)info->max_value); break;
+    case SURGE_PARAM_BOOL: snprintf(buf, len, "true or false"); break;
+    case SURGE_PARAM_ENUM: snprintf(buf, len, "one of %s", info->enum_names); break;
+    }
+}
+
+int surge_param_set(surge_params *p, const surge_param_info *info, const char *value, char *err, size_t err_len)
+{
+    char allowed[160];
+    describe_allowed(info, allowed, sizeof allowed);
+    while (isspace((unsigned char)*value))
+        value++;
+    if (*value == '\0') {
+        fail(err, err_len, "%s.%s: empty value; expected %s", info->section, info->key, allowed);
+        return -1;
+    }
+    switch (info->type) {
+    case SURGE_PARAM_REAL:
+    case SURGE_PARAM_INT: {
+        char *end;
+        errno = 0;
+        double v = strtod(value, &end);
+        while (isspace((unsigned char)*end))
+            end++;
+        if (end == value || *end != '\0' || errno == ERANGE || !isfinite(v)) {
+            fail(err, err_len, "%s.%s: '%s' is not a number; expected %s", info->section, info->key, value, allowed);
+            return -1;
+        }
+        if (info->type == SURGE_PARAM_INT && v != floor(v)) {
+            fail(err, err_len, "%s.%s: '%s' is not an integer; expected %s", info->section, info->key, value,
+                 allowed);
+            return -1;
+        }
+        if (v < info->min_value || v > info->max_value) {
+            fail(err, err_len, "%s.%s: %s is out of range; expected %s", info->section, info->key, value, allowed);
+            return -1;
+        }
+        if (info->type == SURGE_PARAM_REAL)
+            *(double *)field(p, info) = v;
+        else
+            *(int *)field(p, info) = (int)v;
+        return 0;
+    }
+    case SURGE_PARAM_BOOL:
+        if (!strcmp(value, "true") || !strcmp(value, "1") || !strcmp(value, "yes") || !strcmp(value, "on")) {
+            *(bool *)field(p, info) = true;
+            return 0;
+        }
+        if (!strcmp(value, "false") || !strcmp(value, "0") || !strcmp(value, "no") || !strcmp(value, "off")) {
+            *(bool *)field(p, info) = false;
+            return 0;
+        }
+        fail(err, err_len, "%s.%s: '%s' is not a boolean; expected %s", info->section, info->key, value, allowed);
+        return -1;
+    case SURGE_PARAM_ENUM: {
+        char name[64];
+        for (int i = 0; enum_name(info->enum_names, i, name, sizeof name); i++) {
+            if (!strcmp(name, value)) {
+                *(int *)field(p, info) = i;
+                return 0;
+            }
+        }
+        fail(err, err_len, "%s.%s: '%s' is not allowed; expected %s", info->section, info->key, value, allowed);
+        return -1;
+    }
+    }
+    return -1;
+}
+
+static char *trim(char *s)
+{
+    while (isspace((unsigned char)*s))
+        s++;
+    char *e = s + strlen(s);
+    while (e > s && isspace((unsigned char)e[-1]))
+        *--e = '\0';
+    return s;
+}
+
+int surge_params_load_text(surge_params *p, const char *text, const char *source, char *err, size_t err_len)
+{
+    char section[64] = "";
+    int line_no = 0;
+    const char *cursor = text;
+    while (*cursor) {
+        line_no++;
+        size_t len = strcspn(cursor, "\n");
+        char line[1024];
+        if (len >= sizeof line) {
+            fail(err, err_len, "%s:%d: line longer than %zu characters", source, line_no, sizeof line - 1);
+            return -1;
+        }
+        memcpy(line, cursor, len);
+        line[len] = '\0';
+        cursor += len + (cursor[len] == '\n');
+
+        char *comment = strpbrk(line, "#;");
+        if (comment)
+            *comment = '\0';
+        char *s = trim(line);
+        if (*s == '\0')
+            continue;
+        if (*s == '[') {
+            char *close = strchr(s, ']');
+            if (!close || *trim(close + 1) != '\0') {
+                fail(err, err_len, "%s:%d: malformed section header '%s'; expected [section]", source, line_no, s);
+                return -1;
+            }
+            *close = '\0';
+            char *name = trim(s + 1);
+            bool known = false;
+            for (int i = 0; i < REGISTRY_COUNT; i++)
+                known = known || !strcmp(registry[i].section, name);
+            if (!known) {
+                fail(err, err_len, "%s:%d: unknown section [%s]; sections are domain, fluid, walls, body, "
+                     "numerics, shifting, time, output, health", source, line_no, name);
+                return -1;
+            }
+            snprintf(section, sizeof section, "%s", name);
+            continue;
+        }
+        char *eq = strchr(s, '=');
+        if (!eq) {
+            fail(err, err_len, "%s:%d: expected 'key = value', got '%s'", source, line_no, s);
+            return -1;
+        }
+        *eq = '\0';
+        char *key = trim(s);
+        char *value = trim(eq + 1);
+        if (section[0] == '\0') {
+            fail(err, err_len, "%s:%d: '%s' appears before any [section]", source, line_no, key);
+            return -1;
+        }
+        char name[160];
+        snprintf(name, sizeof name, "%s.%s", section, key);
+        const surge_param_info *info = surge_param_find(name);
+        if (!info) {
+            fail(err, err_len, "%s:%d: unknown key '%s' in [%s] (see 'surge params')", source, line_no, key, section);
+            return -1;
+        }
+        char msg[400];
+        if (surge_param_set(p, info, value, msg, sizeof msg) != 0) {
+            fail(err, err_len, "%s:%d: %s", source, line_no, msg);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+int surge_params_load(surge_params *p, const char *path, char *err, size_t err_len)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        fail(err, err_len, "%s: cannot open case file: %s", path, strerror(errno));
+        return -1;
+    }
+    size_t cap = 4096, n = 0;
+    char *text = malloc(cap);
+    size_t got;
+    while (text && (got = fread(text + n, 1, cap - n - 1, f)) > 0) {
+        n += got;
+        if (n + 1 == cap) {
+            if (cap > (1u << 24)) {
+                fclose(f);
+                free(text);
+                fail(err, err_len, "%s: case file larger than 16 MiB", path);
+                return -1;
+            }
+            char *bigger = realloc(text, cap *= 2);
+            if (!bigger)
+                free(text);
+            text = bigger;
+        }
+    }
+    int read_error = ferror(f);
+    fclose(f);
+    if (!text || read_error) {
+        free(text);
+        fail(err, err_len, "%s: cannot read case file", path);
+        return -1;
+    }
+    text[n] = '\0';
+    if (memchr(text, '\0', n)) {
+        free(text);
+        fail(err, err_len, "%s: not a text file (contains NUL bytes)", path);
+        return -1;
+    }
+    int rc = surge_params_load_text(p, text, path, err, err_len);
+    free(text);
+    return rc;
+}
+
+int surge_params_override(surge_params *p, const char *assignment, bool live_only, char *err, size_t err_len)
+{
+    const char *eq = strchr(assignment, '=');
+    if (!eq) {
+        fail(err, err_len, "-s %s: expected section.key=value", assignment);
+        return -1;
+    }
+    char name[160];
+    size_t len = (size_t)(eq - assignment);
+    if (len >= sizeof name)
+        len = sizeof name - 1;
+    memcpy(name, assignment, len);
+    name[len] = '\0';
+    const surge_param_info *info = surge_param_find(trim(name));
+    if (!info) {
+        fail(err, err_len, "-s %s: unknown parameter '%s' (see 'surge params')", assignment, trim(name));
+        return -1;
+    }
+    if (live_only && !info->live) {
+        fail(err, err_len, "-s %s: %s.%s is fixed once a run has started and cannot change on restart",
+             assignment, info->section, info->key);
+        return -1;
+    }
+    char msg[400];
+    if (surge_param_set(p, info, eq + 1, msg, sizeof msg) != 0) {
+        fail(err, err_len, "-s: %s", msg);
+        return -1;
+    }
+    return 0;
+}
+
+int surge_params_wall_layers(const surge_params *p)
+{
+    const double support = 2.0 * p->numerics.ch * sqrt(2.0) * p->numerics.dp_m;
+    const int needed = (int)ceil(support / p->numerics.dp_m - 1e-9);
+    return p->walls.layers > 0 ? p->walls.layers : needed;
+}
+
+int surge_params_validate(const surge_params *p, char *err, size_t err_len)
+{
+    const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
+    const double support = 2.0 * p->numerics.ch * sqrt(2.0) * dp;
+    const int layers = surge_params_wall_layers(p);
+    if (p->fluid.x1_m <= p->fluid.x0_m) {
+        fail(err, err_len, "fluid.x1_m (%g) must be greater than fluid.x0_m (%g)", p->fluid.x1_m, p->fluid.x0_m);
+        return -1;
+    }
+    if (p->fluid.x0_m < 0 || p->fluid.x1_m > L + 1e-12) {
+        fail(err, err_len, "the fluid block [%g, %g] m must lie inside the domain [0, %g] m (domain.length_m)",
+             p->fluid.x0_m, p->fluid.x1_m, L);
+        return -1;
+    }
+    if (p->fluid.depth_m > H + 1e-12) {
+        fail(err, err_len, "fluid.depth_m (%g) exceeds domain.height_m (%g)", p->fluid.depth_m, H);
+        return -1;
+    }
+    if ((p->fluid.x1_m - p->fluid.x0_m) < dp || p->fluid.depth_m < dp) {
+        fail(err, err_len, "the fluid block (%g x %g m) is smaller than one particle (numerics.dp_m = %g)",
+             p->fluid.x1_m - p->fluid.x0_m, p->fluid.depth_m, dp);
+        return -1;
+    }
+    if (p->domain.periodic_x && L < 3.0 * support) {
+        fail(err, err_len, "a periodic domain must be at least 3 kernel supports long: domain.length_m = %g < %g m",
+             L, 3.0 * support);
+        return -1;
+    }
+    if (p->domain.periodic_x && fabs(remainder(L / dp, 1.0)) > 1e-6) {
+        fail(err, err_len, "domain.length_m (%g) must be a whole number of particle spacings dp (%g) when periodic",
+             L, dp);
+        return -1;
+    }
+    if (p->domain.periodic_x && (p->walls.left || p->walls.right)) {
+        fail(err, err_len, "walls.left/walls.right need a non-periodic domain (domain.periodic_x = false)");
+        return -1;
+    }
+    if (p->walls.upstream && !p->domain.periodic_x) {
+        fail(err, err_len, "walls.upstream is for periodic domains; use walls.left in a closed box");
+        return -1;
+    }
+    if (p->walls.upstream &&
+        (p->walls.upstream_x_m - layers * dp < -1e-12 || p->walls.upstream_x_m > p->fluid.x0_m + 1e-12)) {
+        fail(err, err_len, "walls.upstream_x_m (%g) must leave room for %d wall layers after x = 0 and lie upstream "
+             "of the fluid (fluid.x0_m = %g)", p->walls.upstream_x_m, layers, p->fluid.x0_m);
+        return -1;
+    }
+    double layers_needed = ceil(support / dp - 1e-9);
+    if ((p->walls.bottom || p->walls.top || p->walls.left || p->walls.right || p->walls.upstream) &&
+        layers < layers_needed) {
+        fail(err, err_len, "walls.layers = %d is thinner than the kernel support: %g layers needed at "
+             "numerics.ch = %g", layers, layers_needed, p->numerics.ch);
+        return -1;
+    }
+    if (!p->walls.bottom && !p->walls.top && !p->walls.left && !p->walls.right && !p->walls.upstream &&
+        p->body.gravity_mps2 > 0) {
+        fail(err, err_len, "the scene has gravity but no walls: enable walls.bottom");
+        return -1;
+    }
+    double n_estimate = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m / (dp * dp);
+    if (n_estimate > 5e7) {
+        fail(err, err_len, "the fluid block would need about %.3g particles (more than 5e7): raise numerics.dp_m",
+             n_estimate);
+        return -1;
+    }
+    return 0;
+}
+
+void surge_params_write(const surge_params *p, FILE *out)
+{
+    const char *section = "";
+    for (int i = 0; i < REGISTRY_COUNT; i++) {
+        const surge_param_info *r = &registry[i];
+        if (strcmp(section, r->section)) {
+            fprintf(out, "%s[%s]\n", i ? "\n" : "", r->section);
+            section = r->section;
+        }
+        char value[64];
+        surge_param_format(p, r, value, sizeof value);
+        fprintf(out, "%s = %s\n", r->key, value);
+    }
+}
+
+void surge_params_write_reference(FILE *out)
+{
+    fprintf(out, "# Parameter reference\n\n"
+                 "Generated by `surge params` from the parameter registry (sim/src/params.c); do not edit by hand.\n"
+                 "Case files are INI-style: `[section]` then `key = value`; `#` or `;` start comments.\n"
+                 "Any parameter can be overridden on the command line with `-s section.key=value`.\n"
+                 "*Live* parameters may change while a run is going (control socket, restart overrides).\n");
+    const char *section = "";
+    for (int i = 0; i < REGISTRY_COUNT; i++) {
+        const surge_param_info *r = &registry[i];
+        if (strcmp(section, r->section)) {
+            fprintf(out, "\n## [%s]\n\n| key | type | unit | default | allowed | live | meaning |\n"
+                         "|---|---|---|---|---|---|---|\n", r->section);
+            section = r->section;
+        }
+        surge_params defaults = surge_default_params();
+        char def[64], allowed[160];
+        surge_param_format(&defaults, r, def, sizeof def);
+        static const char *type_names[] = {"real", "integer", "boolean", "choice"};
+        switch (r->type) {
+        case SURGE_PARAM_REAL: snprintf(allowed, sizeof allowed, "[%g, %g]", r->min_value, r->max_value); break;
+        case SURGE_PARAM_INT: snprintf(allowed, sizeof allowed, "[%d, %d]", (int)r->min_value, (int)r->max_value); break;
+        case SURGE_PARAM_BOOL: snprintf(allowed, sizeof allowed, "true, false"); break;
+        case SURGE_PARAM_ENUM: snprintf(allowed, sizeof allowed, "%s", r->enum_names); break;
+        }
+        for (char *c = allowed; *c; c++)
+            if (*c == '|')
+                *c = '/';
+        fprintf(out, "| `%s` | %s | %s | %s | %s | %s | %s |\n", r->key, type_names[r->type], r->unit, def, allowed,
+                r->live ? "yes" : "no", r->doc);
+    }
+}

@@ -1,0 +1,225 @@
+#define _POSIX_C_SOURCE 200809L
+#include "surge/run.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "surge/vtk_output.h"
+
+typedef struct run_outputs {
+    const char *dir;
+    surge_pvd *pvd;
+    FILE *csv;
+    surge_snapshot snap;
+} run_outputs;
+
+static double wall_clock_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+surge_run_options surge_default_run_options(void)
+{
+    surge_run_options o;
+    memset(&o, 0, sizeof o);
+    o.output_dir = "out";
+    o.threads = 1;
+    return o;
+}
+
+static int make_dirs(const char *path, char *err, size_t err_len)
+{
+    char buf[4096];
+    snprintf(buf, sizeof buf, "%s", path);
+    for (char *p = buf + 1; ; p++) {
+        if (*p == '/' || *p == '\0') {
+            char saved = *p;
+            *p = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
+                snprintf(err, err_len, "cannot create output folder '%s': %s", buf, strerror(errno));
+                return -1;
+            }
+            *p = saved;
+            if (saved == '\0')
+                break;
+        }
+    }
+    struct stat st;
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
+        snprintf(err, err_len, "output path '%s' is not a folder", path);
+        return -1;
+    }
+    return 0;
+}
+
+static void join(char *out, size_t len, const char *dir, const char *name) { snprintf(out, len, "%s/%s", dir, name); }
+
+static int write_params(const surge_sim *sim, const run_outputs *o, int threads, char *err, size_t err_len)
+{
+    char path[4096];
+    join(path, sizeof path, o->dir, "params.ini");
+    FILE *f = fopen(path, "w");
+    if (!f) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    const surge_derived *d = surge_sim_derived(sim);
+    fprintf(f, "# surge: full resolved parameter set of this run (reloads as a case file)\n"
+               "# derived: h_m = %.9g, c0_mps = %.9g (expected speed %.6g m/s), particle_mass_kgpm = %.9g\n"
+               "# derived: fluid particles = %d, wall particles = %d, threads = %d\n\n",
+            d->h_m, d->c0_mps, d->expected_speed_mps, d->particle_mass_kg, d->fluid_count, d->wall_count, threads);
+    surge_params_write(surge_sim_params(sim), f);
+    if (fclose(f) != 0) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+static int write_snapshot(const surge_sim *sim, run_outputs *o, const char *name, int add_to_collection,
+                          char *err, size_t err_len)
+{
+    char file[64], path[4096];
+    if (name)
+        snprintf(file, sizeof file, "%s", name);
+    else
+        snprintf(file, sizeof file, "snap_%09lld.vtp", (long long)surge_sim_step_count(sim));
+    join(path, sizeof path, o->dir, file);
+    if (surge_sim_snapshot(sim, &o->snap) != 0) {
+        snprintf(err, err_len, "out of memory taking a snapshot");
+        return -1;
+    }
+    if (surge_vtp_write(path, &o->snap, err, err_len) != 0)
+        return -1;
+    if (add_to_collection && surge_pvd_add(o->pvd, surge_sim_time(sim), file, err, err_len) != 0)
+        return -1;
+    return 0;
+}
+
+static void write_diagnostics(const surge_sim *sim, run_outputs *o)
+{
+    surge_diagnostics d = surge_sim_diagnostics(sim);
+    fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g\n", d.time_s, (long long)d.step, d.dt_s,
+            d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
+            d.bottom_wall_speed_mps);
+}
+
+static int write_checkpoint(const surge_sim *sim, const run_outputs *o, char *err, size_t err_len)
+{
+    char path[4096];
+    join(path, sizeof path, o->dir, "checkpoint.bin");
+    return surge_sim_checkpoint_write(sim, path, err, err_len);
+}
+
+/* The first multiple of interval strictly after t. */
+static double next_time(double t, double interval)
+{
+    return interval > 0 ? (floor(t / interval + 1e-9) + 1.0) * interval : INFINITY;
+}
+
+static void print_progress(const surge_sim *sim, double start_wall, int64_t start_step, double start_time)
+{
+    const double elapsed = wall_clock_s() - start_wall, t = surge_sim_time(sim);
+    const double end = surge_sim_params(sim)->time.end_s;
+    const double steps = (double)(surge_sim_step_count(sim) - start_step);
+    const double rate = elapsed > 0 ? steps / elapsed : 0;
+    const double eta = t > start_time ? elapsed * (end - t) / (t - start_time) : 0;
+    fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.0f steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d\n",
+            t, end, (long long)surge_sim_step_count(sim), surge_sim_last_dt(sim), rate,
+            rate * surge_sim_derived(sim)->fluid_count, (int)(eta / 3600), (int)fmod(eta / 60, 60), (int)fmod(eta, 60));
+}
+
+surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
+{
+    run_outputs o = {.dir = opt->output_dir};
+    surge_run_result result = SURGE_RUN_IO_ERROR;
+    char path[4096];
+    if (make_dirs(opt->output_dir, err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
+        return SURGE_RUN_IO_ERROR;
+    join(path, sizeof path, o.dir, "run.pvd");
+    /* a restart keeps the earlier run's entries up to and including its final snapshot (this state) */
+    o.pvd = surge_pvd_open(path, opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0, err, err_len);
+    if (!o.pvd)
+        return SURGE_RUN_IO_ERROR;
+    join(path, sizeof path, o.dir, "diagnostics.csv");
+    o.csv = fopen(path, opt->restarted ? "a" : "w");
+    if (!o.csv) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        goto done;
+    }
+    if (!opt->restarted)
+        fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
+                       "mean_vx_mps,bottom_wall_speed_mps\n");
+    const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
+    if (!opt->restarted) {
+        write_diagnostics(sim, &o);
+        if (write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
+            goto done;
+    }
+    double next_snapshot = next_time(surge_sim_time(sim), p->output.snapshot_interval_s);
+    double next_diag = next_time(surge_sim_time(sim), p->output.diagnostics_interval_s);
+    double next_checkpoint = next_time(surge_sim_time(sim), p->output.checkpoint_interval_s);
+    const double start_wall = wall_clock_s(), start_time = surge_sim_time(sim);
+    const int64_t start_step = surge_sim_step_count(sim);
+    double next_progress = start_wall + p->output.progress_interval_s;
+
+    while (surge_sim_time(sim) < p->time.end_s) {
+        if (opt->stop && *opt->stop) {
+            result = SURGE_RUN_INTERRUPTED;
+            break;
+        }
+        if (surge_sim_step(sim) != 0) {
+            result = SURGE_RUN_UNHEALTHY;
+            snprintf(err, err_len, "%s", surge_sim_health(sim)->message);
+            break;
+        }
+        if (opt->on_step)
+            opt->on_step(sim, opt->user);
+        const double t = surge_sim_time(sim);
+        if (p->output.diagnostics_interval_s == 0 || t >= next_diag) {
+            write_diagnostics(sim, &o);
+            next_diag = next_time(t, p->output.diagnostics_interval_s);
+        }
+        if (t >= next_snapshot) {
+            if (write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
+                goto done;
+            next_snapshot = next_time(t, p->output.snapshot_interval_s);
+        }
+        if (t >= next_checkpoint) {
+            if (write_checkpoint(sim, &o, err, err_len) != 0)
+                goto done;
+            next_checkpoint = next_time(t, p->output.checkpoint_interval_s);
+        }
+        if (p->output.progress_interval_s > 0 && wall_clock_s() >= next_progress) {
+            print_progress(sim, start_wall, start_step, start_time);
+            next_progress = wall_clock_s() + p->output.progress_interval_s;
+        }
+    }
+    if (surge_sim_time(sim) >= p->time.end_s)
+        result = SURGE_RUN_FINISHED;
+    /* the final state (the last good one after a health failure) always reaches disk */
+    char final_err[512];
+    const char *final_name = result == SURGE_RUN_UNHEALTHY ? "last_good.vtp" : NULL;
+    if (write_snapshot(sim, &o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0 ||
+        write_checkpoint(sim, &o, final_err, sizeof final_err) != 0) {
+        if (result != SURGE_RUN_UNHEALTHY)
+            snprintf(err, err_len, "%s", final_err);
+        result = result == SURGE_RUN_UNHEALTHY ? result : SURGE_RUN_IO_ERROR;
+    }
+    if (p->output.progress_interval_s > 0)
+        print_progress(sim, start_wall, start_step, start_time);
+done:
+    if (o.csv && fclose(o.csv) != 0 && result == SURGE_RUN_FINISHED) {
+        snprintf(err, err_len, "cannot write diagnostics.csv: %s", strerror(errno));
+        result = SURGE_RUN_IO_ERROR;
+    }
+    surge_pvd_close(o.pvd);
+    surge_snapshot_free(&o.snap);
+    return result;
+}

@@ -1,0 +1,175 @@
+/* Building a scene from its parameters: walls of boundary particles with their mDBC ghost nodes, the
+ * initial fluid block in hydrostatic balance, and the speed scale c0 derives from. */
+#include <math.h>
+#include <stdlib.h>
+
+#include "sim_internal.h"
+
+/* The largest speed the scene can be expected to reach, from its own scales (physics.md section 1). */
+double scene_expected_speed(const surge_params *p)
+{
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    const double g_normal = p->body.gravity_mps2 * cos(theta);
+    const double drive = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2;
+    const double depth = p->fluid.depth_m, nu = p->fluid.viscosity_m2ps;
+    double u = fmax(fabs(p->walls.bottom_speed_mps), fabs(p->walls.top_speed_mps));
+    if (p->walls.top) {
+        /* closed channel: Poiseuille centre-line speed */
+        if (nu > 0)
+            u = fmax(u, fabs(drive) * p->domain.height_m * p->domain.height_m / (8.0 * nu));
+    } else {
+        /* free surface: collapse of the block (sqrt(2 g h)) and the surface speed of a film of this depth */
+        u = fmax(u, sqrt(2.0 * fabs(g_normal) * depth));
+        if (nu > 0)
+            u = fmax(u, fabs(drive) * depth * depth / (2.0 * nu));
+    }
+    return u;
+}
+
+typedef struct particle_list {
+    int32_t n, cap;
+    double *x, *y;
+    real *gdx, *gdy;
+    uint8_t *wall;
+} particle_list;
+
+static void push_wall(particle_list *l, double x, double y, double ghost_x, double ghost_y, int wall)
+{
+    if (l->n >= l->cap)
+        return;
+    l->x[l->n] = x;
+    l->y[l->n] = y;
+    l->gdx[l->n] = (real)(ghost_x - x);
+    l->gdy[l->n] = (real)(ghost_y - y);
+    l->wall[l->n] = (uint8_t)wall;
+    l->n++;
+}
+
+/* Wall particles of the box: bottom, top, left, right (corners mirrored through the corner point) and the
+ * upstream wall. Ghost nodes are the particle mirrored across the wall face into the fluid. */
+static void build_walls(const surge_params *p, particle_list *l)
+{
+    const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
+    const int layers = p->walls.layers;
+    const double depth = layers * dp;
+    const double xlo = p->walls.left ? -depth : 0.0;
+    const double xhi = p->walls.right ? L + depth : L;
+    const long nx_ext = lround((xhi - xlo) / dp);
+    for (int k = 0; k < layers; k++) {
+        const double off = (k + 0.5) * dp;
+        for (long i = 0; i < nx_ext; i++) {
+            double x = xlo + (i + 0.5) * dp;
+            double gx = x < 0 ? -x : (x > L ? 2 * L - x : x); /* corners mirror through the corner point */
+            if (p->walls.bottom)
+                push_wall(l, x, -off, gx, off, WALL_BOTTOM);
+            if (p->walls.top)
+                push_wall(l, x, H + off, gx, H - off, WALL_TOP);
+        }
+        const long ny = lround(H / dp);
+        for (long j = 0; j < ny; j++) {
+            double y = (j + 0.5) * dp;
+            if (p->walls.left)
+                push_wall(l, -off, y, off, y, WALL_FIXED);
+            if (p->walls.right)
+                push_wall(l, L + off, y, L - off, y, WALL_FIXED);
+        }
+        if (p->walls.upstream) {
+            const long nu = lround(p->walls.upstream_height_m / dp);
+            const double xw = p->walls.upstream_x_m;
+            for (long j = 0; j < nu; j++) {
+                double y = (j + 0.5) * dp;
+                push_wall(l, xw - off, y, xw + off, y, WALL_FIXED);
+            }
+        }
+    }
+}
+
+static long fluid_columns(const surge_params *p) { return lround((p->fluid.x1_m - p->fluid.x0_m) / p->numerics.dp_m); }
+static long fluid_rows(const surge_params *p) { return lround(p->fluid.depth_m / p->numerics.dp_m); }
+
+static int wall_capacity(const surge_params *p)
+{
+    const double dp = p->numerics.dp_m;
+    const int layers = p->walls.layers;
+    long n = 0;
+    long nx_ext = lround(p->domain.length_m / dp) + 2 * layers + 2;
+    n += (p->walls.bottom + p->walls.top) * nx_ext * layers;
+    n += (p->walls.left + p->walls.right) * (lround(p->domain.height_m / dp) + 1) * layers;
+    if (p->walls.upstream)
+        n += (lround(p->walls.upstream_height_m / dp) + 1) * layers;
+    return (int)n;
+}
+
+static int allocate_state(surge_sim *s, int n)
+{
+    s->count = n;
+    int ok = 1;
+#define ALLOC(ptr, len) ok &= ((ptr) = calloc((size_t)(len) > 0 ? (size_t)(len) : 1, sizeof *(ptr))) != NULL
+    ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
+    ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
+    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->visc_rate, n);
+    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n);
+    ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
+    ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);
+    ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count);
+    ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
+#undef ALLOC
+    return ok ? 0 : -1;
+}
+
+int scene_build(surge_sim *s, char *err, size_t err_len)
+{
+    const surge_params *p = &s->params;
+    const double dp = p->numerics.dp_m;
+    particle_list walls = {0};
+    walls.cap = wall_capacity(p);
+    walls.x = malloc((size_t)walls.cap * sizeof(double) + 1);
+    walls.y = malloc((size_t)walls.cap * sizeof(double) + 1);
+    walls.gdx = malloc((size_t)walls.cap * sizeof(real) + 1);
+    walls.gdy = malloc((size_t)walls.cap * sizeof(real) + 1);
+    walls.wall = malloc((size_t)walls.cap + 1);
+    if (!walls.x || !walls.y || !walls.gdx || !walls.gdy || !walls.wall) {
+        snprintf(err, err_len, "out of memory building walls");
+        goto fail;
+    }
+    build_walls(p, &walls);
+
+    const long cols = fluid_columns(p), rows = fluid_rows(p);
+    s->wall_count = walls.n;
+    if (allocate_state(s, walls.n + (int)(cols * rows)) != 0) {
+        snprintf(err, err_len, "out of memory for %ld particles", (long)walls.n + cols * rows);
+        goto fail;
+    }
+    for (int i = 0; i < walls.n; i++) {
+        s->x[i] = walls.x[i];
+        s->y[i] = walls.y[i];
+        s->rho[i] = (real)s->rho0;
+        s->ghost_dx[i] = walls.gdx[i];
+        s->ghost_dy[i] = walls.gdy[i];
+        s->wall_of[i] = walls.wall[i];
+        s->id[i] = i;
+        int moving = (walls.wall[i] == WALL_BOTTOM && p->walls.bottom_speed_mps != 0) ||
+                     (walls.wall[i] == WALL_TOP && p->walls.top_speed_mps != 0);
+        s->kind[i] = moving ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL;
+    }
+    /* fluid on a square lattice, density in hydrostatic balance with the bed-normal gravity */
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    const double g_normal = p->body.gravity_mps2 * cos(theta);
+    int32_t i = walls.n;
+    for (long c = 0; c < cols; c++) {
+        for (long r = 0; r < rows; r++) {
+            s->x[i] = p->fluid.x0_m + (c + 0.5) * dp;
+            s->y[i] = (r + 0.5) * dp;
+            double p_hydro = s->rho0 * g_normal * (p->fluid.depth_m - s->y[i]);
+            s->rho[i] = (real)tait_density(p_hydro, s->rho0, s->b_pa);
+            s->id[i] = i;
+            s->kind[i] = SURGE_KIND_FLUID;
+            i++;
+        }
+    }
+    free(walls.x); free(walls.y); free(walls.gdx); free(walls.gdy); free(walls.wall);
+    return 0;
+fail:
+    free(walls.x); free(walls.y); free(walls.gdx); free(walls.gdy); free(walls.wall);
+    return -1;
+}

@@ -1,0 +1,311 @@
+/* The solver: scene set-up, symplectic position-Verlet stepping with a variable time step, shifting,
+ * snapshots, diagnostics and the state hash. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+static void update_body_force(surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    sim->gx = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2;
+    sim->gy = -p->body.gravity_mps2 * cos(theta);
+    /* hydrostatic density difference per metre along the bed normal, linearised Tait (rho0 g_n / c0^2) */
+    sim->rho_h_per_m = sim->rho0 * p->body.gravity_mps2 * cos(theta) / (sim->derived.c0_mps * sim->derived.c0_mps);
+}
+
+surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_len)
+{
+    if (surge_params_validate(params, err, err_len) != 0)
+        return NULL;
+    surge_sim *sim = calloc(1, sizeof *sim);
+    if (!sim) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    sim->params = *params;
+    sim->params.walls.layers = surge_params_wall_layers(params); /* resolve the automatic value */
+    const surge_params *p = &sim->params;
+    const double dp = p->numerics.dp_m;
+    sim->derived.h_m = p->numerics.ch * sqrt(2.0) * dp;
+    sim->derived.expected_speed_mps = scene_expected_speed(p);
+    sim->derived.c0_mps = p->numerics.c0_mps > 0 ? p->numerics.c0_mps
+                                                : p->numerics.c0_factor * sim->derived.expected_speed_mps;
+    if (!(sim->derived.c0_mps > 0)) {
+        snprintf(err, err_len, "cannot derive c0: the scene has no gravity, body force or moving wall to set a speed "
+                 "scale; set numerics.c0_mps");
+        free(sim);
+        return NULL;
+    }
+    sim->rho0 = p->fluid.density_kgpm3;
+    sim->b_pa = sim->derived.c0_mps * sim->derived.c0_mps * sim->rho0 / 7.0;
+    sim->mass = sim->rho0 * dp * dp;
+    sim->derived.particle_mass_kg = sim->mass;
+    sim->eta2 = 0.01 * sim->derived.h_m * sim->derived.h_m;
+    sim->kernel = kernel2d_make(sim->derived.h_m);
+    update_body_force(sim);
+    if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0) {
+        surge_sim_destroy(sim);
+        return NULL;
+    }
+    sim->derived.wall_count = sim->wall_count;
+    sim->derived.fluid_count = sim->count - sim->wall_count;
+    grid_sort_walls(sim);
+    grid_sort_fluid(sim);
+    boundary_wall_speeds(sim, 0.0);
+    return sim;
+}
+
+void surge_sim_destroy(surge_sim *sim)
+{
+    if (!sim)
+        return;
+    void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
+                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->visc_rate,
+                      sim->grad_c_x, sim->grad_c_y, sim->div_r, sim->surface, sim->near_surface, sim->kind,
+                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->wall_vx, sim->wall_vy, sim->sort_key,
+                      sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
+    grid_free(&sim->grid);
+    free(sim);
+}
+
+/* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7) */
+static double variable_dt(const surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    if (p->numerics.dt_fixed_s > 0)
+        return p->numerics.dt_fixed_s;
+    const double h = sim->derived.h_m, c0 = sim->derived.c0_mps;
+    double max_acc2 = 0, max_rate = 0;
+    #pragma omp parallel for schedule(static) reduction(max : max_acc2, max_rate)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        double acc2 = (double)sim->ax[a] * sim->ax[a] + (double)sim->ay[a] * sim->ay[a];
+        max_acc2 = acc2 > max_acc2 ? acc2 : max_acc2;
+        max_rate = sim->visc_rate[a] > max_rate ? sim->visc_rate[a] : max_rate;
+    }
+    double dt = h / (c0 + max_rate);                 /* dt_cv */
+    if (max_acc2 > 0)
+        dt = fmin(dt, sqrt(h / sqrt(max_acc2)));     /* dt_f */
+    if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)
+        dt = fmin(dt, h * h / p->fluid.viscosity_m2ps); /* dt_nu */
+    return p->numerics.cfl * dt;
+}
+
+static inline double wrap_x(double x, double period)
+{
+    if (period > 0) {
+        if (x >= period)
+            x -= period;
+        else if (x < 0)
+            x += period;
+    }
+    return x;
+}
+
+/* Particle shifting, applied with the corrector (workshop paper Sect. II-D, V-B). */
+static void shift_displacement(const surge_sim *sim, int a, double dt, double *sx, double *sy)
+{
+    const surge_params *p = &sim->params;
+    *sx = *sy = 0;
+    double coef;
+    switch (p->shifting.form) {
+    case SURGE_SHIFT_VELOCITY: /* dr = -A h |u| dt grad C, none on the free surface */
+        if (sim->div_r[a] < p->shifting.surface_threshold)
+            return;
+        coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
+               sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
+        break;
+    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
+        if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
+            return;
+        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
+        break;
+    default: return;
+    }
+    double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
+    const double max_shift = p->shifting.max_shift_dp * p->numerics.dp_m;
+    const double len = sqrt(dx * dx + dy * dy);
+    if (len > max_shift) {
+        dx *= max_shift / len;
+        dy *= max_shift / len;
+    }
+    *sx = dx;
+    *sy = dy;
+}
+
+static void restore_step_start(surge_sim *sim)
+{
+    const size_t nf = (size_t)(sim->count - sim->wall_count), w = (size_t)sim->wall_count;
+    memcpy(sim->x + w, sim->x_n + w, nf * sizeof *sim->x);
+    memcpy(sim->y + w, sim->y_n + w, nf * sizeof *sim->y);
+    memcpy(sim->vx + w, sim->vx_n + w, nf * sizeof *sim->vx);
+    memcpy(sim->vy + w, sim->vy_n + w, nf * sizeof *sim->vy);
+    memcpy(sim->rho + w, sim->rho_n + w, nf * sizeof *sim->rho);
+}
+
+int surge_sim_step(surge_sim *sim)
+{
+    const int first = sim->wall_count, n = sim->count;
+    const double period = sim->grid.period_m;
+    const double t_n = sim->time_s;
+
+    grid_sort_fluid(sim);
+    boundary_wall_speeds(sim, t_n);
+    boundary_update(sim);
+    interaction_compute(sim, 0);
+    const double dt = variable_dt(sim);
+    if (sim->step == 0 && sim->first_dt_s == 0)
+        sim->first_dt_s = dt;
+
+    /* predictor: half step (workshop paper eq. 5a-b) */
+    const double half = 0.5 * dt;
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        sim->x_n[a] = sim->x[a];
+        sim->y_n[a] = sim->y[a];
+        sim->vx_n[a] = sim->vx[a];
+        sim->vy_n[a] = sim->vy[a];
+        sim->rho_n[a] = sim->rho[a];
+        sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
+        sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
+        sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
+        sim->x[a] = wrap_x(sim->x_n[a] + half * sim->vx_n[a], period);
+        sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
+    }
+
+    /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
+    boundary_wall_speeds(sim, t_n + half);
+    boundary_update(sim);
+    interaction_compute(sim, 1);
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        const double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
+        const double eps = -(double)sim->drho[a] / sim->rho[a] * dt;
+        double sx, sy;
+        shift_displacement(sim, a, dt, &sx, &sy);
+        sim->vx[a] = (real)vx1;
+        sim->vy[a] = (real)vy1;
+        sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));
+        sim->x[a] = wrap_x(sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx, period);
+        sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
+    }
+    sim->time_s = t_n + dt;
+    sim->dt_s = dt;
+    sim->step++;
+    boundary_wall_speeds(sim, sim->time_s);
+
+    if (health_check(sim) != 0) {
+        restore_step_start(sim);
+        sim->time_s = t_n;
+        sim->step--;
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    return 0;
+}
+
+double surge_sim_time(const surge_sim *sim) { return sim->time_s; }
+int64_t surge_sim_step_count(const surge_sim *sim) { return sim->step; }
+double surge_sim_last_dt(const surge_sim *sim) { return sim->dt_s; }
+const surge_params *surge_sim_params(const surge_sim *sim) { return &sim->params; }
+const surge_derived *surge_sim_derived(const surge_sim *sim) { return &sim->derived; }
+const surge_health *surge_sim_health(const surge_sim *sim) { return &sim->health; }
+
+int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, char *err, size_t err_len)
+{
+    const surge_param_info *info = surge_param_find(name);
+    if (!info) {
+        snprintf(err, err_len, "unknown parameter '%s'", name);
+        return -1;
+    }
+    if (!info->live) {
+        snprintf(err, err_len, "%s cannot change while the simulation runs", name);
+        return -1;
+    }
+    surge_params candidate = sim->params;
+    if (surge_param_set(&candidate, info, value, err, err_len) != 0 ||
+        surge_params_validate(&candidate, err, err_len) != 0)
+        return -1;
+    sim->params = candidate;
+    update_body_force(sim);
+    return 0;
+}
+
+int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
+{
+    if (surge_snapshot_reserve(snap, sim->count) != 0)
+        return -1;
+    snap->step = sim->step;
+    snap->time_s = sim->time_s;
+    snap->dt_s = sim->dt_s;
+    const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
+    for (int i = 0; i < sim->count; i++) {
+        const int k = sim->id[i];
+        const int is_wall = i < sim->wall_count;
+        snap->x_m[k] = sim->x[i];
+        snap->y_m[k] = sim->y[i];
+        snap->vx_mps[k] = is_wall ? (float)sim->wall_speed[sim->wall_of[i]] : (float)sim->vx[i];
+        snap->vy_mps[k] = is_wall ? 0.0f : (float)sim->vy[i];
+        snap->density_kgpm3[k] = (float)sim->rho[i];
+        snap->pressure_pa[k] = (float)tait_pressure(sim->rho[i], rho0, b);
+        snap->kind[k] = sim->kind[k];
+        snap->id[k] = k;
+    }
+    return 0;
+}
+
+surge_diagnostics surge_sim_diagnostics(const surge_sim *sim)
+{
+    surge_diagnostics d = {0};
+    d.time_s = sim->time_s;
+    d.dt_s = sim->dt_s;
+    d.step = sim->step;
+    d.bottom_wall_speed_mps = sim->wall_speed[WALL_BOTTOM];
+    double ke = 0, vmax2 = 0, dev = 0, vol = 0, sum_vx = 0;
+    const double rho0 = sim->rho0, m = sim->mass;
+    #pragma omp parallel for schedule(static) reduction(+ : ke, vol, sum_vx) reduction(max : vmax2, dev)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
+        ke += 0.5 * m * v2;
+        vmax2 = v2 > vmax2 ? v2 : vmax2;
+        const double e = fabs(sim->rho[a] / rho0 - 1.0);
+        dev = e > dev ? e : dev;
+        vol += m / sim->rho[a];
+        sum_vx += sim->vx[a];
+    }
+    d.kinetic_energy_jpm = ke;
+    d.max_speed_mps = sqrt(vmax2);
+    d.max_density_deviation = dev;
+    d.fluid_volume_m2 = vol;
+    d.mean_vx_mps = sim->count > sim->wall_count ? sum_vx / (sim->count - sim->wall_count) : 0;
+    return d;
+}
+
+static uint64_t fnv1a(uint64_t h, const void *data, size_t len)
+{
+    const unsigned char *p = data;
+    for (size_t i = 0; i < len; i++) {
+        h ^= p[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+uint64_t surge_sim_state_hash(const surge_sim *sim)
+{
+    uint64_t h = 14695981039346656037ull;
+    const size_t w = (size_t)sim->wall_count, nf = (size_t)(sim->count - sim->wall_count);
+    h = fnv1a(h, &sim->step, sizeof sim->step);
+    h = fnv1a(h, &sim->time_s, sizeof sim->time_s);
+    h = fnv1a(h, sim->x + w, nf * sizeof *sim->x);
+    h = fnv1a(h, sim->y + w, nf * sizeof *sim->y);
+    h = fnv1a(h, sim->vx + w, nf * sizeof *sim->vx);
+    h = fnv1a(h, sim->vy + w, nf * sizeof *sim->vy);
+    h = fnv1a(h, sim->rho + w, nf * sizeof *sim->rho);
+    h = fnv1a(h, sim->id + w, nf * sizeof *sim->id);
+    return h;
+}

@@ -1,0 +1,94 @@
+/* The solver's state, shared by the files of sim/src. Not part of the public interface. */
+#ifndef SURGE_SIM_INTERNAL_H
+#define SURGE_SIM_INTERNAL_H
+
+#include <stdint.h>
+
+#include "kernel.h"
+#include "precision.h"
+#include "surge/sim.h"
+
+enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_COUNT = 3 };
+
+/* Uniform cell grid, cells at least 2h wide, periodic in x or not. Wall particles (indices [0, wall_count))
+ * and fluid particles ([wall_count, count)) are each sorted by cell and have their own cell ranges. */
+typedef struct cell_grid {
+    int ncx, ncy;
+    double x0, y0;          /* lower-left corner */
+    double cell_w, cell_h;
+    double period_m;        /* > 0 when periodic in x */
+    int *fluid_start;       /* ncx*ncy + 1 */
+    int *wall_start;        /* ncx*ncy + 1 */
+} cell_grid;
+
+/* Up to two contiguous cell ranges per row of the 3x3 block around a cell, with the x shift that brings the
+ * periodic image next to the particle. */
+typedef struct cell_span {
+    int first_cell, last_cell; /* inclusive, within one row */
+    double shift_x;            /* add to the neighbour's x */
+} cell_span;
+
+struct surge_sim {
+    surge_params params;
+    surge_derived derived;
+    kernel2d kernel;
+    double rho0, b_pa, eta2, mass;
+    double gx, gy;             /* body acceleration (tilted gravity + body force) */
+    double rho_h_per_m;        /* hydrostatic density gradient rho0 g_n / c0^2 (density diffusion) */
+
+    int32_t count, wall_count;
+    /* state, structure of arrays, in cell order */
+    double *x, *y;
+    real *vx, *vy, *rho;
+    int32_t *id;
+    /* copies at the start of the step (symplectic scheme, roll-back) */
+    double *x_n, *y_n;
+    real *vx_n, *vy_n, *rho_n;
+    /* per-particle rates and scratch */
+    real *ax, *ay, *drho, *pressure;
+    real *visc_rate;           /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle (dt_cv) */
+    real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
+    real *div_r;
+    uint8_t *surface;          /* free-surface flag from the last predictor pass */
+    uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */
+    /* wall particles only */
+    uint8_t *wall_of;          /* WALL_* */
+    real *ghost_dx, *ghost_dy; /* offset from wall particle to its mDBC ghost node */
+    real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
+    double wall_speed[WALL_COUNT];
+    uint8_t *kind;             /* surge_particle_kind, by id */
+
+    cell_grid grid;
+    int32_t *sort_key, *sort_scratch_i;
+    double *sort_scratch_d;
+    real *sort_scratch_r;
+
+    double time_s, dt_s, first_dt_s;
+    int64_t step;
+    surge_health health;
+};
+
+/* scene.c */
+int scene_build(surge_sim *sim, char *err, size_t err_len);
+double scene_expected_speed(const surge_params *p);
+
+/* grid.c */
+int grid_init(surge_sim *sim, char *err, size_t err_len);
+void grid_free(cell_grid *grid);
+int grid_cell_x(const cell_grid *g, double x);
+int grid_cell_y(const cell_grid *g, double y);
+int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2]);
+void grid_sort_walls(surge_sim *sim);
+void grid_sort_fluid(surge_sim *sim);
+
+/* boundary.c: mDBC density and no-slip velocity of wall particles */
+void boundary_update(surge_sim *sim);
+void boundary_wall_speeds(surge_sim *sim, double time_s);
+
+/* interaction.c: rates of change of fluid particles */
+void interaction_compute(surge_sim *sim, int corrector);
+
+/* health.c */
+int health_check(surge_sim *sim);
+
+#endif

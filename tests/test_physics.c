@@ -1,0 +1,244 @@
+/* Physics tests against analytic references (physics.md). Each runs a shipped case, made cheaper through
+ * overrides where that keeps the check meaningful, and prints the measured errors next to their bounds.
+ * usage: test_physics NAME [profile.csv]   NAME: hydrostatic | poiseuille | couette | film | restart */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "surge/sim.h"
+
+#define PI 3.14159265358979323846
+
+static int failures = 0;
+
+static void expect_below(const char *what, double value, double bound)
+{
+    const int ok = value <= bound;
+    printf("%-58s %12.4g  (bound %g)  %s\n", what, value, bound, ok ? "ok" : "FAILED");
+    failures += !ok;
+}
+
+static surge_sim *load(const char *case_name, const char *const *overrides, int n)
+{
+    char path[1024], err[1024];
+    snprintf(path, sizeof path, "%s/cases/%s", SURGE_SOURCE_DIR, case_name);
+    surge_params p = surge_default_params();
+    if (surge_params_load(&p, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
+        exit(2);
+    }
+    for (int i = 0; i < n; i++) {
+        if (surge_params_override(&p, overrides[i], false, err, sizeof err) != 0) {
+            fprintf(stderr, "%s\n", err);
+            exit(2);
+        }
+    }
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        exit(2);
+    }
+    return sim;
+}
+
+static void run_until(surge_sim *sim, double t_end)
+{
+    while (surge_sim_time(sim) < t_end) {
+        if (surge_sim_step(sim) != 0) {
+            fprintf(stderr, "%s\n", surge_sim_health(sim)->message);
+            exit(1);
+        }
+    }
+}
+
+/* RMS of (u - u_ref(y)) over fluid particles, relative to scale. */
+static double profile_error(const surge_snapshot *s, double (*ref)(double y, double t), double t, double scale,
+                            FILE *profile)
+{
+    double sum = 0;
+    int n = 0;
+    for (int i = 0; i < s->count; i++) {
+        if (s->kind[i] != SURGE_KIND_FLUID)
+            continue;
+        const double e = s->vx_mps[i] - ref(s->y_m[i], t);
+        sum += e * e;
+        n++;
+        if (profile)
+            fprintf(profile, "%.9g,%.9g,%.9g,%.9g\n", t, s->y_m[i], (double)s->vx_mps[i], ref(s->y_m[i], t));
+    }
+    return sqrt(sum / n) / scale;
+}
+
+/* Plane Poiseuille start-up (Morris et al. 1997), walls at 0 and L, body force F. */
+static const double CH_L = 1e-3, CH_NU = 1e-6, CH_F = 2e-4, CH_U = 2.5e-5;
+static double poiseuille(double y, double t)
+{
+    double u = CH_F / (2 * CH_NU) * y * (CH_L - y);
+    for (int n = 0; n < 200; n++) {
+        const double k = 2 * n + 1;
+        u -= 4 * CH_F * CH_L * CH_L / (CH_NU * PI * PI * PI * k * k * k) * sin(PI * y * k / CH_L) *
+             exp(-k * k * PI * PI * CH_NU * t / (CH_L * CH_L));
+    }
+    return u;
+}
+
+/* Couette start-up: lid at L moving at U from t = 0. */
+static double couette(double y, double t)
+{
+    double u = CH_U * y / CH_L;
+    for (int n = 1; n < 400; n++)
+        u += 2 * CH_U * ((n % 2) ? -1 : 1) / (n * PI) * sin(n * PI * y / CH_L) *
+             exp(-(double)n * n * PI * PI * CH_NU * t / (CH_L * CH_L));
+    return u;
+}
+
+static int test_channel(int poiseuille_flow, const char *profile_path)
+{
+    FILE *profile = profile_path ? fopen(profile_path, "w") : NULL;
+    surge_sim *sim = load(poiseuille_flow ? "poiseuille.ini" : "couette.ini", NULL, 0);
+    surge_snapshot snap = {0};
+    const double times[2] = {0.1, 1.0};
+    const double bounds[2] = {0.02, 0.02};
+    for (int k = 0; k < 2; k++) {
+        run_until(sim, times[k]);
+        surge_sim_snapshot(sim, &snap);
+        const double e = profile_error(&snap, poiseuille_flow ? poiseuille : couette, snap.time_s,
+                                       poiseuille_flow ? CH_F * CH_L * CH_L / (8 * CH_NU) : CH_U, profile);
+        char what[128];
+        snprintf(what, sizeof what, "%s: L2 error / u_max at t = %.3f s", poiseuille_flow ? "poiseuille" : "couette",
+                 snap.time_s);
+        expect_below(what, e, bounds[k]);
+    }
+    surge_snapshot_free(&snap);
+    surge_sim_destroy(sim);
+    if (profile)
+        fclose(profile);
+    return failures;
+}
+
+static int test_hydrostatic(void)
+{
+    surge_sim *sim = load("still_tank.ini", NULL, 0);
+    const surge_params *p = surge_sim_params(sim);
+    const double H = p->fluid.depth_m, g = p->body.gravity_mps2, rho0 = p->fluid.density_kgpm3, dp = p->numerics.dp_m;
+    const double volume0 = surge_sim_diagnostics(sim).fluid_volume_m2;
+    run_until(sim, 1.0);
+    surge_diagnostics d = surge_sim_diagnostics(sim);
+    surge_snapshot s = {0};
+    surge_sim_snapshot(sim, &s);
+    /* pressure of the fluid particles in the lowest layer against rho0 g (H - y) */
+    double sum_p = 0, sum_ref = 0, worst = 0;
+    int n = 0;
+    for (int i = 0; i < s.count; i++) {
+        if (s.kind[i] != SURGE_KIND_FLUID || s.y_m[i] > dp)
+            continue;
+        const double ref = rho0 * g * (H - s.y_m[i]);
+        sum_p += s.pressure_pa[i];
+        sum_ref += ref;
+        worst = fmax(worst, fabs(s.pressure_pa[i] / ref - 1));
+        n++;
+    }
+    printf("hydrostatic: %d particles in the bottom layer, t = %.3f s\n", n, s.time_s);
+    expect_below("hydrostatic: |mean bottom pressure / (rho g (H - y)) - 1|", fabs(sum_p / sum_ref - 1), 0.03);
+    expect_below("hydrostatic: worst bottom-layer particle pressure error", worst, 0.10);
+    expect_below("hydrostatic: max speed / sqrt(g H)", d.max_speed_mps / sqrt(g * H), 0.01);
+    expect_below("hydrostatic: |fluid volume / initial - 1|", fabs(d.fluid_volume_m2 / volume0 - 1), 0.01);
+    surge_snapshot_free(&s);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
+/* Uniform film on an incline (physics.md eq. 12): u(y) = g sin(theta) (2 H y - y^2) / (2 nu). */
+static double film_g_sin, film_h, film_nu;
+static double film(double y, double t)
+{
+    (void)t;
+    return film_g_sin * (2 * film_h * y - y * y) / (2 * film_nu);
+}
+
+static int test_film(void)
+{
+    /* 20 particles in depth, one tenth of the benchmark's length; steady after a few H^2/nu = 1.25 s */
+    const char *overrides[] = {"numerics.dp_m=0.0125", "domain.length_m=0.25", "fluid.x1_m=0.25", "numerics.ch=1.3",
+                               "walls.layers=0"};
+    surge_sim *sim = load("incline_film.ini", overrides, 5);
+    const surge_params *p = surge_sim_params(sim);
+    film_g_sin = p->body.gravity_mps2 * sin(p->body.slope_deg * PI / 180);
+    film_h = p->fluid.depth_m;
+    film_nu = p->fluid.viscosity_m2ps;
+    const double volume0 = surge_sim_diagnostics(sim).fluid_volume_m2;
+    run_until(sim, 3.0);
+    surge_snapshot s = {0};
+    surge_sim_snapshot(sim, &s);
+    const double u_surface = film(film_h, 0);
+    expect_below("film: L2 error of u(y) / surface speed at t = 3 s", profile_error(&s, film, s.time_s, u_surface, NULL),
+                 0.03);
+    surge_diagnostics d = surge_sim_diagnostics(sim);
+    expect_below("film: |fluid volume / initial - 1|", fabs(d.fluid_volume_m2 / volume0 - 1), 0.01);
+    expect_below("film: max density deviation", d.max_density_deviation, 0.02);
+    surge_snapshot_free(&s);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
+/* A run checkpointed half-way and restarted from the file ends bit-identical to the uninterrupted run. */
+static int test_restart(const char *dir)
+{
+    const char *overrides[] = {"time.end_s=0.2"};
+    surge_sim *straight = load("demo.ini", overrides, 1);
+    for (int i = 0; i < 400; i++)
+        if (surge_sim_step(straight) != 0)
+            return ++failures;
+    surge_sim *first = load("demo.ini", overrides, 1);
+    for (int i = 0; i < 170; i++)
+        if (surge_sim_step(first) != 0)
+            return ++failures;
+    char path[1024], err[1024];
+    snprintf(path, sizeof path, "%s/restart_test.bin", dir);
+    if (surge_sim_checkpoint_write(first, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
+        return ++failures;
+    }
+    surge_sim_destroy(first);
+    surge_sim *second = surge_sim_checkpoint_read(path, NULL, 0, err, sizeof err);
+    if (!second) {
+        fprintf(stderr, "%s\n", err);
+        return ++failures;
+    }
+    while (surge_sim_step_count(second) < 400)
+        if (surge_sim_step(second) != 0)
+            return ++failures;
+    const uint64_t a = surge_sim_state_hash(straight), b = surge_sim_state_hash(second);
+    printf("restart: hash uninterrupted %016llx, restarted %016llx (t = %.6f s, %.6f s)\n", (unsigned long long)a,
+           (unsigned long long)b, surge_sim_time(straight), surge_sim_time(second));
+    expect_below("restart: state hashes differ (0 = identical)", a != b, 0);
+    /* the state moved: the check is not between two idle states */
+    expect_below("restart: mean |vx| after 400 steps is not zero (1 = zero)",
+                 surge_sim_diagnostics(straight).max_speed_mps == 0, 0);
+    surge_sim_destroy(straight);
+    surge_sim_destroy(second);
+    return failures;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fprintf(stderr, "usage: test_physics hydrostatic|poiseuille|couette|film|restart [file]\n");
+        return 2;
+    }
+    const char *name = argv[1], *arg = argc > 2 ? argv[2] : NULL;
+    if (!strcmp(name, "hydrostatic"))
+        return test_hydrostatic() ? 1 : 0;
+    if (!strcmp(name, "poiseuille"))
+        return test_channel(1, arg) ? 1 : 0;
+    if (!strcmp(name, "couette"))
+        return test_channel(0, arg) ? 1 : 0;
+    if (!strcmp(name, "film"))
+        return test_film() ? 1 : 0;
+    if (!strcmp(name, "restart"))
+        return test_restart(arg ? arg : ".") ? 1 : 0;
+    fprintf(stderr, "test_physics: unknown test '%s'\n", name);
+    return 2;
+}

@@ -1,0 +1,143 @@
+/* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
+ * periodic wrap. usage: test_unit kernel|eos|neighbours */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+static int failures = 0;
+
+static void expect_below(const char *what, double value, double bound)
+{
+    const int ok = value <= bound;
+    printf("%-60s %12.4g  (bound %g)  %s\n", what, value, bound, ok ? "ok" : "FAILED");
+    failures += !ok;
+}
+
+static int test_kernel(void)
+{
+    const double h = 0.01;
+    kernel2d k = kernel2d_make(h);
+    /* integral over the plane: 2 pi int_0^2h W(r) r dr = 1 (midpoint rule) */
+    const int n = 200000;
+    double integral = 0;
+    for (int i = 0; i < n; i++) {
+        double r = (i + 0.5) * 2 * h / n;
+        integral += 2 * SURGE_PI * kernel2d_w(&k, (real)r) * r * (2 * h / n);
+    }
+    expect_below("kernel: |integral of W - 1|", fabs(integral - 1), 1e-5);
+    /* lattice sum at dp = h / (C_h sqrt 2), C_h = 1.8: sum W dp^2 = 1 */
+    const double dp = h / (1.8 * sqrt(2.0));
+    double sum = 0;
+    for (int i = -10; i <= 10; i++)
+        for (int j = -10; j <= 10; j++)
+            sum += kernel2d_w(&k, (real)(dp * sqrt((double)(i * i + j * j)))) * dp * dp;
+    expect_below("kernel: |lattice sum W dp^2 - 1| (C_h = 1.8)", fabs(sum - 1), 1e-3);
+    /* gradient factor against a central difference of W */
+    double worst = 0;
+    for (int i = 1; i < 400; i++) {
+        const double r = i * 2 * h / 400, e = 1e-3 * h;
+        const double dwdr = (kernel2d_w(&k, (real)(r + e)) - kernel2d_w(&k, (real)(r - e))) / (2 * e);
+        const double analytic = kernel2d_grad_factor(&k, (real)r) * r;
+        worst = fmax(worst, fabs(analytic - dwdr) / (k.alpha / h));
+    }
+    expect_below("kernel: max |F r - dW/dr| / (alpha / h)", worst, 2e-3);
+    expect_below("kernel: W(2h) (compact support)", fabs(kernel2d_w(&k, (real)(2 * h))), 0);
+    expect_below("kernel: |W(0) - 7/(4 pi h^2)| / W(0)", fabs(kernel2d_w(&k, 0) / (7 / (4 * SURGE_PI * h * h)) - 1), 1e-6);
+    return failures;
+}
+
+static int test_eos(void)
+{
+    const double rho0 = 1000, c0 = 20, b = c0 * c0 * rho0 / 7;
+    expect_below("eos: P(rho0)", fabs(tait_pressure((real)rho0, (real)rho0, (real)b)), 0);
+    const double p = tait_pressure((real)1010, (real)rho0, (real)b);
+    const double exact = b * (pow(1.01, 7) - 1);
+    expect_below("eos: |P(1.01 rho0) / B((1.01)^7 - 1) - 1|", fabs(p / exact - 1), 1e-5);
+    /* dP/drho at rho0 = c0^2 */
+    const double slope = (tait_pressure((real)1000.5, (real)rho0, (real)b) - tait_pressure((real)999.5, (real)rho0, (real)b));
+    expect_below("eos: |dP/drho(rho0) / c0^2 - 1|", fabs(slope / (c0 * c0) - 1), 1e-3);
+    expect_below("eos: |rho(P(rho)) - rho| / rho0", fabs(tait_density(exact, rho0, b) - 1010) / rho0, 1e-12);
+    return failures;
+}
+
+/* Every pair within 2h found through the cell spans equals the brute-force set with minimum-image in x. */
+static int test_neighbours(void)
+{
+    surge_params p = surge_default_params();
+    p.domain.length_m = 0.1;
+    p.domain.height_m = 0.05;
+    p.fluid.x0_m = 0.0;
+    p.fluid.x1_m = 0.1;
+    p.fluid.depth_m = 0.04;
+    p.walls.upstream = false;
+    p.numerics.dp_m = 0.004;
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    srand(12345);
+    for (int a = sim->wall_count; a < sim->count; a++) { /* scatter fluid at random, some right at x = 0 and L */
+        sim->x[a] = (a % 17 == 0) ? (a % 2 ? 0.0 : nextafter(0.1, 0)) : 0.1 * rand() / ((double)RAND_MAX + 1);
+        sim->y[a] = 0.045 * rand() / ((double)RAND_MAX + 1);
+    }
+    grid_sort_fluid(sim);
+    const double support2 = 4 * sim->derived.h_m * sim->derived.h_m, L = p.domain.length_m;
+    long found = 0, expected = 0, mismatches = 0;
+    const cell_grid *g = &sim->grid;
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        int cell_count = 0;
+        const int cx = grid_cell_x(g, sim->x[a]), cy = grid_cell_y(g, sim->y[a]);
+        cell_span spans[2];
+        const int ns = grid_row_spans(g, cx, spans);
+        for (int row = cy - 1; row <= cy + 1; row++) {
+            if (row < 0 || row >= g->ncy)
+                continue;
+            for (int s = 0; s < ns; s++) {
+                const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
+                for (int pass = 0; pass < 2; pass++) {
+                    const int *start = pass ? g->wall_start : g->fluid_start;
+                    for (int b = start[c0]; b < start[c1]; b++) {
+                        double dx = sim->x[a] - (sim->x[b] + spans[s].shift_x), dy = sim->y[a] - sim->y[b];
+                        if (b != a && dx * dx + dy * dy < support2)
+                            cell_count++;
+                    }
+                }
+            }
+        }
+        int brute = 0;
+        for (int b = 0; b < sim->count; b++) {
+            double dx = fabs(sim->x[a] - sim->x[b]);
+            dx = fmin(dx, L - dx);
+            double dy = sim->y[a] - sim->y[b];
+            if (b != a && dx * dx + dy * dy < support2)
+                brute++;
+        }
+        found += cell_count;
+        expected += brute;
+        mismatches += cell_count != brute;
+    }
+    printf("neighbours: %ld pairs found through cells, %ld by brute force, %d particles\n", found, expected,
+           sim->count - sim->wall_count);
+    expect_below("neighbours: particles whose neighbour count differs", (double)mismatches, 0);
+    expect_below("neighbours: enough pairs to mean something (1 = too few)", found < 1000, 0);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2)
+        return 2;
+    if (!strcmp(argv[1], "kernel"))
+        return test_kernel() ? 1 : 0;
+    if (!strcmp(argv[1], "eos"))
+        return test_eos() ? 1 : 0;
+    if (!strcmp(argv[1], "neighbours"))
+        return test_neighbours() ? 1 : 0;
+    return 2;
+}
