@@ -188,11 +188,11 @@ static int test_restart(const char *dir)
 {
     const char *overrides[] = {"time.end_s=0.2"};
     surge_sim *straight = load("demo.ini", overrides, 1);
-    for (int i = 0; i < 400; i++)
+    for (int i = 0; i < 200; i++)
         if (surge_sim_step(straight) != 0)
             return ++failures;
     surge_sim *first = load("demo.ini", overrides, 1);
-    for (int i = 0; i < 170; i++)
+    for (int i = 0; i < 85; i++)
         if (surge_sim_step(first) != 0)
             return ++failures;
     char path[1024], err[1024];
@@ -207,7 +207,7 @@ static int test_restart(const char *dir)
         fprintf(stderr, "%s\n", err);
         return ++failures;
     }
-    while (surge_sim_step_count(second) < 400)
+    while (surge_sim_step_count(second) < 200)
         if (surge_sim_step(second) != 0)
             return ++failures;
     const uint64_t a = surge_sim_state_hash(straight), b = surge_sim_state_hash(second);
@@ -215,7 +215,7 @@ static int test_restart(const char *dir)
            (unsigned long long)b, surge_sim_time(straight), surge_sim_time(second));
     expect_below("restart: state hashes differ (0 = identical)", a != b, 0);
     /* the state moved: the check is not between two idle states */
-    expect_below("restart: mean |vx| after 400 steps is not zero (1 = zero)",
+    expect_below("restart: mean |vx| after 200 steps is not zero (1 = zero)",
                  surge_sim_diagnostics(straight).max_speed_mps == 0, 0);
     surge_sim_destroy(straight);
     surge_sim_destroy(second);

@@ -8,30 +8,35 @@ static void compute_pressure(surge_sim *sim)
 {
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
     #pragma omp parallel for schedule(static)
-    for (int i = 0; i < sim->count; i++)
+    for (int i = 0; i < sim->count; i++) {
         sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
+        sim->inv_rho[i] = (real)1 / sim->rho[i];
+    }
 }
 
 void interaction_compute(surge_sim *sim, int corrector)
 {
     compute_pressure(sim);
     const cell_grid *g = &sim->grid;
-    const kernel2d kern = sim->kernel;
-    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = kern.h;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
+    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = sim->kernel.h;
+    const real support2 = sim->kernel.support2;
     const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
     const real ddt_coef = (real)(2.0 * sim->params.numerics.density_diffusion * sim->derived.h_m * sim->derived.c0_mps);
     const real rho_h_per_m = (real)sim->rho_h_per_m;
     const real gx = (real)sim->gx, gy = (real)sim->gy;
     const double *restrict x = sim->x, *restrict y = sim->y;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
-    const real *restrict pres = sim->pressure;
+    const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
     const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
     const uint8_t *restrict surface = sim->surface;
 
+    /* Each particle gathers over its neighbours in a fixed order, so results do not depend on the thread count.
+     * (A branch-free, vectorised form of these loops measured 2x slower: most candidates lie beyond 2h.) */
     #pragma omp parallel for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
         const double xa = x[a], ya = y[a];
-        const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a];
+        const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a], inv_rhoa = inv_rho[a];
         real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_rate = 0;
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         int near_surface = surface[a];
@@ -45,20 +50,21 @@ void interaction_compute(surge_sim *sim, int corrector)
                 const double xa_shifted = xa - spans[s].shift_x;
                 const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
                 /* fluid neighbours */
-                for (int b = g->fluid_start[c0]; b < g->fluid_start[c1]; b++) {
+                const int fluid_begin = g->fluid_start[c0], fluid_end = g->fluid_start[c1];
+                for (int b = fluid_begin; b < fluid_end; b++) {
                     const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
                     const real r2 = dx * dx + dy * dy;
-                    if (r2 >= kern.support2 || r2 == 0)
+                    if (r2 >= support2 || r2 == 0)
                         continue;
-                    const real f = kernel2d_grad_factor(&kern, REAL_SQRT(r2)); /* grad_a W = f r_ab */
-                    const real rhob = rho[b], vol = mass / rhob;
+                    const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
+                    const real vol = mass * inv_rho[b];
                     const real dvx = vxa - vx[b], dvy = vya - vy[b];
-                    const real pressure_term = -mass * (pa + pres[b]) / (rhoa * rhob);          /* eq. 7 */
-                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rhob) * (r2 + eta2)); /* eq. 7 */
+                    const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];           /* eq. 7 */
+                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2)); /* eq. 7 */
                     acc_x += pressure_term * f * dx + viscous_term * dvx;
                     acc_y += pressure_term * f * dy + viscous_term * dvy;
-                    div_v += vol * f * (dvx * dx + dvy * dy);                                  /* eq. 6 */
-                    diffusion -= (rhob - rhoa - rho_h_per_m * dy) * f * vol;                  /* Fourtakas */
+                    div_v += vol * f * (dvx * dx + dvy * dy);                                      /* eq. 6 */
+                    diffusion -= (rho[b] - rhoa - rho_h_per_m * dy) * f * vol;                    /* Fourtakas */
                     const real rate = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
                     visc_rate = rate > visc_rate ? rate : visc_rate;
                     grad_c_x += vol * f * dx;
@@ -68,20 +74,20 @@ void interaction_compute(surge_sim *sim, int corrector)
                 }
                 /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
                  * continuity; no density diffusion across the wall */
-                for (int b = g->wall_start[c0]; b < g->wall_start[c1]; b++) {
+                const int wall_begin = g->wall_start[c0], wall_end = g->wall_start[c1];
+                for (int b = wall_begin; b < wall_end; b++) {
                     const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
                     const real r2 = dx * dx + dy * dy;
-                    if (r2 >= kern.support2)
+                    if (r2 >= support2)
                         continue;
-                    const real f = kernel2d_grad_factor(&kern, REAL_SQRT(r2));
-                    const real rhob = rho[b], vol = mass / rhob;
-                    const real pressure_term = -mass * (pa + pres[b]) / (rhoa * rhob);
-                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rhob) * (r2 + eta2));
+                    const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                    const real vol = mass * inv_rho[b];
+                    const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];
+                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2));
                     const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
                     acc_x += pressure_term * f * dx + viscous_term * nsx;
                     acc_y += pressure_term * f * dy + viscous_term * nsy;
-                    const real dvx = vxa - vx[b], dvy = vya - vy[b];
-                    div_v += vol * f * (dvx * dx + dvy * dy);
+                    div_v += vol * f * ((vxa - vx[b]) * dx + (vya - vy[b]) * dy);
                     const real rate = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
                     visc_rate = rate > visc_rate ? rate : visc_rate;
                     grad_c_x += vol * f * dx;

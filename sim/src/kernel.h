@@ -49,6 +49,13 @@ static inline real kernel2d_grad_factor(const kernel2d *k, real r)
     return k->grad_coef * t * t * t;
 }
 
+/* The same for r already known to lie within 2h, from the kernel's constants (hot loops). */
+static inline real kernel2d_grad_factor_inside(real grad_coef, real inv_h, real r)
+{
+    const real t = (real)1 - (real)0.5 * r * inv_h;
+    return grad_coef * t * t * t;
+}
+
 /* Tait: P = B ((rho/rho0)^gamma - 1), B = c0^2 rho0 / gamma, gamma = 7  (eq. 3) */
 static inline real tait_pressure(real rho, real rho0, real b_pa)
 {

@@ -1,0 +1,619 @@
+#!/usr/bin/python3
+"""Command-line tests of the surge program: errors for bad input, the health monitor, restarts.
+
+Usage: test_cli.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
+  GROUP inputs   every kind of bad case file and bad option gets its own clear error (exit 2 or 3, never a
+                 crash, never exit 0); `surge check` accepts every shipped case; `surge params` documents
+                 every key the cases use; every --help prints usage.
+  GROUP blowup   an absurd fixed time step makes the health monitor stop the run (exit 1) with a clear
+                 message, a finite last_good.vtp, a checkpoint and clean diagnostics; the same case with
+                 its normal time step runs healthy.
+  GROUP restart  `surge run --restart` continues to the same state hash as an uninterrupted run; the run
+                 folder's run.pvd and diagnostics.csv cover both halves; the hash does not depend on the
+                 thread count.
+
+Each check prints one line, "name: ok" or "name: FAILED" followed by the command, exit code and stderr.
+The script exits 1 if any check failed. Every subprocess has a timeout: a hang is a failure.
+Python 3 standard library + numpy only.
+"""
+
+import math
+import os
+import re
+import shlex
+import shutil
+import struct
+import subprocess
+import sys
+
+import numpy as np
+
+QUICK_TIMEOUT_S = 30   # commands that fail or finish before stepping
+RUN_TIMEOUT_S = 90     # short simulations (a few seconds each on 2 cores)
+
+failures = []
+SURGE = SOURCE = WORK = None
+
+
+class Result:
+    def __init__(self, args, rc, stdout, stderr, timed_out):
+        self.args, self.rc, self.stdout, self.stderr, self.timed_out = args, rc, stdout, stderr, timed_out
+
+    def describe(self):
+        if self.timed_out:
+            code = "none (timed out)"
+        elif self.rc < 0:
+            code = "%d (killed by signal %d)" % (self.rc, -self.rc)
+        else:
+            code = str(self.rc)
+        lines = ["    command: %s" % shlex.join(self.args), "    exit code: %s" % code]
+        err = self.stderr.rstrip("\n")
+        if len(err) > 3000:
+            err = err[:1500] + "\n... (%d characters left out) ...\n" % (len(err) - 3000) + err[-1500:]
+        lines.append("    stderr: " + (err.replace("\n", "\n            ") if err else "(empty)"))
+        out = self.stdout.rstrip("\n")
+        if out and len(out) < 2000:
+            lines.append("    stdout: " + out.replace("\n", "\n            "))
+        return "\n".join(lines)
+
+
+# Idle OpenMP threads sleep instead of spinning: on a loaded 2-core machine (ctest -j, other builds) spinning
+# threads make a 1 s run take 10 s or more. Results do not depend on it (the restart group checks that the
+# hash does not depend on the thread count).
+ENV = dict(os.environ)
+ENV.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+
+def surge(*args, timeout=QUICK_TIMEOUT_S, cwd=None):
+    """Runs the surge binary; never raises for a bad exit, a signal or a hang."""
+    argv = [SURGE] + [str(a) for a in args]
+    try:
+        p = subprocess.run(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           timeout=timeout, cwd=cwd or WORK, env=ENV)
+        return Result(argv, p.returncode, p.stdout.decode("utf-8", "replace"),
+                      p.stderr.decode("utf-8", "replace"), False)
+    except subprocess.TimeoutExpired as e:
+        def text(b):
+            return b.decode("utf-8", "replace") if isinstance(b, bytes) else (b or "")
+        return Result(argv, None, text(e.stdout), text(e.stderr), True)
+
+
+def report(name, ok, result=None, detail=None):
+    """Prints one line per check; on failure, the reason and the command with its exit code and stderr."""
+    if ok:
+        print("%s: ok" % name)
+        return True
+    failures.append(name)
+    print("%s: FAILED%s" % (name, (" - " + detail) if detail else ""))
+    if result is not None:
+        print(result.describe())
+    sys.stdout.flush()
+    return False
+
+
+def exited(r, code):
+    return not r.timed_out and r.rc == code
+
+
+def missing_text(text, wanted):
+    return [w for w in wanted if w not in text]
+
+
+def expect_error(name, args, wanted, code=2, stream="stderr"):
+    """The command must exit with `code` (not 0, not a signal, not a hang) and its stderr must contain every
+    string in `wanted`."""
+    r = surge(*args)
+    problems = []
+    if r.timed_out:
+        problems.append("timed out after %d s" % QUICK_TIMEOUT_S)
+    elif r.rc < 0:
+        problems.append("crashed (signal %d)" % -r.rc)
+    elif r.rc != code:
+        problems.append("exit code %d, expected %d" % (r.rc, code))
+    text = r.stderr if stream == "stderr" else r.stdout
+    miss = missing_text(text, wanted)
+    if miss:
+        problems.append("%s lacks %s" % (stream, ", ".join(repr(m) for m in miss)))
+    return report(name, not problems, r, "; ".join(problems))
+
+
+def write_file(name, data):
+    path = os.path.join(WORK, name)
+    mode = "wb" if isinstance(data, bytes) else "w"
+    with open(path, mode) as f:
+        f.write(data)
+    return path
+
+
+def state_hash(r):
+    """The hash on the final stderr line ("... state hash XXXXXXXXXXXXXXXX ..."), or None."""
+    lines = [l for l in r.stderr.splitlines() if l.strip()]
+    if not lines:
+        return None
+    m = re.search(r"state hash ([0-9a-f]{16})\b", lines[-1])
+    return m.group(1) if m else None
+
+
+def case_lines(name):
+    with open(os.path.join(SOURCE, "cases", name)) as f:
+        return f.read().splitlines()
+
+
+def parse_case(path):
+    """(section, key) pairs of a shipped case file (comments '#'/';' stripped)."""
+    pairs, section = [], None
+    with open(path) as f:
+        for line in f:
+            line = re.split(r"[#;]", line, maxsplit=1)[0].strip()
+            if not line:
+                continue
+            if line.startswith("["):
+                section = line.strip("[]").strip()
+            elif "=" in line:
+                pairs.append((section, line.split("=", 1)[0].strip()))
+    return pairs
+
+
+# ---------------------------------------------------------------------------------------------------------
+# GROUP inputs
+
+
+def bad_case(name, lines, insert_at, bad_line, wanted_fn, also_run=True):
+    """Writes `lines` with `bad_line` inserted so that it becomes line `insert_at` (1-based), then checks that
+    `surge check` and `surge run` refuse it with exit 2 and a message containing wanted_fn(path, line_no)."""
+    text_lines = list(lines)
+    text_lines.insert(insert_at - 1, bad_line)
+    path = write_file("case_%s.ini" % name, "\n".join(text_lines) + "\n")
+    wanted = wanted_fn(path, insert_at)
+    expect_error("case_%s_check" % name, ["check", path], wanted)
+    if also_run:
+        expect_error("case_%s_run" % name, ["run", path, "-s", "output.progress_interval_s=0", "-s", "time.end_s=0.001",
+                                            "-o", os.path.join(WORK, "out_" + name)], wanted)
+
+
+def cross_field(name, base, overrides, wanted):
+    """A case file that parses but fails surge_params_validate, via the file and via -s overrides."""
+    lines = case_lines(base)
+    out, section = [], None
+    pending = dict(overrides)
+    for line in lines:
+        s = line.split("#")[0].split(";")[0].strip()
+        if s.startswith("["):
+            section = s.strip("[]").strip()
+        elif "=" in s and section:
+            key = "%s.%s" % (section, s.split("=", 1)[0].strip())
+            if key in pending:
+                line = "%s = %s" % (key.split(".")[1], pending.pop(key))
+        out.append(line)
+    for key, value in pending.items():  # keys the base file does not set: append their sections
+        sec, k = key.split(".")
+        out += ["[%s]" % sec, "%s = %s" % (k, value)]
+    path = write_file("cross_%s.ini" % name, "\n".join(out) + "\n")
+    expect_error("cross_%s_file" % name, ["check", path], wanted)
+    sets = []
+    for key, value in overrides.items():
+        sets += ["-s", "%s=%s" % (key, value)]
+    expect_error("cross_%s_override" % name, ["check", os.path.join(SOURCE, "cases", base)] + sets, wanted)
+
+
+def group_inputs():
+    cases_dir = os.path.join(SOURCE, "cases")
+    tank = case_lines("still_tank.ini")
+    # line numbers in still_tank.ini (1-based) used below: after "[domain]" and after "[numerics]"
+    domain_line = tank.index("[domain]") + 1
+    numerics_line = tank.index("[numerics]") + 1
+    shifting_line = tank.index("[shifting]") + 1
+    walls_line = tank.index("[walls]") + 1
+    body_line = tank.index("[body]") + 1
+
+    def at(path, n):
+        return "%s:%d:" % (path, n)
+
+    # --- case-file errors, each with file:line -------------------------------------------------------
+    bad_case("unknown_section", tank, domain_line, "[nosuch]",
+             lambda p, n: [at(p, n), "unknown section", "nosuch"])
+    bad_case("unknown_key", tank, domain_line + 1, "colour_m = 3",
+             lambda p, n: [at(p, n), "unknown key", "colour_m"])
+    bad_case("not_a_number", tank, domain_line + 1, "length_m = 0.4m",
+             lambda p, n: [at(p, n), "domain.length_m", "'0.4m'", "not a number"])
+    bad_case("not_a_number_word", tank, numerics_line + 1, "cfl = fast",
+             lambda p, n: [at(p, n), "numerics.cfl", "'fast'", "not a number"])
+    bad_case("nan_value", tank, numerics_line + 1, "cfl = nan",
+             lambda p, n: [at(p, n), "numerics.cfl", "not a number"])
+    bad_case("out_of_range_real", tank, body_line + 1, "slope_deg = 95",
+             lambda p, n: [at(p, n), "body.slope_deg", "out of range", "-89", "89"])
+    bad_case("out_of_range_real2", tank, numerics_line + 1, "ch = 10",
+             lambda p, n: [at(p, n), "numerics.ch", "out of range", "[0.5, 4]"])
+    bad_case("out_of_range_int", tank, walls_line + 1, "layers = 17",
+             lambda p, n: [at(p, n), "walls.layers", "out of range", "[0, 16]"])
+    bad_case("not_an_integer", tank, walls_line + 1, "layers = 6.5",
+             lambda p, n: [at(p, n), "walls.layers", "not an integer"])
+    bad_case("bad_boolean", tank, domain_line + 1, "periodic_x = maybe",
+             lambda p, n: [at(p, n), "domain.periodic_x", "'maybe'", "true or false"])
+    bad_case("bad_enum", tank, shifting_line + 1, "form = sideways",
+             lambda p, n: [at(p, n), "shifting.form", "'sideways'", "none|velocity|lind"])
+    bad_case("no_equals", tank, domain_line + 1, "length_m 0.4",
+             lambda p, n: [at(p, n), "key = value", "length_m 0.4"])
+    bad_case("key_before_section", ["# a comment, then a key with no section"] + tank, 2, "length_m = 0.4",
+             lambda p, n: [at(p, n), "length_m", "before any [section]"])
+    bad_case("malformed_header_unclosed", tank, numerics_line + 1, "[time",
+             lambda p, n: [at(p, n), "malformed section header", "[time"])
+    bad_case("malformed_header_trailing", tank, numerics_line + 1, "[time] end_s = 1",
+             lambda p, n: [at(p, n), "malformed section header"])
+    bad_case("empty_value", tank, domain_line + 1, "length_m =",
+             lambda p, n: [at(p, n), "domain.length_m", "empty value"])
+    bad_case("empty_value_comment", tank, domain_line + 1, "height_m =   # forgot it",
+             lambda p, n: [at(p, n), "domain.height_m", "empty value"])
+    bad_case("long_line", tank, numerics_line + 1, "# " + "x" * 3000,
+             lambda p, n: [at(p, n), "longer than"])
+    # an error late in the file still names its own line (line counting is not thrown off by comments)
+    bad_case("late_line_number", tank, len(tank) + 1, "bogus_key = 1",
+             lambda p, n: [at(p, n), "bogus_key"])
+
+    missing = os.path.join(WORK, "no_such_dir", "no_such_case.ini")
+    expect_error("case_missing_file_check", ["check", missing], [missing, "cannot open"])
+    expect_error("case_missing_file_run", ["run", missing, "-o", os.path.join(WORK, "out_missing")], [missing])
+    binary = write_file("case_binary.ini", b"[domain]\nlength_m = 0.4\n\x00\x01\x02\xff\xfe garbage\x00\n")
+    expect_error("case_binary_check", ["check", binary], [binary, "NUL"])
+    expect_error("case_binary_run", ["run", binary, "-o", os.path.join(WORK, "out_binary")], [binary, "NUL"])
+    folder = os.path.join(WORK, "a_folder.ini")
+    os.makedirs(folder, exist_ok=True)
+    expect_error("case_is_a_folder", ["check", folder], [folder])
+    empty = write_file("case_empty.ini", "")
+    r = surge("check", empty)
+    report("case_empty_file_not_a_crash", not r.timed_out and r.rc in (0, 2), r,
+           "an empty case file (all defaults) must be accepted or refused with exit 2")
+
+    # files that are fine: CRLF line endings, a long comment just under the limit, comments with ';'
+    crlf = write_file("case_crlf.ini", "\r\n".join(tank) + "\r\n")
+    r = surge("check", crlf)
+    report("case_crlf_accepted", exited(r, 0) and "ok" in r.stdout, r)
+    under = list(tank)
+    under.insert(numerics_line, "#" + "y" * 1000)
+    path = write_file("case_long_comment.ini", "\n".join(under) + "\n")
+    r = surge("check", path)
+    report("case_1000_char_comment_accepted", exited(r, 0) and "ok" in r.stdout, r)
+
+    # --- cross-field errors (surge_params_validate) ------------------------------------------------------
+    cross_field("fluid_outside_domain", "still_tank.ini", {"fluid.x1_m": "0.5"},
+                ["fluid block", "domain", "0.5", "0.4"])
+    cross_field("x1_not_above_x0", "still_tank.ini", {"fluid.x0_m": "0.3", "fluid.x1_m": "0.2"},
+                ["fluid.x1_m", "fluid.x0_m", "greater"])
+    cross_field("x1_equal_x0", "still_tank.ini", {"fluid.x0_m": "0.2", "fluid.x1_m": "0.2"},
+                ["fluid.x1_m", "fluid.x0_m"])
+    cross_field("periodic_length_not_dp_multiple", "demo.ini", {"domain.length_m": "0.6011"},
+                ["domain.length_m", "0.6011", "whole number", "dp"])
+    cross_field("wall_layers_too_thin", "still_tank.ini", {"walls.layers": "2"},
+                ["walls.layers", "2", "kernel support", "6"])
+    cross_field("upstream_without_periodic", "still_tank.ini", {"walls.upstream": "true"},
+                ["walls.upstream", "periodic"])
+
+    # --- command line --------------------------------------------------------------------------------
+    poiseuille = os.path.join(cases_dir, "poiseuille.ini")
+    tank_case = os.path.join(cases_dir, "still_tank.ini")
+    out = os.path.join(WORK, "out_cli")
+    expect_error("cli_no_command", [], ["usage"])
+    expect_error("cli_unknown_command", ["frobnicate"], ["unknown command", "frobnicate"])
+    expect_error("cli_run_unknown_option", ["run", tank_case, "--bogus", "-o", out], ["unknown option", "--bogus"])
+    expect_error("cli_check_unknown_option", ["check", tank_case, "--fast"], ["unknown option", "--fast"])
+    expect_error("cli_check_rejects_o", ["check", tank_case, "-o", out], ["-o"])
+    expect_error("cli_params_extra_argument", ["params", "extra"], ["params"])
+    expect_error("cli_s_without_value", ["run", tank_case, "-o", out, "-s"], ["-s", "section.key=value"])
+    expect_error("cli_s_unknown_key", ["run", tank_case, "-o", out, "-s", "domain.colour=3"],
+                 ["unknown parameter", "domain.colour"])
+    expect_error("cli_s_unknown_section", ["check", tank_case, "-s", "nosuch.key=3"],
+                 ["unknown parameter", "nosuch.key"])
+    expect_error("cli_s_no_equals", ["run", tank_case, "-o", out, "-s", "time.end_s"],
+                 ["time.end_s", "section.key=value"])
+    expect_error("cli_s_no_section", ["check", tank_case, "-s", "end_s=1"], ["end_s"])
+    expect_error("cli_s_out_of_range", ["run", tank_case, "-o", out, "-s", "numerics.ch=10"],
+                 ["numerics.ch", "out of range", "[0.5, 4]"])
+    expect_error("cli_s_not_a_number", ["check", tank_case, "-s", "time.end_s=soon"],
+                 ["time.end_s", "'soon'", "not a number"])
+    expect_error("cli_s_empty_value", ["check", tank_case, "-s", "time.end_s="], ["time.end_s", "empty value"])
+    expect_error("cli_s_bad_enum", ["check", tank_case, "-s", "shifting.form=wiggle"],
+                 ["shifting.form", "none|velocity|lind"])
+    expect_error("cli_threads_zero", ["run", tank_case, "-o", out, "--threads", "0"], ["--threads", "'0'", "[1, 1024]"])
+    expect_error("cli_threads_abc", ["run", tank_case, "-o", out, "--threads", "abc"],
+                 ["--threads", "'abc'", "[1, 1024]"])
+    expect_error("cli_threads_negative", ["run", tank_case, "-o", out, "--threads", "-3"], ["--threads", "'-3'"])
+    expect_error("cli_threads_without_value", ["run", tank_case, "-o", out, "--threads"], ["--threads"])
+    expect_error("cli_o_without_value", ["run", tank_case, "-o"], ["-o", "output folder"])
+    expect_error("cli_o_empty", ["run", tank_case, "-o", ""], ["-o", "output folder"])
+    expect_error("cli_two_case_files", ["run", tank_case, poiseuille, "-o", out],
+                 ["unexpected argument", poiseuille])
+    expect_error("cli_check_two_case_files", ["check", tank_case, poiseuille], ["unexpected argument", poiseuille])
+    expect_error("cli_check_without_case", ["check"], ["CASE"])
+    expect_error("cli_restart_without_value", ["run", "--restart"], ["--restart", "checkpoint"])
+
+    # a real checkpoint from a tiny run, and broken copies of it
+    ck_dir = os.path.join(WORK, "ck_run")
+    r = surge("run", poiseuille, "-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-o", ck_dir,
+              timeout=RUN_TIMEOUT_S)
+    checkpoint = os.path.join(ck_dir, "checkpoint.bin")
+    have_ck = report("tiny_run_for_checkpoint", exited(r, 0) and os.path.isfile(checkpoint), r)
+    expect_error("cli_case_and_restart", ["run", tank_case, "--restart", checkpoint, "-o", out],
+                 ["CASE", "--restart", "not both"])
+    missing_ck = os.path.join(WORK, "no_such_checkpoint.bin")
+    expect_error("cli_restart_missing_file", ["run", "--restart", missing_ck, "-o", out], [missing_ck])
+    expect_error("cli_restart_case_file", ["run", "--restart", tank_case, "-o", out],
+                 [tank_case, "not a surge checkpoint"])
+    empty_ck = write_file("empty_checkpoint.bin", b"")
+    expect_error("cli_restart_empty_file", ["run", "--restart", empty_ck, "-o", out],
+                 [empty_ck, "not a surge checkpoint"])
+    if have_ck:
+        with open(checkpoint, "rb") as f:
+            data = f.read()
+        # cut in the header, in the parameter block, in the particle arrays, in the final hash
+        for label, size, wanted in [("header", 12, "checkpoint"),
+                                    ("params", 200, "truncated"),
+                                    ("particles", len(data) // 2, "truncated"),
+                                    ("hash", len(data) - 3, "truncated")]:
+            path = write_file("truncated_%s.bin" % label, data[:size])
+            expect_error("cli_restart_truncated_%s" % label,
+                         ["run", "--restart", path, "-o", os.path.join(WORK, "out_trunc_" + label)], [path, wanted])
+        # one flipped byte in the particle data: the stored hash must catch it
+        # (layout: magic, u32 version, u32 real size, u64 params length, params, i64 step, 3 f64, 2 i32, x[f64]...)
+        plen = struct.unpack_from("<Q", data, 16)[0]
+        first_x = 24 + plen + 8 + 3 * 8 + 2 * 4
+        corrupt = bytearray(data)
+        corrupt[min(first_x + 8 * 10 + 2, len(data) - 1)] ^= 0x40  # a low mantissa byte of the 11th x
+        path = write_file("corrupt_checkpoint.bin", bytes(corrupt))
+        expect_error("cli_restart_corrupt_byte", ["run", "--restart", path, "-o", os.path.join(WORK, "out_corrupt")],
+                     [path, "corrupt"])
+    expect_error("cli_restart_non_live_override",
+                 ["run", "--restart", checkpoint, "-s", "numerics.dp_m=0.001", "-o", os.path.join(WORK, "out_nl")],
+                 ["numerics.dp_m", "restart"])
+    expect_error("cli_restart_override_unknown_key",
+                 ["run", "--restart", checkpoint, "-s", "time.finish=1", "-o", os.path.join(WORK, "out_nl")],
+                 ["time.finish"])
+    expect_error("cli_restart_override_out_of_range",
+                 ["run", "--restart", checkpoint, "-s", "fluid.viscosity_m2ps=-1", "-o", os.path.join(WORK, "out_nl")],
+                 ["fluid.viscosity_m2ps", "out of range"])
+
+    # -o under a regular file (output error, exit 3, names the path), and -o naming a regular file
+    regular = write_file("a_regular_file", "not a folder\n")
+    under_file = os.path.join(regular, "sub")
+    expect_error("cli_output_under_regular_file",
+                 ["run", poiseuille, "-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-o", under_file],
+                 [regular], code=3)
+    expect_error("cli_output_is_regular_file",
+                 ["run", poiseuille, "-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-o", regular],
+                 [regular], code=3)
+
+    # --- the shipped cases, the parameter reference, help -----------------------------------------------
+    shipped = sorted(f for f in os.listdir(cases_dir) if f.endswith(".ini"))
+    report("shipped_cases_found", len(shipped) > 0, None, "no cases/*.ini in %s" % cases_dir)
+    for name in shipped:
+        r = surge("check", os.path.join(cases_dir, name))
+        report("check_shipped_%s" % name[:-4], exited(r, 0) and "ok" in r.stdout, r)
+
+    r = surge("params")
+    ok = exited(r, 0)
+    documented, section = set(), None
+    for line in r.stdout.splitlines():
+        m = re.match(r"^##\s*\[(\w+)\]", line)
+        if m:
+            section = m.group(1)
+        m = re.match(r"^\|\s*`([^`]+)`\s*\|", line)
+        if m and section:
+            documented.add((section, m.group(1)))
+    report("params_exit_0", ok and len(documented) > 0, r)
+    undocumented = []
+    for name in shipped:
+        for sec, key in parse_case(os.path.join(cases_dir, name)):
+            if (sec, key) not in documented:
+                undocumented.append("%s:[%s]%s" % (name, sec, key))
+    report("params_lists_every_case_key", ok and not undocumented, r if not ok else None,
+           "not in 'surge params': " + ", ".join(sorted(set(undocumented))))
+
+    for args in (["--help"], ["-h"], ["run", "--help"], ["check", "--help"], ["params", "--help"]):
+        r = surge(*args)
+        report("help_" + "_".join(a.strip("-") for a in args),
+               exited(r, 0) and "usage" in r.stdout.lower(), r)
+    # help text of run documents the restart and thread options
+    r = surge("run", "--help")
+    miss = missing_text(r.stdout, ["--restart", "--threads", "-o", "-s"])
+    report("help_run_lists_options", exited(r, 0) and not miss, r, "missing %s" % miss if miss else None)
+
+
+# ---------------------------------------------------------------------------------------------------------
+# GROUP blowup
+
+
+def read_csv_rows(path):
+    with open(path) as f:
+        lines = [l.rstrip("\n") for l in f if l.strip()]
+    return lines[0].split(","), [l.split(",") for l in lines[1:]]
+
+
+def group_blowup():
+    sys.path.insert(0, os.path.join(SOURCE, "tools"))
+    import vtp
+
+    case = os.path.join(SOURCE, "cases", "still_tank.ini")
+    out = os.path.join(WORK, "blowup")
+    r = surge("run", case, "-s", "numerics.dt_fixed_s=0.01", "-s", "output.progress_interval_s=0", "-o", out,
+              timeout=RUN_TIMEOUT_S)
+    problems = []
+    if r.timed_out:
+        problems.append("did not stop within %d s" % RUN_TIMEOUT_S)
+    elif r.rc != 1:
+        problems.append("exit code %d, expected 1" % r.rc)
+    report("blowup_exit_1", not problems, r, "; ".join(problems))
+    check_names = ["non-finite value", "density far from rho0", "particle left the domain",
+                   "particle crossed a wall", "time step collapsed"]
+    named = [c for c in check_names if c in r.stderr]
+    report("blowup_message_names_check", bool(named), r, "stderr names none of %s" % check_names)
+    miss = missing_text(r.stderr, ["health check failed", "particle", "step", "t ="])
+    report("blowup_message_details", not miss, r, "stderr lacks %s" % miss)
+    m = re.search(r"health check failed: .* at particle (-?\d+), step (\d+), t = ([0-9.eE+-]+) s", r.stderr)
+    report("blowup_message_format", m is not None and int(m.group(1)) >= 0, r,
+           "no 'health check failed: CHECK at particle N, step S, t = T s' with a particle id")
+    fail_step = int(m.group(2)) if m else None
+    fail_t = float(m.group(3)) if m else None
+    report("blowup_message_names_outputs", "last_good.vtp" in r.stderr and "checkpoint.bin" in r.stderr, r)
+
+    for name in ("last_good.vtp", "checkpoint.bin", "params.ini", "diagnostics.csv"):
+        report("blowup_writes_%s" % name.replace(".", "_"), os.path.isfile(os.path.join(out, name)), r,
+               "%s missing in %s (has: %s)" % (name, out, sorted(os.listdir(out)) if os.path.isdir(out) else "no folder"))
+
+    path = os.path.join(out, "last_good.vtp")
+    if os.path.isfile(path):
+        try:
+            d = vtp.read_vtp(path)
+            err = None
+        except Exception as e:  # noqa: BLE001 - any reader error is a failed check
+            d, err = None, "%s: %s" % (type(e).__name__, e)
+        report("blowup_last_good_readable", d is not None, None, err)
+        if d is not None:
+            bad = [k for k in ("points", "velocity_mps", "density_kgpm3")
+                   if k not in d or not np.all(np.isfinite(np.asarray(d[k], dtype=float)))]
+            report("blowup_last_good_finite", not bad and len(d["points"]) > 0, None,
+                   "non-finite or missing: %s" % bad)
+            step, t = d.get("step"), d.get("time_s")
+            report("blowup_last_good_before_failure",
+                   fail_step is not None and step is not None and step < fail_step and t < fail_t + 1e-12, None,
+                   "last_good step %s t %s, failure at step %s t %s" % (step, t, fail_step, fail_t))
+            # the last good state passed the monitor: fluid densities within 1 +- max_density_deviation (0.1)
+            fluid = np.asarray(d.get("kind", [])) == 0
+            rho = np.asarray(d.get("density_kgpm3", []), dtype=float)
+            dev = float(np.max(np.abs(rho[fluid] / 1000.0 - 1.0))) if fluid.any() else math.inf
+            report("blowup_last_good_is_healthy", dev <= 0.1 + 1e-6, None,
+                   "max |rho/rho0 - 1| of the fluid in last_good.vtp is %g > 0.1" % dev)
+
+    path = os.path.join(out, "checkpoint.bin")
+    if os.path.isfile(path):
+        with open(path, "rb") as f:
+            magic = f.read(8)
+        report("blowup_checkpoint_is_checkpoint", magic == b"SURGECK1", None, "starts with %r" % magic)
+
+    path = os.path.join(out, "diagnostics.csv")
+    if os.path.isfile(path):
+        with open(path) as f:
+            text = f.read()
+        header, rows = read_csv_rows(path)
+        bad_words = [w for w in ("nan", "inf") if w in text.lower()]
+        values_ok = True
+        try:
+            vals = [float(x) for row in rows for x in row]
+            values_ok = all(math.isfinite(v) for v in vals) and all(len(row) == len(header) for row in rows)
+        except ValueError:
+            values_ok = False
+        report("blowup_diagnostics_clean", not bad_words and values_ok and len(rows) >= 1, None,
+               "diagnostics.csv: %s, %d rows, parse ok %s" % (bad_words, len(rows), values_ok))
+
+    path = os.path.join(out, "params.ini")
+    if os.path.isfile(path):
+        with open(path) as f:
+            text = f.read()
+        report("blowup_params_has_fixed_dt", re.search(r"^dt_fixed_s\s*=\s*0\.01\s*$", text, re.M) is not None,
+               None, "params.ini does not record dt_fixed_s = 0.01")
+        r2 = surge("check", path)
+        report("blowup_params_reloads_as_case", exited(r2, 0) and "ok" in r2.stdout, r2)
+
+    r = surge("run", case, "-s", "time.end_s=0.05", "-s", "output.progress_interval_s=0",
+              "-o", os.path.join(WORK, "healthy"), timeout=RUN_TIMEOUT_S)
+    report("healthy_short_run_exit_0", exited(r, 0) and state_hash(r) is not None, r)
+    report("healthy_short_run_no_last_good", not os.path.exists(os.path.join(WORK, "healthy", "last_good.vtp")), None,
+           "a healthy run wrote last_good.vtp")
+
+
+# ---------------------------------------------------------------------------------------------------------
+# GROUP restart
+
+
+def group_restart():
+    sys.path.insert(0, os.path.join(SOURCE, "tools"))
+    import vtp
+
+    case = os.path.join(SOURCE, "cases", "demo.ini")
+    quiet = ["-s", "output.progress_interval_s=0"]
+    dir_a, dir_b = os.path.join(WORK, "A"), os.path.join(WORK, "B")
+
+    ra = surge("run", case, "-s", "time.end_s=0.04", *quiet, "-o", dir_a, timeout=RUN_TIMEOUT_S)
+    hash_a = state_hash(ra)
+    report("uninterrupted_run", exited(ra, 0) and hash_a is not None, ra, "needs exit 0 and a final 'state hash'")
+    rb = surge("run", case, "-s", "time.end_s=0.02", *quiet, "-o", dir_b, timeout=RUN_TIMEOUT_S)
+    report("first_half_run", exited(rb, 0) and state_hash(rb) is not None, rb)
+    rc = surge("run", "--restart", os.path.join(dir_b, "checkpoint.bin"), "-s", "time.end_s=0.04",
+               timeout=RUN_TIMEOUT_S)
+    hash_c = state_hash(rc)
+    report("restarted_run", exited(rc, 0) and hash_c is not None, rc, "needs exit 0 and a final 'state hash'")
+    report("restart_hash_equals_uninterrupted", hash_a is not None and hash_a == hash_c, rc,
+           "uninterrupted %s, restarted %s" % (hash_a, hash_c))
+    report("restart_outputs_to_checkpoint_folder", dir_b in rc.stderr, rc, "stderr does not name %s" % dir_b)
+
+    pvd = os.path.join(dir_b, "run.pvd")
+    try:
+        entries = vtp.read_pvd(pvd)
+        err = None
+    except Exception as e:  # noqa: BLE001
+        entries, err = [], "%s: %s" % (type(e).__name__, e)
+    times = [t for t, _ in entries]
+    increasing = all(b > a for a, b in zip(times, times[1:]))
+    report("restart_pvd_increasing", err is None and len(times) >= 3 and increasing, None,
+           err or "times %s" % times)
+    covers = bool(times) and times[0] == 0.0 and any(0 < t < 0.04 for t in times) and times[-1] >= 0.04
+    report("restart_pvd_covers_both_halves", covers, None, "times %s" % times)
+    missing = [f for _, f in entries if not os.path.isfile(os.path.join(dir_b, f))]
+    report("restart_pvd_files_exist", not missing, None, "listed but missing: %s" % missing)
+
+    # the final snapshots of both runs hold the same particles
+    try:
+        last_a = vtp.read_vtp(os.path.join(dir_a, vtp.read_pvd(os.path.join(dir_a, "run.pvd"))[-1][1]))
+        last_b = vtp.read_vtp(os.path.join(dir_b, entries[-1][1]))
+        same = all(np.array_equal(last_a[k], last_b[k]) for k in ("points", "velocity_mps", "density_kgpm3", "id"))
+        err = None if same else "final snapshots differ"
+    except Exception as e:  # noqa: BLE001
+        same, err = False, "%s: %s" % (type(e).__name__, e)
+    report("restart_final_snapshot_equals_uninterrupted", same, None, err)
+
+    try:
+        header, rows_b = read_csv_rows(os.path.join(dir_b, "diagnostics.csv"))
+        _, rows_a = read_csv_rows(os.path.join(dir_a, "diagnostics.csv"))
+        tb = [float(row[0]) for row in rows_b]
+        err = None
+    except Exception as e:  # noqa: BLE001
+        rows_a, rows_b, tb, err = [], [], [], "%s: %s" % (type(e).__name__, e)
+    report("restart_diagnostics_both_halves", err is None and any(t < 0.02 for t in tb) and any(t > 0.02 for t in tb),
+           None, err or "times %s" % tb)
+    report("restart_diagnostics_increasing", err is None and all(b > a for a, b in zip(tb, tb[1:])), None,
+           err or "times %s (a repeated or out-of-order row)" % tb)
+    report("restart_diagnostics_equal_uninterrupted", err is None and rows_a == rows_b, None,
+           err or "uninterrupted rows %s\n    restarted rows %s" % (rows_a, rows_b))
+
+    # the result does not depend on the thread count
+    hashes = {}
+    for n in (1, 2):
+        r = surge("run", case, "-s", "time.end_s=0.04", *quiet, "-o", os.path.join(WORK, "T%d" % n),
+                  "--threads", str(n), timeout=RUN_TIMEOUT_S)
+        hashes[n] = state_hash(r)
+        report("threads_%d_run" % n, exited(r, 0) and hashes[n] is not None and ("%d threads" % n) in r.stderr, r)
+    report("threads_1_vs_2_same_hash", hashes[1] is not None and hashes[1] == hashes[2], None,
+           "--threads 1: %s, --threads 2: %s" % (hashes[1], hashes[2]))
+    report("threads_1_equals_default_run", hashes[1] is not None and hashes[1] == hash_a, None,
+           "--threads 1: %s, default threads: %s" % (hashes[1], hash_a))
+
+
+def main():
+    global SURGE, SOURCE, WORK
+    if len(sys.argv) != 5 or sys.argv[4] not in ("inputs", "blowup", "restart"):
+        sys.stderr.write(__doc__)
+        return 2
+    SURGE = os.path.abspath(sys.argv[1])
+    SOURCE = os.path.abspath(sys.argv[2])
+    WORK = os.path.abspath(sys.argv[3])
+    if os.path.isdir(WORK):
+        shutil.rmtree(WORK)
+    os.makedirs(WORK)
+    {"inputs": group_inputs, "blowup": group_blowup, "restart": group_restart}[sys.argv[4]]()
+    if failures:
+        print("%d check(s) FAILED: %s" % (len(failures), ", ".join(failures)))
+        return 1
+    print("all checks passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
