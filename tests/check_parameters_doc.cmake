@@ -1,0 +1,10 @@
+# Fails when docs/parameters.md differs from what 'surge params' prints (regenerate: build/surge params > docs/parameters.md).
+execute_process(COMMAND ${SURGE} params OUTPUT_VARIABLE generated RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "surge params failed with ${rc}")
+endif()
+file(READ ${DOC} committed)
+if(NOT generated STREQUAL committed)
+  message(FATAL_ERROR "docs/parameters.md is out of date: run build/surge params > docs/parameters.md")
+endif()
+message(STATUS "docs/parameters.md matches surge params")
