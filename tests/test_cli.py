@@ -22,9 +22,11 @@ import os
 import re
 import shlex
 import shutil
+import signal
 import struct
 import subprocess
 import sys
+import time
 
 import numpy as np
 
@@ -126,7 +128,7 @@ def write_file(name, data):
 
 
 def state_hash(r):
-    """The hash on the final stderr line ("... state hash XXXXXXXXXXXXXXXX ..."), or None."""
+    """The hash on the final stderr line ("... state hash <16 hex digits> ..."), or None."""
     lines = [l for l in r.stderr.splitlines() if l.strip()]
     if not lines:
         return None
@@ -594,6 +596,31 @@ def group_restart():
            "--threads 1: %s, --threads 2: %s" % (hashes[1], hashes[2]))
     report("threads_1_equals_default_run", hashes[1] is not None and hashes[1] == hash_a, None,
            "--threads 1: %s, default threads: %s" % (hashes[1], hash_a))
+
+    # Ctrl-C stops a long run at the next step with a checkpoint (exit 4), and the run continues from it
+    dir_i = os.path.join(WORK, "I")
+    argv = [SURGE, "run", case, "-s", "time.end_s=100", *quiet, "-o", dir_i, "--threads", "1"]
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            cwd=WORK, env=ENV)
+    csv_path = os.path.join(dir_i, "diagnostics.csv")
+    deadline = time.time() + RUN_TIMEOUT_S
+    while time.time() < deadline and proc.poll() is None and \
+            (not os.path.isfile(csv_path) or os.path.getsize(csv_path) < 2000):
+        time.sleep(0.1)
+    proc.send_signal(signal.SIGINT)
+    try:
+        _, err_bytes = proc.communicate(timeout=RUN_TIMEOUT_S)
+        rc_i, timed_out = proc.returncode, False
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err_bytes = proc.communicate()
+        rc_i, timed_out = None, True
+    r_int = Result(argv, rc_i, "", err_bytes.decode("utf-8", "replace"), timed_out)
+    checkpoint = os.path.join(dir_i, "checkpoint.bin")
+    report("sigint_stops_with_checkpoint", exited(r_int, 4) and "interrupted" in r_int.stderr and
+           os.path.isfile(checkpoint), r_int, "needs exit 4, 'interrupted' and checkpoint.bin")
+    r_cont = surge("run", "--restart", checkpoint, "-s", "time.end_s=0.01", timeout=RUN_TIMEOUT_S)
+    report("restart_after_sigint", exited(r_cont, 0) and state_hash(r_cont) is not None, r_cont)
 
 
 def main():

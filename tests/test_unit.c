@@ -1,5 +1,5 @@
 /* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
- * periodic wrap. usage: test_unit kernel|eos|neighbours */
+ * periodic wrap, live parameter changes. usage: test_unit kernel|eos|neighbours|set_param */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -129,6 +129,35 @@ static int test_neighbours(void)
     return failures;
 }
 
+/* Live parameter changes between steps: accepted for live keys (and take effect), refused otherwise. */
+static int test_set_param(void)
+{
+    surge_params p = surge_default_params();
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    int rc = surge_sim_set_param(sim, "fluid.viscosity_m2ps", "0.006", err, sizeof err);
+    expect_below("set_param: live viscosity accepted (rc)", rc != 0, 0);
+    expect_below("set_param: |viscosity - 0.006|", fabs(surge_sim_params(sim)->fluid.viscosity_m2ps - 0.006), 0);
+    rc = surge_sim_set_param(sim, "body.slope_deg", "30", err, sizeof err);
+    expect_below("set_param: |gx - g sin 30deg| after a slope change", fabs(sim->gx - 9.81 * 0.5) + (rc != 0), 1e-12);
+    rc = surge_sim_set_param(sim, "numerics.dp_m", "0.001", err, sizeof err);
+    printf("set_param: numerics.dp_m refused with: %s\n", err);
+    expect_below("set_param: non-live numerics.dp_m refused (rc == 0 is a failure)", rc == 0, 0);
+    expect_below("set_param: message names why", strstr(err, "cannot change") == NULL, 0);
+    rc = surge_sim_set_param(sim, "body.slope_deg", "95", err, sizeof err);
+    printf("set_param: slope 95 refused with: %s\n", err);
+    expect_below("set_param: out-of-range slope refused and slope unchanged",
+                 (rc == 0) + fabs(surge_sim_params(sim)->body.slope_deg - 30), 0);
+    rc = surge_sim_set_param(sim, "fluid.nosuch", "1", err, sizeof err);
+    expect_below("set_param: unknown key refused", rc == 0, 0);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -139,5 +168,7 @@ int main(int argc, char **argv)
         return test_eos() ? 1 : 0;
     if (!strcmp(argv[1], "neighbours"))
         return test_neighbours() ? 1 : 0;
+    if (!strcmp(argv[1], "set_param"))
+        return test_set_param() ? 1 : 0;
     return 2;
 }

@@ -11,11 +11,12 @@
 #define OFF(field) offsetof(surge_params, field)
 #define BIG 1e30
 
+/* The defaults describe the demo scene (cases/demo.ini): a valid scene on their own. */
 static const surge_param_info registry[] = {
     /* section, key, type, unit, default, min, max, live, enum names, doc, offset */
     {"domain", "length_m", SURGE_PARAM_REAL, "m", 0.6, 1e-6, 1e4, false, NULL,
      "Extent of the domain along x (the period when periodic).", OFF(domain.length_m)},
-    {"domain", "height_m", SURGE_PARAM_REAL, "m", 0.1, 1e-6, 1e4, false, NULL,
+    {"domain", "height_m", SURGE_PARAM_REAL, "m", 0.08, 1e-6, 1e4, false, NULL,
      "Extent of the domain along y from the bed; the top wall sits here; particles above it have left the domain.",
      OFF(domain.height_m)},
     {"domain", "periodic_x", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
@@ -25,11 +26,11 @@ static const surge_param_info registry[] = {
      "Reference density rho0.", OFF(fluid.density_kgpm3)},
     {"fluid", "viscosity_m2ps", SURGE_PARAM_REAL, "m^2 s^-1", 5.6 / 1383.0, 0, 1e3, true, NULL,
      "Kinematic viscosity nu0 (dynamic viscosity / density).", OFF(fluid.viscosity_m2ps)},
-    {"fluid", "x0_m", SURGE_PARAM_REAL, "m", 0.0, -1e4, 1e4, false, NULL,
+    {"fluid", "x0_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,
      "Upstream end of the initial fluid block.", OFF(fluid.x0_m)},
-    {"fluid", "x1_m", SURGE_PARAM_REAL, "m", 0.27, -1e4, 1e4, false, NULL,
+    {"fluid", "x1_m", SURGE_PARAM_REAL, "m", 0.282, -1e4, 1e4, false, NULL,
      "Downstream end of the initial fluid block.", OFF(fluid.x1_m)},
-    {"fluid", "depth_m", SURGE_PARAM_REAL, "m", 0.017, 1e-6, 1e4, false, NULL,
+    {"fluid", "depth_m", SURGE_PARAM_REAL, "m", 0.018, 1e-6, 1e4, false, NULL,
      "Depth of the initial fluid block above the bed (y = 0).", OFF(fluid.depth_m)},
 
     {"walls", "layers", SURGE_PARAM_INT, "-", 0, 0, 16, false, NULL,
@@ -45,7 +46,7 @@ static const surge_param_info registry[] = {
     {"walls", "upstream", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
      "Fixed vertical wall at upstream_x_m inside a periodic domain, fluid on its downstream (+x) side.",
      OFF(walls.upstream)},
-    {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.0, -1e4, 1e4, false, NULL,
+    {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,
      "Position of the upstream wall's fluid face.", OFF(walls.upstream_x_m)},
     {"walls", "upstream_height_m", SURGE_PARAM_REAL, "m", 0.06, 1e-6, 1e4, false, NULL,
      "Height of the upstream wall above the bed.", OFF(walls.upstream_height_m)},
@@ -100,7 +101,7 @@ static const surge_param_info registry[] = {
     {"shifting", "max_shift_dp", SURGE_PARAM_REAL, "dp", 0.1, 0, 1, true, NULL,
      "Largest shift of a particle in one step, in units of dp.", OFF(shifting.max_shift_dp)},
 
-    {"time", "end_s", SURGE_PARAM_REAL, "s", 10, 0, 1e7, true, NULL, "Simulated time at which the run ends.",
+    {"time", "end_s", SURGE_PARAM_REAL, "s", 6, 0, 1e7, true, NULL, "Simulated time at which the run ends.",
      OFF(time.end_s)},
 
     {"output", "snapshot_interval_s", SURGE_PARAM_REAL, "s", 0.1, 0, 1e7, true, NULL,
