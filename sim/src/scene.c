@@ -84,8 +84,65 @@ static void build_walls(const surge_params *p, particle_list *l)
     }
 }
 
-static long fluid_columns(const surge_params *p) { return lround((p->fluid.x1_m - p->fluid.x0_m) / p->numerics.dp_m); }
-static long fluid_rows(const surge_params *p) { return lround(p->fluid.depth_m / p->numerics.dp_m); }
+/* Uniform depth that a belt moving at u_b holds steady on the slope: h_n = sqrt(3 nu u_b / (g sin theta)). */
+static double uniform_depth(const surge_params *p)
+{
+    const double g_along = p->body.gravity_mps2 * sin(p->body.slope_deg * SURGE_PI / 180.0);
+    return sqrt(3.0 * p->fluid.viscosity_m2ps * fabs(p->walls.bottom_speed_mps) / g_along);
+}
+
+/* Lubrication front (physics.md 3): xi tan(theta) / h_n = artanh(h/h_n) - h/h_n, xi upstream of the tip. */
+static double lubrication_depth(double xi, double h_n, double tan_theta)
+{
+    const double target = xi * tan_theta / h_n;
+    double lo = 0, hi = 1;
+    for (int i = 0; i < 60; i++) {
+        const double s = 0.5 * (lo + hi);
+        if (atanh(s) - s < target)
+            lo = s;
+        else
+            hi = s;
+    }
+    return 0.5 * (lo + hi) * h_n;
+}
+
+/* The initial fluid as columns of particles: rows[c] particles high in column c, from x0. Returns the number of
+ * columns, or -1 with a message. */
+static long fluid_columns(const surge_params *p, int *rows, long max_columns, char *err, size_t err_len)
+{
+    const double dp = p->numerics.dp_m;
+    if (p->fluid.shape == SURGE_SHAPE_BLOCK) {
+        const long cols = lround((p->fluid.x1_m - p->fluid.x0_m) / dp);
+        for (long c = 0; rows && c < cols && c < max_columns; c++)
+            rows[c] = (int)lround(p->fluid.depth_m / dp);
+        return cols;
+    }
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    if (p->walls.bottom_speed_mps == 0 || !(theta > 0) || p->fluid.viscosity_m2ps <= 0) {
+        snprintf(err, err_len, "fluid.shape = lubrication needs a moving belt (walls.bottom_speed_mps), a positive "
+                 "body.slope_deg and a viscosity");
+        return -1;
+    }
+    const double h_n = uniform_depth(p), tan_theta = tan(theta);
+    const double volume = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m;
+    /* front length L with the block's volume: the integral of h over [0, L] from the tip */
+    double length = 0, filled = 0;
+    const double step = dp / 64;
+    while (filled < volume && length < p->domain.length_m) {
+        filled += lubrication_depth(length + 0.5 * step, h_n, tan_theta) * step;
+        length += step;
+    }
+    const double x_tip = p->fluid.x0_m + length;
+    if (x_tip > p->domain.length_m - 2.0 * dp) {
+        snprintf(err, err_len, "fluid.shape = lubrication: the front (h_n = %.4g m) holding the block's volume would "
+                 "reach x = %.4g m, beyond domain.length_m = %g", h_n, x_tip, p->domain.length_m);
+        return -1;
+    }
+    const long cols = lround(length / dp);
+    for (long c = 0; rows && c < cols && c < max_columns; c++)
+        rows[c] = (int)lround(lubrication_depth(x_tip - (p->fluid.x0_m + (c + 0.5) * dp), h_n, tan_theta) / dp);
+    return cols;
+}
 
 static int wall_capacity(const surge_params *p)
 {
@@ -134,10 +191,21 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     }
     build_walls(p, &walls);
 
-    const long cols = fluid_columns(p), rows = fluid_rows(p);
+    const long cols = fluid_columns(p, NULL, 0, err, err_len);
+    int *rows = cols > 0 ? malloc((size_t)cols * sizeof *rows) : NULL;
+    if (cols < 0 || !rows) {
+        if (cols >= 0)
+            snprintf(err, err_len, "out of memory");
+        goto fail;
+    }
+    fluid_columns(p, rows, cols, err, err_len);
+    long fluid_count = 0;
+    for (long c = 0; c < cols; c++)
+        fluid_count += rows[c];
     s->wall_count = walls.n;
-    if (allocate_state(s, walls.n + (int)(cols * rows)) != 0) {
-        snprintf(err, err_len, "out of memory for %ld particles", (long)walls.n + cols * rows);
+    if (allocate_state(s, walls.n + (int)fluid_count) != 0) {
+        snprintf(err, err_len, "out of memory for %ld particles", (long)walls.n + fluid_count);
+        free(rows);
         goto fail;
     }
     for (int i = 0; i < walls.n; i++) {
@@ -157,16 +225,17 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     const double g_normal = p->body.gravity_mps2 * cos(theta);
     int32_t i = walls.n;
     for (long c = 0; c < cols; c++) {
-        for (long r = 0; r < rows; r++) {
+        for (long r = 0; r < rows[c]; r++) {
             s->x[i] = p->fluid.x0_m + (c + 0.5) * dp;
             s->y[i] = (r + 0.5) * dp;
-            double p_hydro = s->rho0 * g_normal * (p->fluid.depth_m - s->y[i]);
+            double p_hydro = s->rho0 * g_normal * (rows[c] * dp - s->y[i]);
             s->rho[i] = (real)tait_density(p_hydro, s->rho0, s->b_pa);
             s->id[i] = i;
             s->kind[i] = SURGE_KIND_FLUID;
             i++;
         }
     }
+    free(rows);
     free(walls.x); free(walls.y); free(walls.gdx); free(walls.gdy); free(walls.wall);
     return 0;
 fail:

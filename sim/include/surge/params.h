@@ -14,6 +14,11 @@ typedef enum surge_shifting_form {
     SURGE_SHIFT_LIND = 2,     /* Lind et al. 2012: dr = -(A/2) h c0 dt grad C, none in the surface layer */
 } surge_shifting_form;
 
+typedef enum surge_fluid_shape {
+    SURGE_SHAPE_BLOCK = 0,       /* rectangle [x0, x1] x [0, depth] */
+    SURGE_SHAPE_LUBRICATION = 1, /* steady lubrication front with the block's volume, from x0 downstream */
+} surge_fluid_shape;
+
 typedef struct surge_params {
     struct {
         double length_m;  /* x extent; the period when periodic */
@@ -25,6 +30,7 @@ typedef struct surge_params {
         double viscosity_m2ps; /* kinematic viscosity nu0 */
         double x0_m, x1_m;     /* initial fluid block, along x */
         double depth_m;        /* initial fluid block depth from the bed (y = 0) */
+        int shape;             /* surge_fluid_shape */
     } fluid;
     struct {
         int layers;
