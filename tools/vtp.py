@@ -11,8 +11,24 @@ read_vtp(path) -> dict
 
 read_pvd(path) -> list of (time: float, file: str)
     The <DataSet> entries of a .pvd time collection, in file order.
+
+write_vtp(path, points, point_data, time_s, step)
+    Writes a snapshot in the format of surge_vtp_write (sim/src/vtk_output.c), byte for byte for
+    the same values: VTK XML PolyData, little endian, header_type UInt64, raw appended data, field
+    data time_s (Float64) and step (Int64), point data velocity_mps (Float32 x3), density_kgpm3,
+    pressure_pa (Float32), kind (UInt8), id (Int32), Float64 points and Int64 verts (one vertex
+    per point). points may be (n, 2) or (n, 3) (z is written as 0 like the C writer), and so may
+    velocity_mps. A standard array missing from point_data is written as zeros (id: 0..n-1).
+    Other arrays in point_data are appended after id, typed from their numpy dtype.
+    Like the C writer it writes "<path>.tmp" and renames it over path.
+
+write_pvd(path, entries)
+    Writes a .pvd time collection of (time_s, file) entries as surge_pvd_open/surge_pvd_add do.
+
+Synthetic runs for tests are built with these two (see tests/test_freydier_metrics.py).
 """
 
+import os
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -117,3 +133,132 @@ def read_pvd(path):
     if root.get("type") != "Collection":
         raise ValueError("%s: not a Collection file (type=%r)" % (path, root.get("type")))
     return [(float(d.get("timestep")), d.get("file")) for d in root.findall("Collection/DataSet")]
+
+
+# ------------------------------------------------------------------------------------------------
+# Writers (same bytes as sim/src/vtk_output.c)
+# ------------------------------------------------------------------------------------------------
+
+# The C writer's point data arrays, in its order: (name, VTK type, number of components).
+_STANDARD_ARRAYS = (
+    ("velocity_mps", "Float32", 3),
+    ("density_kgpm3", "Float32", 1),
+    ("pressure_pa", "Float32", 1),
+    ("kind", "UInt8", 1),
+    ("id", "Int32", 1),
+)
+
+_VTK_NAMES = {np.dtype(v).str[1:]: k for k, v in _TYPES.items()}  # "f8" -> "Float64", ...
+
+
+def _xyz(values, n, name):
+    """(n, 2) or (n, 3) -> (n, 3) float64 with z = 0 where absent."""
+    values = np.asarray(values, dtype=np.float64)
+    if values.ndim != 2 or values.shape[0] != n or values.shape[1] not in (2, 3):
+        raise ValueError("%s: expected shape (%d, 2) or (%d, 3), got %s" % (name, n, n, values.shape))
+    out = np.zeros((n, 3))
+    out[:, :2] = values[:, :2]  # the C writer always writes z = 0
+    return out
+
+
+def _xml_escape(text):
+    return (text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+            .replace('"', "&quot;").replace("'", "&apos;"))
+
+
+def write_vtp(path, points, point_data, time_s, step):
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2:
+        raise ValueError("points: expected a 2-D array, got shape %s" % (points.shape,))
+    n = points.shape[0]
+    points = _xyz(points, n, "points")
+    point_data = dict(point_data)
+
+    arrays = []  # (name, vtk type, ncomp, little-endian numpy array)
+    for name, vtk_type, ncomp in _STANDARD_ARRAYS:
+        dtype = np.dtype("<" + _TYPES[vtk_type])
+        values = point_data.pop(name, None)
+        if values is None:
+            values = np.arange(n) if name == "id" else np.zeros((n, ncomp) if ncomp > 1 else n)
+        if ncomp == 3:
+            values = _xyz(values, n, name)
+        else:
+            values = np.asarray(values).reshape(-1)
+            if values.shape[0] != n:
+                raise ValueError("%s: %d values for %d points" % (name, values.shape[0], n))
+        arrays.append((name, vtk_type, ncomp, values.astype(dtype)))
+    for name, values in point_data.items():
+        values = np.asarray(values)
+        if values.shape[:1] != (n,) or values.ndim > 2:
+            raise ValueError("%s: expected shape (%d,) or (%d, k), got %s" % (name, n, n, values.shape))
+        key = values.dtype.str[1:]
+        if key not in _VTK_NAMES:
+            raise ValueError("%s: unsupported dtype %s" % (name, values.dtype))
+        ncomp = values.shape[1] if values.ndim == 2 else 1
+        arrays.append((name, _VTK_NAMES[key], ncomp, values.astype(values.dtype.newbyteorder("<"))))
+
+    header = []
+    blocks = []
+    offset = 0
+
+    def tag(indent, vtk_type, name, ncomp, data):
+        nonlocal offset
+        extra = 'NumberOfTuples="1" ' if ncomp == 0 else (
+            'NumberOfComponents="%d" ' % ncomp if ncomp > 1 else "")
+        header.append('%s<DataArray type="%s" Name="%s" %sformat="appended" offset="%d"/>\n'
+                      % (indent, vtk_type, _xml_escape(name), extra, offset))
+        raw = np.ascontiguousarray(data).tobytes()
+        blocks.append(np.array([len(raw)], dtype="<u8").tobytes() + raw)
+        offset += 8 + len(raw)
+
+    in3, in4 = " " * 6, " " * 8
+    header.append('<?xml version="1.0"?>\n'
+                  '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
+                  "  <PolyData>\n"
+                  "    <FieldData>\n")
+    tag(in3, "Float64", "time_s", 0, np.array([time_s], dtype="<f8"))
+    tag(in3, "Int64", "step", 0, np.array([step], dtype="<i8"))
+    header.append("    </FieldData>\n"
+                  '    <Piece NumberOfPoints="%d" NumberOfVerts="%d" NumberOfLines="0" '
+                  'NumberOfStrips="0" NumberOfPolys="0">\n'
+                  '      <PointData Scalars="density_kgpm3" Vectors="velocity_mps">\n' % (n, n))
+    for name, vtk_type, ncomp, values in arrays:
+        tag(in4, vtk_type, name, ncomp, values)
+    header.append("      </PointData>\n"
+                  "      <Points>\n")
+    tag(in4, "Float64", "Points", 3, points.astype("<f8"))
+    header.append("      </Points>\n"
+                  "      <Verts>\n")
+    tag(in4, "Int64", "connectivity", 1, np.arange(n, dtype="<i8"))
+    tag(in4, "Int64", "offsets", 1, np.arange(1, n + 1, dtype="<i8"))
+    header.append("      </Verts>\n"
+                  "    </Piece>\n"
+                  "  </PolyData>\n"
+                  '  <AppendedData encoding="raw">\n'
+                  "   _")
+    data = "".join(header).encode() + b"".join(blocks) + b"\n  </AppendedData>\n</VTKFile>\n"
+    _write_atomic(path, data)
+
+
+def write_pvd(path, entries):
+    lines = ['<?xml version="1.0"?>\n'
+             '<VTKFile type="Collection" version="1.0" byte_order="LittleEndian" header_type="UInt64">\n'
+             "  <Collection>\n"]
+    for time_s, file in entries:
+        lines.append('    <DataSet timestep="%.17g" group="" part="0" file="%s"/>\n'
+                     % (float(time_s), _xml_escape(str(file))))
+    lines.append("  </Collection>\n"
+                 "</VTKFile>\n")
+    _write_atomic(path, "".join(lines).encode())
+
+
+def _write_atomic(path, data):
+    tmp = str(path) + ".tmp"
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise

@@ -15,6 +15,7 @@ typedef struct run_outputs {
     surge_pvd *pvd;
     FILE *csv;
     surge_snapshot snap;
+    int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
 } run_outputs;
 
 static double wall_clock_s(void)
@@ -99,6 +100,8 @@ static int write_snapshot(const surge_sim *sim, run_outputs *o, const char *name
         return -1;
     if (add_to_collection && surge_pvd_add(o->pvd, surge_sim_time(sim), file, err, err_len) != 0)
         return -1;
+    if (add_to_collection)
+        o->last_snapshot_step = surge_sim_step_count(sim);
     return 0;
 }
 
@@ -137,7 +140,7 @@ static void print_progress(const surge_sim *sim, double start_wall, int64_t star
 
 surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
 {
-    run_outputs o = {.dir = opt->output_dir};
+    run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1};
     surge_run_result result = SURGE_RUN_IO_ERROR;
     char path[4096];
     if (make_dirs(opt->output_dir, err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
@@ -206,7 +209,9 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     /* the final state (the last good one after a health failure) always reaches disk */
     char final_err[512];
     const char *final_name = result == SURGE_RUN_UNHEALTHY ? "last_good.vtp" : NULL;
-    if (write_snapshot(sim, &o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0 ||
+    const int snapshot_due = result == SURGE_RUN_UNHEALTHY || surge_sim_step_count(sim) != o.last_snapshot_step;
+    if ((snapshot_due &&
+         write_snapshot(sim, &o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0) ||
         write_checkpoint(sim, &o, final_err, sizeof final_err) != 0) {
         if (result != SURGE_RUN_UNHEALTHY)
             snprintf(err, err_len, "%s", final_err);

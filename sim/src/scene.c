@@ -138,9 +138,16 @@ static long fluid_columns(const surge_params *p, int *rows, long max_columns, ch
                  "reach x = %.4g m, beyond domain.length_m = %g", h_n, x_tip, p->domain.length_m);
         return -1;
     }
+    /* rows from the cumulative volume, so that rounding each column does not bias the depth */
     const long cols = lround(length / dp);
-    for (long c = 0; rows && c < cols && c < max_columns; c++)
-        rows[c] = (int)lround(lubrication_depth(x_tip - (p->fluid.x0_m + (c + 0.5) * dp), h_n, tan_theta) / dp);
+    double volume_so_far = 0;
+    long rows_so_far = 0;
+    for (long c = 0; rows && c < cols && c < max_columns; c++) {
+        volume_so_far += lubrication_depth(x_tip - (p->fluid.x0_m + (c + 0.5) * dp), h_n, tan_theta) * dp;
+        const long total = lround(volume_so_far / (dp * dp));
+        rows[c] = (int)(total - rows_so_far);
+        rows_so_far = total;
+    }
     return cols;
 }
 

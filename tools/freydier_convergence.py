@@ -1,0 +1,237 @@
+#!/usr/bin/python3
+"""Convergence study of the Freydier surges: runs a grid of (case, dp, C_h, shifting) configurations, each in
+its own folder, resumable from checkpoints, and appends one row per finished run to a CSV; `chart` plots each
+error against wall time (one point per run).
+
+  tools/freydier_convergence.py run [--cases id1,id2] [--dp 0.001,0.0005] [--ch 1,1.3,1.5,1.8,2.2]
+        [--shifting lind] [--shape block] [--end-s 40] [--threads 2] [--budget-s SECONDS]
+        [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
+  tools/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
+
+A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
+its wall time adds up across the pieces (progress.json in its folder).
+"""
+import argparse
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
+           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status"]
+METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
+
+
+def fail(message):
+    print("freydier_convergence: " + message, file=sys.stderr)
+    sys.exit(2)
+
+
+def number_list(text, name):
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        fail("--%s: expected comma-separated numbers, got '%s'" % (name, text))
+    if not values or any(v <= 0 for v in values):
+        fail("--%s: expected positive numbers, got '%s'" % (name, text))
+    return values
+
+
+def run_name(case, dp, ch, shifting, shape):
+    return "%s_dp%g_ch%g_%s_%s" % (case, dp, ch, shifting, shape)
+
+
+def read_progress(folder):
+    try:
+        with open(os.path.join(folder, "progress.json")) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {"wall_s": 0.0, "status": "new"}
+
+
+def write_progress(folder, progress):
+    with open(os.path.join(folder, "progress.json"), "w") as f:
+        json.dump(progress, f, indent=1)
+
+
+def finished_rows(csv_path):
+    if not os.path.isfile(csv_path):
+        return set()
+    with open(csv_path) as f:
+        return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"))
+                for r in csv.DictReader(f)}
+
+
+def append_row(csv_path, row):
+    new = not os.path.isfile(csv_path)
+    os.makedirs(os.path.dirname(os.path.abspath(csv_path)), exist_ok=True)
+    with open(csv_path, "a", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=COLUMNS)
+        if new:
+            w.writeheader()
+        w.writerow(row)
+
+
+def particle_steps(folder):
+    """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
+    fluid = None
+    with open(os.path.join(folder, "params.ini")) as f:
+        for line in f:
+            if "fluid particles =" in line:
+                fluid = int(line.split("fluid particles =")[1].split(",")[0])
+    with open(os.path.join(folder, "diagnostics.csv")) as f:
+        rows = list(csv.reader(f))
+    last = rows[-1]
+    return fluid * int(last[1]), float(last[0])
+
+
+def run_one(args, case, dp, ch, deadline):
+    name = run_name(case, dp, ch, args.shifting, args.shape)
+    folder = os.path.join(args.runs_dir, name)
+    os.makedirs(folder, exist_ok=True)
+    progress = read_progress(folder)
+    checkpoint = os.path.join(folder, "checkpoint.bin")
+    common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.progress_interval_s=60", "--threads",
+              str(args.threads)]
+    if os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running"):
+        argv = [args.surge, "run", "--restart", checkpoint] + common
+    else:
+        argv = [args.surge, "run", os.path.join(ROOT, "cases", "freydier_%s.ini" % case),
+                "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
+                "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
+                "-o", folder] + common
+    print("freydier_convergence: %s: %s" % (name, " ".join(argv)), flush=True)
+    progress["status"] = "running"
+    write_progress(folder, progress)
+    start = time.time()
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL)
+    try:
+        while proc.poll() is None:
+            if deadline and time.time() > deadline:
+                proc.send_signal(signal.SIGINT)
+                proc.wait()
+                break
+            time.sleep(1)
+    except KeyboardInterrupt:
+        proc.send_signal(signal.SIGINT)
+        proc.wait()
+    progress["wall_s"] += time.time() - start
+    rc = proc.returncode
+    if rc == 4:
+        progress["status"] = "interrupted"
+        write_progress(folder, progress)
+        return False
+    steps, sim_time = particle_steps(folder)
+    row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
+           "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
+           "sim_time_s": "%.3f" % sim_time}
+    if rc == 0:
+        metrics = subprocess.run([sys.executable, os.path.join(HERE, "freydier_metrics.py"), folder, "--csv-row",
+                                  "--png", os.path.join(folder, "metrics.png")], capture_output=True, text=True)
+        if metrics.returncode != 0:
+            row.update({m: "nan" for m in METRICS})
+            row["status"] = "metrics failed: " + metrics.stderr.strip().splitlines()[-1]
+        else:
+            values = metrics.stdout.strip().splitlines()[-1].split(",")
+            row.update(dict(zip(METRICS, values)))
+            row["status"] = "ok"
+    else:
+        row.update({m: "nan" for m in METRICS})
+        row["status"] = "exit %d (health monitor)" % rc if rc == 1 else "exit %d" % rc
+    progress["status"] = row["status"]
+    write_progress(folder, progress)
+    append_row(args.csv, row)
+    print("freydier_convergence: %s: %s" % (name, row), flush=True)
+    return True
+
+
+def command_run(args):
+    deadline = time.time() + args.budget_s if args.budget_s else None
+    done = finished_rows(args.csv)
+    for case in args.cases.split(","):
+        if case not in ("id1", "id2"):
+            fail("--cases: unknown case '%s' (id1, id2)" % case)
+        for dp in number_list(args.dp, "dp"):
+            for ch in number_list(args.ch, "ch"):
+                if (case, dp, ch, args.shifting, args.shape) in done:
+                    continue
+                if deadline and time.time() > deadline:
+                    print("freydier_convergence: budget spent; run again to continue", flush=True)
+                    return 0
+                if not run_one(args, case, dp, ch, deadline):
+                    print("freydier_convergence: interrupted; run again to continue", flush=True)
+                    return 0
+    return 0
+
+
+def command_chart(args):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    if not os.path.isfile(args.csv):
+        fail("%s: no such file" % args.csv)
+    with open(args.csv) as f:
+        rows = [r for r in csv.DictReader(f) if r["status"] == "ok"]
+    if not rows:
+        fail("%s: no finished runs to chart" % args.csv)
+    targets = {"zeta_f": 0.01, "zeta_h": 0.05, "zeta_fs": 0.10, "zeta_u_076": 0.05, "zeta_u_150": 0.05,
+               "zeta_u_970": 0.05}
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), sharex=True)
+    for ax, metric in zip(axes.flat, METRICS):
+        for case, marker in (("id1", "o"), ("id2", "s")):
+            for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
+                sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp]
+                xs = [float(r["wall_s"]) for r in sel]
+                ys = [float(r[metric]) for r in sel]
+                ax.scatter(xs, ys, marker=marker, label="%s dp=%g mm" % (case.upper(), dp * 1e3))
+                for r, x, y in zip(sel, xs, ys):
+                    ax.annotate("C_h %s" % r["ch"], (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+        ax.axhline(targets[metric], color="grey", ls="--", lw=1)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title("%s (target %g, dashed)" % (metric, targets[metric]))
+        ax.set_xlabel("wall time (s, %s threads)" % rows[0]["threads"])
+        ax.set_ylabel("error (fraction)")
+    axes.flat[0].legend(fontsize=8)
+    fig.suptitle("Freydier surges: accuracy against cost, one point per run")
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=110)
+    print("freydier_convergence: wrote %s from %d runs" % (args.png, len(rows)))
+    return 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run")
+    run.add_argument("--cases", default="id1,id2")
+    run.add_argument("--dp", default="0.001,0.0005")
+    run.add_argument("--ch", default="1,1.3,1.5,1.8,2.2")
+    run.add_argument("--shifting", default="lind", choices=["none", "velocity", "lind"])
+    run.add_argument("--shape", default="block", choices=["block", "lubrication"])
+    run.add_argument("--end-s", type=float, default=40.0)
+    run.add_argument("--threads", type=int, default=2)
+    run.add_argument("--budget-s", type=float, default=0.0)
+    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "convergence"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
+    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    chart = sub.add_parser("chart")
+    chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
+    chart.add_argument("--png", default=os.path.join(ROOT, "docs", "validation", "freydier_accuracy_vs_cost.png"))
+    args = parser.parse_args()
+    if args.command == "run":
+        if args.end_s <= 0 or args.threads < 1 or args.budget_s < 0:
+            fail("--end-s must be > 0, --threads >= 1, --budget-s >= 0")
+        if not os.access(args.surge, os.X_OK):
+            fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
+        return command_run(args)
+    return command_chart(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
