@@ -60,6 +60,9 @@ static void build_walls(const surge_params *p, particle_list *l)
         for (long i = 0; i < nx_ext; i++) {
             double x = xlo + (i + 0.5) * dp;
             double gx = x < 0 ? -x : (x > L ? 2 * L - x : x); /* corners mirror through the corner point */
+            const double xw = p->walls.upstream_x_m;
+            if (p->walls.upstream && x < xw && x > xw - depth)
+                gx = 2 * xw - x; /* bed under the upstream wall: the belt-wall corner */
             if (p->walls.bottom)
                 push_wall(l, x, -off, gx, off, WALL_BOTTOM);
             if (p->walls.top)
