@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Validation metrics of a steady viscous front held on a conveyor belt (GMD paper Sect. 3.1,
-eqs. 15-18; docs/freydier_metrics.md describes the method, /work/shared/physics.md sections 3-5
+eqs. 15-18; docs/validation/freydier_metrics.md describes the method, ../shared/physics.md sections 3-5
 the physics).
 
 Usage:
