@@ -173,6 +173,7 @@ def command_chart(args):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
     if not os.path.isfile(args.csv):
         fail("%s: no such file" % args.csv)
     with open(args.csv) as f:
@@ -194,6 +195,7 @@ def command_chart(args):
         ax.axhline(targets[metric], color="grey", ls="--", lw=1)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_title("%s (target %g, dashed)" % (metric, targets[metric]))
         ax.set_xlabel("wall time (s, %s threads)" % rows[0]["threads"])
         ax.set_ylabel("error (fraction)")
