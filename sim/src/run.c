@@ -111,6 +111,7 @@ static void write_diagnostics(const surge_sim *sim, run_outputs *o)
     fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g\n", d.time_s, (long long)d.step, d.dt_s,
             d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
             d.bottom_wall_speed_mps);
+    fflush(o->csv); /* a run that dies still leaves its time series */
 }
 
 static int write_checkpoint(const surge_sim *sim, const run_outputs *o, char *err, size_t err_len)

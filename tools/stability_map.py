@@ -1,0 +1,208 @@
+#!/usr/bin/python3
+"""Where the methods fail: short runs of a belt-front case over shifting form x C_h x CFL x c0 factor, recording
+for each cell whether the health monitor let it finish, the failing check (particle, step, time) when it did
+not, and for every cell a frame of the particles near the upstream wall and the front.
+
+  tools/stability_map.py run [--case id1] [--dp 0.002] [--shifting none,velocity,lind] [--ch 1.3,1.8]
+        [--cfl 0.2,0.5] [--c0-factor 10,5] [--end-s 3] [--threads 2]
+        [--runs-dir runs/stability] [--csv docs/validation/stability_map.csv] [--frames docs/validation/stability]
+  tools/stability_map.py chart [--csv ...] [--png docs/validation/stability_map.png]
+
+One CSV row per cell (appended; cells already in the CSV are skipped): the parameters, status (healthy or the
+check that failed), the health message, wall time, the final time reached, the largest density deviation and
+the mean x velocity of the fluid over the last second (the drift of its centre of mass).
+"""
+import argparse
+import csv
+import os
+import re
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+COLUMNS = ["case", "dp_m", "shifting", "ch", "cfl", "c0_factor", "end_s", "status", "message", "wall_s",
+           "time_reached_s", "max_density_deviation", "mean_vx_last_s_mps", "frame"]
+
+
+def fail(message):
+    print("stability_map: " + message, file=sys.stderr)
+    sys.exit(2)
+
+
+def numbers(text, name):
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        fail("--%s: expected comma-separated numbers, got '%s'" % (name, text))
+    if not values or any(v <= 0 for v in values):
+        fail("--%s: expected positive numbers, got '%s'" % (name, text))
+    return values
+
+
+def cell_name(args, shifting, ch, cfl, c0f):
+    return "%s_dp%g_%s_ch%g_cfl%g_c0x%g" % (args.case, args.dp, shifting, ch, cfl, c0f)
+
+
+def diagnostics_summary(folder):
+    """Time reached, largest density deviation, mean fluid x velocity over the last second."""
+    with open(os.path.join(folder, "diagnostics.csv")) as f:
+        rows = [r for r in csv.reader(f)][1:]
+    if not rows:
+        return 0.0, float("nan"), float("nan")
+    t = [float(r[0]) for r in rows]
+    last = [float(r[7]) for r, ti in zip(rows, t) if ti >= t[-1] - 1.0]
+    return t[-1], max(float(r[5]) for r in rows), sum(last) / len(last)
+
+
+def draw_frame(folder, png, title):
+    """Particles of the last good state (or the final snapshot), coloured by speed, near the wall and front."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import vtp
+    path = os.path.join(folder, "last_good.vtp")
+    if not os.path.isfile(path):
+        path = os.path.join(folder, vtp.read_pvd(os.path.join(folder, "run.pvd"))[-1][1])
+    s = vtp.read_vtp(path)
+    x, y = s["points"][:, 0], s["points"][:, 1]
+    speed = np.hypot(s["velocity_mps"][:, 0], s["velocity_mps"][:, 1])
+    fluid = s["kind"] == 0
+    fig, ax = plt.subplots(figsize=(11, 2.8))
+    ax.scatter(x[~fluid], y[~fluid], s=1.5, c="0.6")
+    sc = ax.scatter(x[fluid], y[fluid], s=2.5, c=speed[fluid], cmap="viridis")
+    fig.colorbar(sc, ax=ax, label="speed (m/s)")
+    ax.set_xlim(0, max(0.05, x[fluid].max() + 0.02))
+    ax.set_ylim(-0.01, max(0.03, y[fluid].max() + 0.005))
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (m, along the belt)")
+    ax.set_ylabel("y (m)")
+    ax.set_title("%s, t = %.3f s (%s)" % (title, s["time_s"], os.path.basename(path)), fontsize=9)
+    fig.tight_layout()
+    fig.savefig(png, dpi=90)
+    plt.close(fig)
+
+
+def run_cell(args, shifting, ch, cfl, c0f):
+    name = cell_name(args, shifting, ch, cfl, c0f)
+    folder = os.path.join(args.runs_dir, name)
+    argv = [args.surge, "run", os.path.join(ROOT, "cases", "freydier_%s.ini" % args.case),
+            "-s", "numerics.dp_m=%g" % args.dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
+            "-s", "numerics.cfl=%g" % cfl, "-s", "numerics.c0_factor=%g" % c0f, "-s", "shifting.form=%s" % shifting,
+            "-s", "time.end_s=%g" % args.end_s, "-s", "output.snapshot_interval_s=0.5",
+            "-s", "output.progress_interval_s=0", "--threads", str(args.threads), "-o", folder]
+    start = time.time()
+    r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True)
+    wall = time.time() - start
+    message = ""
+    if r.returncode == 0:
+        status = "healthy"
+    elif r.returncode == 1:
+        message = next((l for l in r.stderr.splitlines() if "health check failed" in l), r.stderr.strip())
+        m = re.search(r"health check failed: (.*?) at ", message)
+        status = "failed: " + (m.group(1) if m else "health monitor")
+    else:
+        status = "error: exit %d" % r.returncode
+        message = r.stderr.strip().splitlines()[-1] if r.stderr.strip() else ""
+    t_reached, max_dev, mean_vx = diagnostics_summary(folder)
+    os.makedirs(args.frames, exist_ok=True)
+    frame = os.path.join(args.frames, name + ".png")
+    draw_frame(folder, frame, "%s: %s" % (name, status))
+    return {"case": args.case, "dp_m": args.dp, "shifting": shifting, "ch": ch, "cfl": cfl, "c0_factor": c0f,
+            "end_s": args.end_s, "status": status, "message": message.replace("surge: ", ""),
+            "wall_s": "%.1f" % wall, "time_reached_s": "%.4f" % t_reached, "max_density_deviation": "%.5f" % max_dev,
+            "mean_vx_last_s_mps": "%.6f" % mean_vx, "frame": os.path.relpath(frame, os.path.dirname(args.csv))}
+
+
+def command_run(args):
+    done = set()
+    if os.path.isfile(args.csv):
+        with open(args.csv) as f:
+            done = {(r["case"], float(r["dp_m"]), r["shifting"], float(r["ch"]), float(r["cfl"]), float(r["c0_factor"]),
+                     float(r["end_s"])) for r in csv.DictReader(f)}
+    for shifting in args.shifting.split(","):
+        if shifting not in ("none", "velocity", "lind"):
+            fail("--shifting: unknown form '%s' (none, velocity, lind)" % shifting)
+        for ch in numbers(args.ch, "ch"):
+            for cfl in numbers(args.cfl, "cfl"):
+                for c0f in numbers(args.c0_factor, "c0-factor"):
+                    if (args.case, args.dp, shifting, ch, cfl, c0f, args.end_s) in done:
+                        continue
+                    row = run_cell(args, shifting, ch, cfl, c0f)
+                    new = not os.path.isfile(args.csv)
+                    with open(args.csv, "a", newline="") as f:
+                        w = csv.DictWriter(f, fieldnames=COLUMNS)
+                        if new:
+                            w.writeheader()
+                        w.writerow(row)
+                    print("stability_map: %s: %s (%s s)" % (cell_name(args, shifting, ch, cfl, c0f), row["status"],
+                                                           row["wall_s"]), flush=True)
+    return 0
+
+
+def command_chart(args):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    if not os.path.isfile(args.csv):
+        fail("%s: no such file" % args.csv)
+    with open(args.csv) as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        fail("%s: empty" % args.csv)
+    forms = ["none", "velocity", "lind"]
+    fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
+    for ax, form in zip(axes, forms):
+        sel = [r for r in rows if r["shifting"] == form]
+        for r in sel:
+            healthy = r["status"] == "healthy"
+            label = "healthy" if healthy else r["status"].replace("failed: ", "")
+            ax.scatter(float(r["ch"]) + 0.03 * (float(r["c0_factor"]) - 10) / 5, float(r["cfl"]),
+                       marker="o" if healthy else "x", s=80, color="tab:green" if healthy else "tab:red")
+            ax.annotate("c0x%s %s" % (r["c0_factor"], "" if healthy else "\n" + label[:24]),
+                        (float(r["ch"]), float(r["cfl"])), fontsize=6, xytext=(4, 2), textcoords="offset points")
+        ax.set_title("shifting = %s" % form)
+        ax.set_xlabel("C_h")
+    axes[0].set_ylabel("C_CFL")
+    fig.suptitle("Stability map (%s, dp = %s m, %s s): o healthy, x stopped by the health monitor" %
+                 (rows[0]["case"], rows[0]["dp_m"], rows[0]["end_s"]))
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=100)
+    print("stability_map: wrote %s from %d cells" % (args.png, len(rows)))
+    return 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run")
+    run.add_argument("--case", default="id1", choices=["id1", "id2"])
+    run.add_argument("--dp", type=float, default=0.002)
+    run.add_argument("--shifting", default="none,velocity,lind")
+    run.add_argument("--ch", default="1.3,1.8")
+    run.add_argument("--cfl", default="0.2,0.5")
+    run.add_argument("--c0-factor", default="10,5")
+    run.add_argument("--end-s", type=float, default=3.0)
+    run.add_argument("--threads", type=int, default=2)
+    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "stability"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
+    run.add_argument("--frames", default=os.path.join(ROOT, "docs", "validation", "stability"))
+    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    chart = sub.add_parser("chart")
+    chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
+    chart.add_argument("--png", default=os.path.join(ROOT, "docs", "validation", "stability_map.png"))
+    args = parser.parse_args()
+    if args.command == "run":
+        if args.dp <= 0 or args.end_s <= 0 or args.threads < 1:
+            fail("--dp and --end-s must be > 0, --threads >= 1")
+        if not os.access(args.surge, os.X_OK):
+            fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
+        return command_run(args)
+    return command_chart(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
