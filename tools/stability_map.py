@@ -157,18 +157,22 @@ def command_chart(args):
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
     for ax, form in zip(axes, forms):
         sel = [r for r in rows if r["shifting"] == form]
+        c0_factors = sorted({float(r["c0_factor"]) for r in rows})
         for r in sel:
             healthy = r["status"] == "healthy"
-            label = "healthy" if healthy else r["status"].replace("failed: ", "")
-            ax.scatter(float(r["ch"]) + 0.03 * (float(r["c0_factor"]) - 10) / 5, float(r["cfl"]),
-                       marker="o" if healthy else "x", s=80, color="tab:green" if healthy else "tab:red")
-            ax.annotate("c0x%s %s" % (r["c0_factor"], "" if healthy else "\n" + label[:24]),
-                        (float(r["ch"]), float(r["cfl"])), fontsize=6, xytext=(4, 2), textcoords="offset points")
+            offset = 0.08 * (c0_factors.index(float(r["c0_factor"])) - (len(c0_factors) - 1) / 2)
+            x = float(r["ch"]) + offset
+            ax.scatter(x, float(r["cfl"]), marker="o" if healthy else "x", s=80,
+                       color="tab:green" if healthy else "tab:red")
+            ax.annotate("c0x%g" % float(r["c0_factor"]), (x, float(r["cfl"])), fontsize=7, xytext=(-10, 8),
+                        textcoords="offset points")
+        ax.set_xlim(1.0, 2.1)
         ax.set_title("shifting = %s" % form)
         ax.set_xlabel("C_h")
     axes[0].set_ylabel("C_CFL")
-    fig.suptitle("Stability map (%s, dp = %s m, %s s): o healthy, x stopped by the health monitor" %
-                 (rows[0]["case"], rows[0]["dp_m"], rows[0]["end_s"]))
+    failures = sorted({r["status"].replace("failed: ", "") for r in rows if r["status"] != "healthy"})
+    fig.suptitle("Stability map (%s, dp = %s m, %s s): o healthy, x stopped by the health monitor (%s)" %
+                 (rows[0]["case"], rows[0]["dp_m"], rows[0]["end_s"], "; ".join(failures) or "none"))
     fig.tight_layout()
     fig.savefig(args.png, dpi=100)
     print("stability_map: wrote %s from %d cells" % (args.png, len(rows)))
