@@ -22,24 +22,15 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import study  # noqa: E402
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
            "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status"]
 METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
 
 
 def fail(message):
-    print("freydier_convergence: " + message, file=sys.stderr)
-    sys.exit(2)
-
-
-def number_list(text, name):
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        fail("--%s: expected comma-separated numbers, got '%s'" % (name, text))
-    if not values or any(v <= 0 for v in values):
-        fail("--%s: expected positive numbers, got '%s'" % (name, text))
-    return values
+    study.fail("freydier_convergence", message)
 
 
 def run_name(case, dp, ch, shifting, shape):
@@ -65,16 +56,6 @@ def finished_rows(csv_path):
     with open(csv_path) as f:
         return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"))
                 for r in csv.DictReader(f)}
-
-
-def append_row(csv_path, row):
-    new = not os.path.isfile(csv_path)
-    os.makedirs(os.path.dirname(os.path.abspath(csv_path)), exist_ok=True)
-    with open(csv_path, "a", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=COLUMNS)
-        if new:
-            w.writeheader()
-        w.writerow(row)
 
 
 def particle_steps(folder):
@@ -145,7 +126,7 @@ def run_one(args, case, dp, ch, deadline):
         row["status"] = "exit %d (health monitor)" % rc if rc == 1 else "exit %d" % rc
     progress["status"] = row["status"]
     write_progress(folder, progress)
-    append_row(args.csv, row)
+    study.append_row(args.csv, COLUMNS, row)
     print("freydier_convergence: %s: %s" % (name, row), flush=True)
     return True
 
@@ -156,8 +137,8 @@ def command_run(args):
     for case in args.cases.split(","):
         if case not in ("id1", "id2"):
             fail("--cases: unknown case '%s' (id1, id2)" % case)
-        for dp in number_list(args.dp, "dp"):
-            for ch in number_list(args.ch, "ch"):
+        for dp in study.positive_numbers("freydier_convergence", args.dp, "dp"):
+            for ch in study.positive_numbers("freydier_convergence", args.ch, "ch"):
                 if (case, dp, ch, args.shifting, args.shape) in done:
                     continue
                 if deadline and time.time() > deadline:

@@ -23,23 +23,13 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
+import study  # noqa: E402
 COLUMNS = ["case", "dp_m", "shifting", "ch", "cfl", "c0_factor", "end_s", "status", "message", "wall_s",
            "time_reached_s", "max_density_deviation", "mean_vx_last_s_mps", "frame"]
 
 
 def fail(message):
-    print("stability_map: " + message, file=sys.stderr)
-    sys.exit(2)
-
-
-def numbers(text, name):
-    try:
-        values = [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        fail("--%s: expected comma-separated numbers, got '%s'" % (name, text))
-    if not values or any(v <= 0 for v in values):
-        fail("--%s: expected positive numbers, got '%s'" % (name, text))
-    return values
+    study.fail("stability_map", message)
 
 
 def cell_name(args, shifting, ch, cfl, c0f):
@@ -126,18 +116,13 @@ def command_run(args):
     for shifting in args.shifting.split(","):
         if shifting not in ("none", "velocity", "lind"):
             fail("--shifting: unknown form '%s' (none, velocity, lind)" % shifting)
-        for ch in numbers(args.ch, "ch"):
-            for cfl in numbers(args.cfl, "cfl"):
-                for c0f in numbers(args.c0_factor, "c0-factor"):
+        for ch in study.positive_numbers("stability_map", args.ch, "ch"):
+            for cfl in study.positive_numbers("stability_map", args.cfl, "cfl"):
+                for c0f in study.positive_numbers("stability_map", args.c0_factor, "c0-factor"):
                     if (args.case, args.dp, shifting, ch, cfl, c0f, args.end_s) in done:
                         continue
                     row = run_cell(args, shifting, ch, cfl, c0f)
-                    new = not os.path.isfile(args.csv)
-                    with open(args.csv, "a", newline="") as f:
-                        w = csv.DictWriter(f, fieldnames=COLUMNS)
-                        if new:
-                            w.writeheader()
-                        w.writerow(row)
+                    study.append_row(args.csv, COLUMNS, row)
                     print("stability_map: %s: %s (%s s)" % (cell_name(args, shifting, ch, cfl, c0f), row["status"],
                                                            row["wall_s"]), flush=True)
     return 0

@@ -1,0 +1,45 @@
+#!/usr/bin/python3
+"""The study drivers' shared pieces and charts: append_row writes the header once, bad numeric options exit 2
+with the option named, and both charts render from the committed tables.
+usage: test_study_tools.py SOURCE_DIR WORK_DIR"""
+import csv
+import os
+import subprocess
+import sys
+
+source, work = sys.argv[1], sys.argv[2]
+sys.path.insert(0, os.path.join(source, "tools"))
+import study  # noqa: E402
+
+os.makedirs(work, exist_ok=True)
+failures = []
+
+
+def check(name, ok, detail=""):
+    print("%s: %s %s" % (name, "ok" if ok else "FAILED", detail))
+    if not ok:
+        failures.append(name)
+
+
+table = os.path.join(work, "table.csv")
+if os.path.exists(table):
+    os.remove(table)
+study.append_row(table, ["a", "b"], {"a": 1, "b": 2})
+study.append_row(table, ["a", "b"], {"a": 3, "b": 4})
+with open(table) as f:
+    rows = list(csv.reader(f))
+check("append_row_header_once", rows == [["a", "b"], ["1", "2"], ["3", "4"]], str(rows))
+check("positive_numbers", study.positive_numbers("t", "1,1.3, 2.2", "ch") == [1.0, 1.3, 2.2])
+
+tools = os.path.join(source, "tools")
+for tool, option in (("freydier_convergence.py", "--ch"), ("stability_map.py", "--cfl")):
+    for bad in ("0.2,abc", "-1", ""):
+        r = subprocess.run([sys.executable, os.path.join(tools, tool), "run", option, bad], capture_output=True,
+                           text=True, timeout=60)
+        check("%s %s '%s' refused" % (tool, option, bad), r.returncode == 2 and option[2:] in r.stderr,
+              r.stderr.strip())
+    png = os.path.join(work, tool.replace(".py", ".png"))
+    r = subprocess.run([sys.executable, os.path.join(tools, tool), "chart", "--png", png], capture_output=True,
+                       text=True, timeout=120)
+    check("%s chart" % tool, r.returncode == 0 and os.path.getsize(png) > 10000, r.stderr.strip())
+sys.exit(1 if failures else 0)
