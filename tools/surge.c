@@ -1,4 +1,5 @@
-/* surge: the command-line program. Wires the solver (sim/) to its outputs; later the stream and renderer. */
+/* surge: the command-line program. Wires the solver (sim/) to its outputs, the state publisher and the control
+ * socket (stream/). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <limits.h>
@@ -8,13 +9,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <zmq.h>
+
+#include "surge/control.h"
+#include "surge/journal.h"
 #include "surge/params.h"
+#include "surge/publisher.h"
 #include "surge/run.h"
 #include "surge/sim.h"
 
 extern const char surge_default_case_text[]; /* cases/demo.ini, embedded at build time */
 
 enum { EXIT_OK = 0, EXIT_UNHEALTHY = 1, EXIT_USAGE = 2, EXIT_IO = 3, EXIT_INTERRUPTED = 4 };
+enum { ENDPOINT_BYTES = 256 };
 
 static volatile sig_atomic_t stop_requested = 0;
 static void on_signal(int sig)
@@ -29,7 +36,8 @@ static const char *usage_main =
     "A 2D weakly-compressible SPH simulator of viscous debris-flow surges.\n"
     "\n"
     "commands:\n"
-    "  run [CASE]        run a case file (no CASE: the default demo scene, cases/demo.ini)\n"
+    "  run [CASE]        run a case file (no CASE: the default demo scene, cases/demo.ini); can publish its\n"
+    "                    state over ZeroMQ and take commands on a control socket\n"
     "  check CASE        validate a case file without running it\n"
     "  params            print the parameter reference (Markdown)\n"
     "\n"
@@ -53,6 +61,18 @@ static const char *usage_run =
     "  --threads N           OpenMP threads (default: all cores)\n"
     "  --restart FILE        continue from a checkpoint; only live parameters may be overridden (time.end_s...)\n"
     "                        and the output goes to the checkpoint's folder unless -o is given\n"
+    "\n"
+    "live state and control (docs/protocol.md; a bare PORT means tcp://127.0.0.1:PORT):\n"
+    "  --publish ENDPOINT    publish topics state, bodies and stats on a ZeroMQ PUB socket\n"
+    "  --publish-every N     at most once every N steps (default 1)\n"
+    "  --publish-hz F        and at most F times per wall-clock second (default 30; 0: no limit)\n"
+    "  --publish-hwm N       messages queued per subscriber before newer ones are dropped (default 4)\n"
+    "  --control ENDPOINT    accept JSON commands (get, set, pause, step, snapshot, stop...) on a ROUTER\n"
+    "                        socket; applied commands are journaled in OUTDIR/control.jsonl\n"
+    "  --paused              with --control: wait for 'resume' or 'step' before the first step\n"
+    "  --replay JOURNAL      apply a control.jsonl's parameter changes and stop at the same steps again\n"
+    "The sockets have no authentication: bind to 127.0.0.1 (the default) and reach them through an SSH\n"
+    "tunnel from elsewhere.\n"
     "Ctrl-C stops at the next step and writes a checkpoint.\n";
 
 static const char *usage_check =
@@ -79,6 +99,11 @@ typedef struct cli {
     const char *overrides[256];
     int override_count;
     int threads;
+    char publish[ENDPOINT_BYTES];
+    char control[ENDPOINT_BYTES];
+    const char *replay_path;
+    surge_publisher_def publisher;
+    int paused;
 } cli;
 
 static int parse_int(const char *text, int lo, int hi, int *out)
@@ -92,9 +117,43 @@ static int parse_int(const char *text, int lo, int hi, int *out)
     return 0;
 }
 
+static int parse_real(const char *text, double lo, double hi, double *out)
+{
+    char *end;
+    errno = 0;
+    double v = strtod(text, &end);
+    if (end == text || *end != '\0' || errno || !(v >= lo && v <= hi))
+        return -1;
+    *out = v;
+    return 0;
+}
+
+/* A ZeroMQ endpoint, or a bare port meaning loopback. Warns when it is reachable from other machines. */
+static int parse_endpoint(const char *option, const char *text, char *out)
+{
+    int port;
+    if (parse_int(text, 1, 65535, &port) == 0) {
+        snprintf(out, ENDPOINT_BYTES, "tcp://127.0.0.1:%d", port);
+        return 0;
+    }
+    if (strlen(text) >= ENDPOINT_BYTES || !strstr(text, "://")) {
+        fprintf(stderr, "surge: %s needs an endpoint such as tcp://127.0.0.1:5555 or ipc:///tmp/surge, or a port; "
+                        "got '%s'\n", option, text);
+        return -1;
+    }
+    snprintf(out, ENDPOINT_BYTES, "%s", text);
+    if (!strncmp(text, "tcp://", 6) && strncmp(text, "tcp://127.", 10) && strncmp(text, "tcp://localhost:", 16) &&
+        strncmp(text, "tcp://[::1]:", 12))
+        fprintf(stderr, "surge: warning: %s %s is not bound to loopback; it has no authentication, so anyone who "
+                        "can reach it can %s (see docs/protocol.md)\n", option, text,
+                !strcmp(option, "--control") ? "steer and stop the run" : "read the state");
+    return 0;
+}
+
 static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
 {
     memset(c, 0, sizeof *c);
+    c->publisher = surge_default_publisher_def();
     for (int i = 0; i < argc; i++) {
         const char *a = argv[i];
         const int has_value = i + 1 < argc;
@@ -127,6 +186,42 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
                 return -1;
             }
             c->restart_path = argv[++i];
+        } else if (allow_run_options && (!strcmp(a, "--publish") || !strcmp(a, "--control"))) {
+            if (!has_value || parse_endpoint(a, argv[i + 1], !strcmp(a, "--publish") ? c->publish : c->control) != 0) {
+                if (!has_value)
+                    fprintf(stderr, "surge: %s needs an endpoint or a port\n", a);
+                return -1;
+            }
+            i++;
+        } else if (allow_run_options && !strcmp(a, "--publish-every")) {
+            if (!has_value || parse_int(argv[i + 1], 1, 1000000000, &c->publisher.every_steps) != 0) {
+                fprintf(stderr, "surge: --publish-every needs a whole number of steps in [1, 1e9], got '%s'\n",
+                        has_value ? argv[i + 1] : "");
+                return -1;
+            }
+            i++;
+        } else if (allow_run_options && !strcmp(a, "--publish-hz")) {
+            if (!has_value || parse_real(argv[i + 1], 0, 1e6, &c->publisher.max_rate_hz) != 0) {
+                fprintf(stderr, "surge: --publish-hz needs a rate in [0, 1e6] per second (0: no limit), got '%s'\n",
+                        has_value ? argv[i + 1] : "");
+                return -1;
+            }
+            i++;
+        } else if (allow_run_options && !strcmp(a, "--publish-hwm")) {
+            if (!has_value || parse_int(argv[i + 1], 1, 1000000, &c->publisher.send_hwm) != 0) {
+                fprintf(stderr, "surge: --publish-hwm needs a message count in [1, 1e6], got '%s'\n",
+                        has_value ? argv[i + 1] : "");
+                return -1;
+            }
+            i++;
+        } else if (allow_run_options && !strcmp(a, "--replay")) {
+            if (!has_value) {
+                fprintf(stderr, "surge: --replay needs a journal file (control.jsonl)\n");
+                return -1;
+            }
+            c->replay_path = argv[++i];
+        } else if (allow_run_options && !strcmp(a, "--paused")) {
+            c->paused = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             fprintf(stderr, "surge: unknown option '%s' (see --help)\n", a);
             return -1;
@@ -139,6 +234,14 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
     }
     if (c->restart_path && c->case_path) {
         fprintf(stderr, "surge: give either a CASE or --restart CHECKPOINT, not both\n");
+        return -1;
+    }
+    if (c->paused && !c->control[0]) {
+        fprintf(stderr, "surge: --paused needs --control (nothing could resume the run)\n");
+        return -1;
+    }
+    if (c->publish[0] && c->control[0] && !strcmp(c->publish, c->control)) {
+        fprintf(stderr, "surge: --publish and --control need different endpoints\n");
         return -1;
     }
     return 0;
@@ -170,6 +273,81 @@ static void default_output_dir(const char *case_path, char *out, size_t len)
     base = base ? base + 1 : (case_path ? case_path : "demo.ini");
     size_t n = strcspn(base, ".");
     snprintf(out, len, "runs/%.*s", (int)n, base);
+}
+
+/* The live links of a run: replayed journal, control socket and publisher, served at each step boundary. */
+typedef struct live_links {
+    void *zmq_context;
+    surge_publisher *publisher;
+    surge_control *control;
+    surge_replay *replay;
+    surge_journal *journal;
+    char replay_error[1024]; /* set when a journal entry could not be replayed */
+} live_links;
+
+static int at_step_boundary(surge_sim *sim, void *user)
+{
+    live_links *l = user;
+    int requests = SURGE_CONTINUE;
+    if (l->replay) {
+        const int replayed = surge_replay_apply(l->replay, sim, l->journal, l->replay_error, sizeof l->replay_error);
+        if (replayed < 0)
+            return SURGE_REQUEST_STOP;
+        requests |= replayed;
+    }
+    if (l->control)
+        requests |= surge_control_service(l->control, sim, &stop_requested);
+    if (l->publisher)
+        surge_publisher_offer(l->publisher, sim);
+    return requests;
+}
+
+static int open_live_links(const cli *c, const char *outdir, live_links *l)
+{
+    char err[1024], path[4200];
+    memset(l, 0, sizeof *l);
+    if (c->replay_path && !(l->replay = surge_replay_load(c->replay_path, err, sizeof err)))
+        goto fail;
+    if (c->control[0] || c->replay_path) {
+        snprintf(path, sizeof path, "%s/control.jsonl", outdir);
+        if (!(l->journal = surge_journal_open(path, c->restart_path != NULL, err, sizeof err)))
+            goto fail;
+    }
+    if (c->publish[0] || c->control[0])
+        l->zmq_context = zmq_ctx_new();
+    if (c->control[0]) {
+        surge_control_def def = surge_default_control_def();
+        def.endpoint = c->control;
+        def.start_paused = c->paused;
+        if (!(l->control = surge_control_start(l->zmq_context, &def, l->journal, err, sizeof err)))
+            goto fail;
+    }
+    if (c->publish[0]) {
+        surge_publisher_def def = c->publisher;
+        def.endpoint = c->publish;
+        if (!(l->publisher = surge_publisher_start(l->zmq_context, &def, err, sizeof err)))
+            goto fail;
+    }
+    return 0;
+fail:
+    fprintf(stderr, "surge: %s\n", err);
+    return -1;
+}
+
+static void close_live_links(live_links *l, const surge_sim *sim)
+{
+    if (l->publisher) {
+        surge_publisher_report r;
+        surge_publisher_finish(l->publisher, sim, &r);
+        fprintf(stderr, "surge: published %llu states (%llu superseded by newer ones before sending), %llu messages, "
+                        "%.1f MB\n", (unsigned long long)r.frames_posted, (unsigned long long)r.frames_superseded,
+                (unsigned long long)r.messages_sent, 1e-6 * (double)r.bytes_sent);
+    }
+    surge_control_close(l->control);
+    surge_replay_free(l->replay);
+    surge_journal_close(l->journal);
+    if (l->zmq_context)
+        zmq_ctx_term(l->zmq_context);
 }
 
 static int command_run(int argc, char **argv)
@@ -217,6 +395,16 @@ static int command_run(int argc, char **argv)
             c.restart_path ? "restart from " : "", c.restart_path ? c.restart_path
                                                    : (c.case_path ? c.case_path : "default scene (cases/demo.ini)"),
             outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads);
+    live_links links;
+    if (open_live_links(&c, outdir, &links) != 0) {
+        close_live_links(&links, sim);
+        surge_sim_destroy(sim);
+        return EXIT_USAGE;
+    }
+    if (c.publish[0])
+        fprintf(stderr, "surge: publishing state, bodies and stats on %s\n", c.publish);
+    if (c.control[0])
+        fprintf(stderr, "surge: control socket on %s%s\n", c.control, c.paused ? " (paused: send resume or step)" : "");
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);
     surge_run_options opt = surge_default_run_options();
@@ -224,9 +412,18 @@ static int command_run(int argc, char **argv)
     opt.threads = threads;
     opt.restarted = c.restart_path != NULL;
     opt.stop = &stop_requested;
+    if (links.publisher || links.control || links.replay) {
+        opt.at_step_boundary = at_step_boundary;
+        opt.user = &links;
+    }
     surge_run_result r = surge_run(sim, &opt, err, sizeof err);
+    close_live_links(&links, sim);
     const uint64_t hash = surge_sim_state_hash(sim);
     surge_sim_destroy(sim);
+    if (links.replay_error[0]) {
+        fprintf(stderr, "surge: %s\nsurge: the run stopped there; its outputs are in %s\n", links.replay_error, outdir);
+        return EXIT_USAGE;
+    }
     switch (r) {
     case SURGE_RUN_FINISHED:
         fprintf(stderr, "surge: done, state hash %016llx, outputs in %s\n", (unsigned long long)hash, outdir);
@@ -235,6 +432,10 @@ static int command_run(int argc, char **argv)
         fprintf(stderr, "surge: %s\nsurge: last good state written to %s/last_good.vtp and %s/checkpoint.bin\n",
                 err, outdir, outdir);
         return EXIT_UNHEALTHY;
+    case SURGE_RUN_STOPPED:
+        fprintf(stderr, "surge: stopped by a control request, state hash %016llx; checkpoint written to "
+                        "%s/checkpoint.bin\n", (unsigned long long)hash, outdir);
+        return EXIT_OK;
     case SURGE_RUN_INTERRUPTED:
         fprintf(stderr, "surge: interrupted; checkpoint written to %s/checkpoint.bin\n", outdir);
         return EXIT_INTERRUPTED;

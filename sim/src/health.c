@@ -39,7 +39,7 @@ static surge_health_check check_particle(const surge_sim *sim, int a, double *va
     return SURGE_HEALTHY;
 }
 
-static const char *check_name(surge_health_check c)
+const char *surge_health_check_name(surge_health_check c)
 {
     switch (c) {
     case SURGE_HEALTHY: return "healthy";
@@ -82,7 +82,7 @@ int health_check(surge_sim *sim)
             detail = extra;
         }
         snprintf(h->message, sizeof h->message, "health check failed: %s at particle %d, step %lld, t = %.9g s (%s)",
-                 check_name(h->check), h->particle_id, (long long)h->step, h->time_s, detail);
+                 surge_health_check_name(h->check), h->particle_id, (long long)h->step, h->time_s, detail);
         return -1;
     }
     if (sim->params.numerics.dt_fixed_s == 0 && sim->first_dt_s > 0 &&
@@ -91,7 +91,7 @@ int health_check(surge_sim *sim)
         h->value = sim->dt_s;
         snprintf(h->message, sizeof h->message,
                  "health check failed: %s at step %lld, t = %.9g s (dt = %.3g s, below %g x first dt %.3g s)",
-                 check_name(h->check), (long long)h->step, h->time_s, sim->dt_s, sim->params.health.min_dt_ratio,
+                 surge_health_check_name(h->check), (long long)h->step, h->time_s, sim->dt_s, sim->params.health.min_dt_ratio,
                  sim->first_dt_s);
         return -1;
     }

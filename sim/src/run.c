@@ -90,7 +90,7 @@ static int write_snapshot(const surge_sim *sim, run_outputs *o, const char *name
     if (name)
         snprintf(file, sizeof file, "%s", name);
     else
-        snprintf(file, sizeof file, "snap_%09lld.vtp", (long long)surge_sim_step_count(sim));
+        surge_run_snapshot_name(surge_sim_step_count(sim), file, sizeof file);
     join(path, sizeof path, o->dir, file);
     if (surge_sim_snapshot(sim, &o->snap) != 0) {
         snprintf(err, err_len, "out of memory taking a snapshot");
@@ -103,6 +103,11 @@ static int write_snapshot(const surge_sim *sim, run_outputs *o, const char *name
     if (add_to_collection)
         o->last_snapshot_step = surge_sim_step_count(sim);
     return 0;
+}
+
+void surge_run_snapshot_name(int64_t step, char *name, size_t len)
+{
+    snprintf(name, len, "snap_%09lld.vtp", (long long)step);
 }
 
 static void write_diagnostics(const surge_sim *sim, run_outputs *o)
@@ -127,16 +132,30 @@ static double next_time(double t, double interval)
     return interval > 0 ? (floor(t / interval + 1e-9) + 1.0) * interval : INFINITY;
 }
 
-static void print_progress(const surge_sim *sim, double start_wall, int64_t start_step, double start_time)
+/* held_s: wall time the run was held at a step boundary (paused by a control client), left out of the rates */
+static void print_progress(const surge_sim *sim, double start_wall, double held_s, int64_t start_step,
+                           double start_time)
 {
-    const double elapsed = wall_clock_s() - start_wall, t = surge_sim_time(sim);
+    const double elapsed = wall_clock_s() - start_wall - held_s, t = surge_sim_time(sim);
     const double end = surge_sim_params(sim)->time.end_s;
     const double steps = (double)(surge_sim_step_count(sim) - start_step);
     const double rate = elapsed > 0 ? steps / elapsed : 0;
     const double eta = t > start_time ? elapsed * (end - t) / (t - start_time) : 0;
-    fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.0f steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d\n",
+    fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.4g steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d\n",
             t, end, (long long)surge_sim_step_count(sim), surge_sim_last_dt(sim), rate,
             rate * surge_sim_derived(sim)->fluid_count, (int)(eta / 3600), (int)fmod(eta / 60, 60), (int)fmod(eta, 60));
+}
+
+/* The step-boundary callback; time spent in calls that hold the run (paused) is added to held_s. */
+static int call_boundary(const surge_run_options *opt, surge_sim *sim, double *held_s)
+{
+    if (!opt->at_step_boundary)
+        return SURGE_CONTINUE;
+    const double from = wall_clock_s();
+    const int requests = opt->at_step_boundary(sim, opt->user);
+    if (requests & SURGE_REQUEST_AGAIN)
+        *held_s += wall_clock_s() - from;
+    return requests;
 }
 
 surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
@@ -172,8 +191,27 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     const double start_wall = wall_clock_s(), start_time = surge_sim_time(sim);
     const int64_t start_step = surge_sim_step_count(sim);
     double next_progress = start_wall + p->output.progress_interval_s;
+    double held_s = 0;
 
-    while (surge_sim_time(sim) < p->time.end_s) {
+    int requests = call_boundary(opt, sim, &held_s);
+    for (;;) {
+        if (requests & SURGE_REQUEST_SNAPSHOT && surge_sim_step_count(sim) != o.last_snapshot_step &&
+            write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
+            goto done;
+        if (requests & SURGE_REQUEST_CHECKPOINT && write_checkpoint(sim, &o, err, err_len) != 0)
+            goto done;
+        if (requests & SURGE_REQUEST_STOP) {
+            result = SURGE_RUN_STOPPED;
+            break;
+        }
+        if (requests & SURGE_REQUEST_AGAIN) {
+            requests = call_boundary(opt, sim, &held_s);
+            continue;
+        }
+        if (surge_sim_time(sim) >= p->time.end_s) {
+            result = SURGE_RUN_FINISHED;
+            break;
+        }
         if (opt->stop && *opt->stop) {
             result = SURGE_RUN_INTERRUPTED;
             break;
@@ -183,8 +221,6 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
             snprintf(err, err_len, "%s", surge_sim_health(sim)->message);
             break;
         }
-        if (opt->on_step)
-            opt->on_step(sim, opt->user);
         const double t = surge_sim_time(sim);
         if (p->output.diagnostics_interval_s == 0 || t >= next_diag) {
             write_diagnostics(sim, &o);
@@ -201,12 +237,11 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
             next_checkpoint = next_time(t, p->output.checkpoint_interval_s);
         }
         if (p->output.progress_interval_s > 0 && wall_clock_s() >= next_progress) {
-            print_progress(sim, start_wall, start_step, start_time);
+            print_progress(sim, start_wall, held_s, start_step, start_time);
             next_progress = wall_clock_s() + p->output.progress_interval_s;
         }
+        requests = call_boundary(opt, sim, &held_s);
     }
-    if (surge_sim_time(sim) >= p->time.end_s)
-        result = SURGE_RUN_FINISHED;
     /* the final state (the last good one after a health failure) always reaches disk */
     char final_err[512];
     const char *final_name = result == SURGE_RUN_UNHEALTHY ? "last_good.vtp" : NULL;
@@ -219,7 +254,7 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         result = result == SURGE_RUN_UNHEALTHY ? result : SURGE_RUN_IO_ERROR;
     }
     if (p->output.progress_interval_s > 0)
-        print_progress(sim, start_wall, start_step, start_time);
+        print_progress(sim, start_wall, held_s, start_step, start_time);
 done:
     if (o.csv && fclose(o.csv) != 0 && result == SURGE_RUN_FINISHED) {
         snprintf(err, err_len, "cannot write diagnostics.csv: %s", strerror(errno));

@@ -37,6 +37,9 @@ typedef struct surge_health {
     char message[256];
 } surge_health;
 
+/* "healthy", "density far from rho0", ... */
+const char *surge_health_check_name(surge_health_check check);
+
 /* Builds the scene described by params. NULL on error, with the reason in err. */
 surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_len);
 void surge_sim_destroy(surge_sim *sim);

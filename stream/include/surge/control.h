@@ -1,0 +1,37 @@
+/* The control socket: outside tools read and change parameters, pause, step, save and stop a running
+ * simulation (ROUTER socket, JSON requests and replies; docs/protocol.md).
+ *
+ * Requests are handled in the solver thread at step boundaries, so every change applies atomically between
+ * two steps; each applied command is journaled (surge/journal.h). */
+#ifndef SURGE_CONTROL_H
+#define SURGE_CONTROL_H
+
+#include <signal.h>
+#include <stddef.h>
+
+#include "surge/journal.h"
+#include "surge/sim.h"
+
+typedef struct surge_control_def {
+    const char *endpoint;  /* where the ROUTER socket binds, e.g. "tcp://127.0.0.1:5556" */
+    int start_paused;      /* wait for "resume" or "step" before the first step */
+    int max_request_bytes; /* a larger request drops the client's connection (ZMQ_MAXMSGSIZE) */
+} surge_control_def;
+
+surge_control_def surge_default_control_def(void);
+
+typedef struct surge_control surge_control;
+
+/* Binds the socket; NULL with the reason in err. The journal (may be NULL) records applied commands. */
+surge_control *surge_control_start(void *zmq_context, const surge_control_def *def, surge_journal *journal,
+                                   char *err, size_t err_len);
+
+/* Solver thread, at a step boundary: answers every pending request. While paused it waits up to 0.1 s for one
+ * and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping (unless stop_signal is set).
+ * Returns SURGE_CONTINUE or SURGE_REQUEST_* flags (surge/run.h). */
+int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_atomic_t *stop_signal);
+
+/* Closes the socket; a client waiting for a reply gets none. */
+void surge_control_close(surge_control *control);
+
+#endif

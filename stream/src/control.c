@@ -1,0 +1,444 @@
+/* Control socket: JSON requests on a ROUTER socket, answered in the solver thread between steps (see
+ * surge/control.h; commands and errors in docs/protocol.md). ROUTER rather than REP so that several clients
+ * may be connected and a client that vanishes mid-request leaves nothing stuck: its reply is dropped. */
+#define _POSIX_C_SOURCE 200809L
+#include "surge/control.h"
+
+#include <cjson/cJSON.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <zmq.h>
+
+#include "surge/run.h"
+
+enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100 };
+
+struct surge_control {
+    void *socket;
+    surge_journal *journal;
+    int paused;
+    int64_t pause_at_step; /* "step N" pauses again here; -1: no target */
+    double start_wall_s;
+    int64_t start_step;
+};
+
+static double wall_clock_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+surge_control_def surge_default_control_def(void)
+{
+    surge_control_def d = {.endpoint = "tcp://127.0.0.1:5556", .start_paused = 0, .max_request_bytes = 65536};
+    return d;
+}
+
+surge_control *surge_control_start(void *context, const surge_control_def *def, surge_journal *journal, char *err,
+                                   size_t err_len)
+{
+    if (def->max_request_bytes < 64) {
+        snprintf(err, err_len, "control: max_request_bytes must be >= 64");
+        return NULL;
+    }
+    surge_control *c = calloc(1, sizeof *c);
+    if (!c) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    c->socket = zmq_socket(context, ZMQ_ROUTER);
+    const int64_t max_bytes = def->max_request_bytes;
+    const int linger_ms = 200;
+    if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
+        zmq_bind(c->socket, def->endpoint) != 0) {
+        snprintf(err, err_len, "cannot open the control socket on '%s': %s", def->endpoint,
+                 zmq_strerror(zmq_errno()));
+        if (c->socket)
+            zmq_close(c->socket);
+        free(c);
+        return NULL;
+    }
+    c->journal = journal;
+    c->paused = def->start_paused;
+    c->pause_at_step = -1;
+    c->start_wall_s = -1;
+    return c;
+}
+
+void surge_control_close(surge_control *c)
+{
+    if (!c)
+        return;
+    zmq_close(c->socket);
+    free(c);
+}
+
+/* ---- replies ---- */
+
+static cJSON *error_reply(const char *format, const char *detail)
+{
+    char message[512];
+    snprintf(message, sizeof message, format, detail);
+    cJSON *r = cJSON_CreateObject();
+    cJSON_AddFalseToObject(r, "ok");
+    cJSON_AddStringToObject(r, "error", message);
+    return r;
+}
+
+static cJSON *ok_reply(const char *cmd, const surge_sim *sim)
+{
+    cJSON *r = cJSON_CreateObject();
+    cJSON_AddTrueToObject(r, "ok");
+    cJSON_AddStringToObject(r, "cmd", cmd);
+    cJSON_AddNumberToObject(r, "step", (double)surge_sim_step_count(sim));
+    cJSON_AddNumberToObject(r, "time_s", surge_sim_time(sim));
+    return r;
+}
+
+/* A parameter's value as JSON: number, true/false, or the enum's name. */
+static cJSON *param_value(const surge_params *p, const surge_param_info *info)
+{
+    if (info->type == SURGE_PARAM_BOOL)
+        return cJSON_CreateBool(surge_param_get_number(p, info) != 0);
+    if (info->type == SURGE_PARAM_ENUM) {
+        char text[64];
+        surge_param_format(p, info, text, sizeof text);
+        return cJSON_CreateString(text);
+    }
+    return cJSON_CreateNumber(surge_param_get_number(p, info));
+}
+
+static void full_name(const surge_param_info *info, char *out, size_t len)
+{
+    snprintf(out, len, "%s.%s", info->section, info->key);
+}
+
+/* ---- commands ---- */
+
+/* Every member of the request must be one the command reads: a typo such as "vlaue" is an error. */
+static cJSON *check_members(const cJSON *request, const char *cmd, const char *const *allowed)
+{
+    for (const cJSON *m = request->child; m; m = m->next) {
+        int known = !strcmp(m->string, "cmd");
+        for (int i = 0; allowed[i]; i++)
+            known |= !strcmp(m->string, allowed[i]);
+        if (!known) {
+            char detail[300];
+            snprintf(detail, sizeof detail, "'%.120s' for command '%.40s'", m->string, cmd);
+            return error_reply("unexpected member %s", detail);
+        }
+    }
+    return NULL;
+}
+
+static const surge_param_info *find_key(const cJSON *request, cJSON **error)
+{
+    const cJSON *key = cJSON_GetObjectItemCaseSensitive(request, "key");
+    if (!cJSON_IsString(key)) {
+        *error = error_reply("%s", "\"key\" must be a string such as \"fluid.viscosity_m2ps\"");
+        return NULL;
+    }
+    const surge_param_info *info = surge_param_find(key->valuestring);
+    if (!info)
+        *error = error_reply("unknown parameter '%.200s' (the \"list\" command names them all)", key->valuestring);
+    return info;
+}
+
+static cJSON *command_list(const surge_sim *sim)
+{
+    cJSON *r = ok_reply("list", sim);
+    cJSON *list = cJSON_AddArrayToObject(r, "params");
+    static const char *const type_names[] = {"real", "int", "bool", "enum"};
+    for (int i = 0; i < surge_param_count(); i++) {
+        const surge_param_info *info = surge_param_at(i);
+        char name[128];
+        full_name(info, name, sizeof name);
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "key", name);
+        cJSON_AddStringToObject(o, "type", type_names[info->type]);
+        cJSON_AddStringToObject(o, "unit", info->unit);
+        cJSON_AddItemToObject(o, "value", param_value(surge_sim_params(sim), info));
+        cJSON_AddBoolToObject(o, "live", info->live);
+        if (info->type == SURGE_PARAM_ENUM) {
+            cJSON_AddStringToObject(o, "values", info->enum_names);
+        } else if (info->type != SURGE_PARAM_BOOL) {
+            cJSON_AddNumberToObject(o, "min", info->min_value);
+            cJSON_AddNumberToObject(o, "max", info->max_value);
+        }
+        cJSON_AddStringToObject(o, "doc", info->doc);
+        cJSON_AddItemToArray(list, o);
+    }
+    return r;
+}
+
+static cJSON *command_get(const cJSON *request, const surge_sim *sim)
+{
+    cJSON *error = NULL;
+    const surge_param_info *info = find_key(request, &error);
+    if (!info)
+        return error;
+    char name[128];
+    full_name(info, name, sizeof name);
+    cJSON *r = ok_reply("get", sim);
+    cJSON_AddStringToObject(r, "key", name);
+    cJSON_AddItemToObject(r, "value", param_value(surge_sim_params(sim), info));
+    cJSON_AddBoolToObject(r, "live", info->live);
+    cJSON_AddStringToObject(r, "unit", info->unit);
+    return r;
+}
+
+static cJSON *command_set(surge_control *c, const cJSON *request, surge_sim *sim)
+{
+    cJSON *error = NULL;
+    const surge_param_info *info = find_key(request, &error);
+    if (!info)
+        return error;
+    char name[128], text[128], previous[64], message[512];
+    full_name(info, name, sizeof name);
+    const cJSON *value = cJSON_GetObjectItemCaseSensitive(request, "value");
+    if (cJSON_IsNumber(value) && (info->type == SURGE_PARAM_REAL || info->type == SURGE_PARAM_INT))
+        snprintf(text, sizeof text, "%.17g", value->valuedouble);
+    else if (cJSON_IsBool(value) && info->type == SURGE_PARAM_BOOL)
+        snprintf(text, sizeof text, "%s", cJSON_IsTrue(value) ? "true" : "false");
+    else if (cJSON_IsString(value) && info->type == SURGE_PARAM_ENUM)
+        snprintf(text, sizeof text, "%.100s", value->valuestring);
+    else {
+        static const char *const expected[] = {"a number", "a whole number", "true or false", "one of the names "};
+        snprintf(message, sizeof message, "\"value\" for %s must be %s%s", name, expected[info->type],
+                 info->type == SURGE_PARAM_ENUM ? info->enum_names : "");
+        return error_reply("%s", message);
+    }
+    const surge_params before = *surge_sim_params(sim);
+    surge_param_format(&before, info, previous, sizeof previous);
+    if (surge_sim_set_param(sim, name, text, message, sizeof message) != 0)
+        return error_reply("%s", message);
+    char applied[64];
+    surge_param_format(surge_sim_params(sim), info, applied, sizeof applied);
+    if (c->journal)
+        surge_journal_write(c->journal, sim, "control", "set", name, applied, previous);
+    cJSON *r = ok_reply("set", sim);
+    cJSON_AddStringToObject(r, "key", name);
+    cJSON_AddItemToObject(r, "value", param_value(surge_sim_params(sim), info));
+    cJSON_AddItemToObject(r, "previous", param_value(&before, info));
+    cJSON_AddStringToObject(r, "applies", "from the next step on");
+    return r;
+}
+
+static cJSON *command_step(surge_control *c, const cJSON *request, surge_sim *sim)
+{
+    const cJSON *n = cJSON_GetObjectItemCaseSensitive(request, "n");
+    double count = 1;
+    if (n) {
+        if (!cJSON_IsNumber(n) || n->valuedouble < 1 || n->valuedouble > 1e9 || n->valuedouble != floor(n->valuedouble))
+            return error_reply("%s", "\"n\" must be a whole number of steps in [1, 1e9]");
+        count = n->valuedouble;
+    }
+    c->paused = 0;
+    c->pause_at_step = surge_sim_step_count(sim) + (int64_t)count;
+    char text[32];
+    snprintf(text, sizeof text, "%.0f", count);
+    if (c->journal)
+        surge_journal_write(c->journal, sim, "control", "step", NULL, text, NULL);
+    cJSON *r = ok_reply("step", sim);
+    cJSON_AddNumberToObject(r, "n", count);
+    cJSON_AddNumberToObject(r, "pauses_at_step", (double)c->pause_at_step);
+    return r;
+}
+
+static cJSON *command_status(const surge_control *c, const surge_sim *sim)
+{
+    cJSON *r = ok_reply("status", sim);
+    const double elapsed = wall_clock_s() - c->start_wall_s;
+    cJSON_AddNumberToObject(r, "dt_s", surge_sim_last_dt(sim));
+    cJSON_AddNumberToObject(r, "end_s", surge_sim_params(sim)->time.end_s);
+    cJSON_AddBoolToObject(r, "paused", c->paused);
+    cJSON_AddNumberToObject(r, "mean_steps_per_s", elapsed > 0 ? (double)(surge_sim_step_count(sim) - c->start_step) / elapsed : 0);
+    cJSON_AddStringToObject(r, "health", surge_health_check_name(surge_sim_health(sim)->check));
+    cJSON_AddNumberToObject(r, "fluid_count", surge_sim_derived(sim)->fluid_count);
+    return r;
+}
+
+/* A simple command with no members but "cmd", journaled: pause, resume, snapshot, checkpoint, stop. */
+static cJSON *command_simple(surge_control *c, const char *cmd, surge_sim *sim, int *requests)
+{
+    cJSON *r = ok_reply(cmd, sim);
+    if (!strcmp(cmd, "pause")) {
+        c->paused = 1;
+        c->pause_at_step = -1;
+    } else if (!strcmp(cmd, "resume")) {
+        c->paused = 0;
+        c->pause_at_step = -1;
+    } else if (!strcmp(cmd, "snapshot")) {
+        char file[64];
+        surge_run_snapshot_name(surge_sim_step_count(sim), file, sizeof file);
+        cJSON_AddStringToObject(r, "file", file);
+        *requests |= SURGE_REQUEST_SNAPSHOT;
+    } else if (!strcmp(cmd, "checkpoint")) {
+        cJSON_AddStringToObject(r, "file", "checkpoint.bin");
+        *requests |= SURGE_REQUEST_CHECKPOINT;
+    } else {
+        *requests |= SURGE_REQUEST_STOP;
+    }
+    if (c->journal)
+        surge_journal_write(c->journal, sim, "control", cmd, NULL, NULL, NULL);
+    cJSON_AddBoolToObject(r, "paused", c->paused);
+    return r;
+}
+
+#define COMMAND_NAMES "list, get, set, pause, resume, step, snapshot, checkpoint, status, stop"
+
+typedef struct command {
+    const char *name;
+    const char *const *members; /* besides "cmd", NULL-terminated */
+} command;
+
+static const char *const no_members[] = {NULL}, *const key_only[] = {"key", NULL},
+                         *const key_value[] = {"key", "value", NULL}, *const step_members[] = {"n", NULL};
+static const command commands[] = {
+    {"list", no_members},      {"get", key_only},        {"set", key_value},          {"pause", no_members},
+    {"resume", no_members},    {"step", step_members},   {"snapshot", no_members},    {"checkpoint", no_members},
+    {"status", no_members},    {"stop", no_members},
+};
+
+static const command *find_command(const char *name)
+{
+    for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+        if (!strcmp(commands[i].name, name))
+            return &commands[i];
+    return NULL;
+}
+
+static cJSON *run_command(surge_control *c, const char *name, const cJSON *request, surge_sim *sim, int *requests)
+{
+    if (!strcmp(name, "list"))
+        return command_list(sim);
+    if (!strcmp(name, "get"))
+        return command_get(request, sim);
+    if (!strcmp(name, "set"))
+        return command_set(c, request, sim);
+    if (!strcmp(name, "step"))
+        return command_step(c, request, sim);
+    if (!strcmp(name, "status"))
+        return command_status(c, sim);
+    return command_simple(c, name, sim, requests);
+}
+
+static cJSON *handle_request(surge_control *c, const char *body, size_t len, surge_sim *sim, int *requests)
+{
+    if (memchr(body, '\0', len))
+        return error_reply("%s", "request contains a NUL byte; send one JSON object as UTF-8 text");
+    const char *end = NULL;
+    cJSON *request = cJSON_ParseWithOpts(body, &end, 1);
+    if (!request) {
+        char detail[64];
+        snprintf(detail, sizeof detail, "%ld", end ? (long)(end - body) : 0L);
+        return error_reply("request is not valid JSON (error near byte %s)", detail);
+    }
+    cJSON *reply = NULL;
+    const cJSON *cmd = cJSON_GetObjectItemCaseSensitive(request, "cmd");
+    if (!cJSON_IsObject(request))
+        reply = error_reply("%s", "request must be a JSON object such as {\"cmd\": \"status\"}");
+    else if (!cJSON_IsString(cmd))
+        reply = error_reply("%s", "request needs \"cmd\": a string (" COMMAND_NAMES ")");
+    else {
+        const command *found = find_command(cmd->valuestring);
+        if (!found)
+            reply = error_reply("unknown command '%.100s' (" COMMAND_NAMES ")", cmd->valuestring);
+        else if (!(reply = check_members(request, found->name, found->members)))
+            reply = run_command(c, found->name, request, sim, requests);
+    }
+    cJSON_Delete(request);
+    return reply;
+}
+
+/* ---- the socket ---- */
+
+/* Receives one request: [identity][empty delimiter, from REQ clients][body]. Answers it in the same envelope.
+ * Returns 0 when nothing was waiting. */
+static int serve_one(surge_control *c, surge_sim *sim, int *requests)
+{
+    zmq_msg_t frames[MAX_ENVELOPE_FRAMES];
+    int count = 0, more = 1, overflow = 0;
+    while (more) {
+        zmq_msg_t part;
+        zmq_msg_init(&part);
+        if (zmq_msg_recv(&part, c->socket, count == 0 ? ZMQ_DONTWAIT : 0) < 0) {
+            zmq_msg_close(&part);
+            break;
+        }
+        more = zmq_msg_more(&part);
+        if (count < MAX_ENVELOPE_FRAMES)
+            frames[count++] = part;
+        else {
+            overflow = 1;
+            zmq_msg_close(&part);
+        }
+    }
+    if (count == 0)
+        return 0;
+    const int delimited = count >= 3 && zmq_msg_size(&frames[1]) == 0;
+    const int head = delimited ? 2 : 1; /* identity (+ delimiter) */
+    cJSON *reply;
+    if (count < 2)
+        reply = error_reply("%s", "empty request");
+    else if (overflow || count != head + 1)
+        reply = error_reply("%s", "a request is one frame holding one JSON object");
+    else {
+        const size_t len = zmq_msg_size(&frames[head]);
+        char *body = malloc(len + 1);
+        if (!body)
+            reply = error_reply("%s", "out of memory");
+        else {
+            memcpy(body, zmq_msg_data(&frames[head]), len);
+            body[len] = '\0';
+            reply = handle_request(c, body, len, sim, requests);
+            free(body);
+        }
+    }
+    char *text = cJSON_PrintUnformatted(reply);
+    cJSON_Delete(reply);
+    /* the reply goes back through the same envelope; a client that has gone is silently skipped */
+    zmq_send(c->socket, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), ZMQ_SNDMORE | ZMQ_DONTWAIT);
+    if (delimited)
+        zmq_send(c->socket, "", 0, ZMQ_SNDMORE | ZMQ_DONTWAIT);
+    if (text)
+        zmq_send(c->socket, text, strlen(text), ZMQ_DONTWAIT);
+    else
+        zmq_send(c->socket, "{\"ok\":false,\"error\":\"out of memory\"}", 36, ZMQ_DONTWAIT);
+    free(text);
+    for (int i = 0; i < count; i++)
+        zmq_msg_close(&frames[i]);
+    return 1;
+}
+
+int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_t *stop_signal)
+{
+    if (c->start_wall_s < 0) {
+        c->start_wall_s = wall_clock_s();
+        c->start_step = surge_sim_step_count(sim);
+    }
+    if (c->pause_at_step >= 0 && surge_sim_step_count(sim) >= c->pause_at_step) {
+        c->paused = 1;
+        c->pause_at_step = -1;
+    }
+    int requests = SURGE_CONTINUE;
+    while (serve_one(c, sim, &requests))
+        ;
+    if (!c->paused || (requests & SURGE_REQUEST_STOP) || (stop_signal && *stop_signal))
+        return requests;
+    /* paused: wait a little for the next request, then let the run loop come back (it publishes, checks
+     * signals) before any step */
+    if (!requests) {
+        zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
+        if (zmq_poll(&item, 1, PAUSED_POLL_MS) > 0)
+            while (serve_one(c, sim, &requests))
+                ;
+    }
+    return requests | (c->paused && !(requests & SURGE_REQUEST_STOP) ? SURGE_REQUEST_AGAIN : 0);
+}

@@ -1,0 +1,394 @@
+/* State publisher: an XPUB socket fed by a mailbox, in its own thread (see surge/publisher.h and
+ * docs/protocol.md for the wire format). XPUB rather than PUB so that the publisher sees subscriptions:
+ * nothing is copied out of the solver while nobody listens, and a subscriber may ask for a subset of the
+ * particle fields by subscribing to "state/name,name,...". */
+#define _POSIX_C_SOURCE 200809L
+#include "surge/publisher.h"
+
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <zmq.h>
+
+#include "surge/mailbox.h"
+
+#if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
+#error "the wire format sends arrays in memory order, which must be little-endian"
+#endif
+
+enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256 };
+enum { WANT_STATE = 1, WANT_BODIES = 2, WANT_STATS = 4 };
+
+/* The particle fields of the "state" topic, in the order they are sent. */
+typedef struct state_field {
+    const char *name, *dtype, *unit;
+    size_t element_bytes;
+} state_field;
+
+static const state_field state_fields[] = {
+    {"x_m", "f64", "m", 8},
+    {"y_m", "f64", "m", 8},
+    {"vx_mps", "f32", "m/s", 4},
+    {"vy_mps", "f32", "m/s", 4},
+    {"density_kgpm3", "f32", "kg/m^3", 4},
+    {"pressure_pa", "f32", "Pa", 4},
+    {"kind", "u8", "0 fluid, 1 wall, 2 moving wall", 1},
+    {"id", "i32", "-", 4},
+};
+enum { STATE_FIELD_COUNT = sizeof state_fields / sizeof state_fields[0] };
+
+static const void *state_field_data(const surge_snapshot *s, int field)
+{
+    switch (field) {
+    case 0: return s->x_m;
+    case 1: return s->y_m;
+    case 2: return s->vx_mps;
+    case 3: return s->vy_mps;
+    case 4: return s->density_kgpm3;
+    case 5: return s->pressure_pa;
+    case 6: return s->kind;
+    default: return s->id;
+    }
+}
+
+/* The rigid bodies of the "bodies" topic (issue #6 adds bodies; until then every message has count 0). */
+static const state_field body_fields[] = {
+    {"x_m", "f64", "m", 8},           {"y_m", "f64", "m", 8},         {"angle_rad", "f64", "rad", 8},
+    {"vx_mps", "f64", "m/s", 8},      {"vy_mps", "f64", "m/s", 8},    {"omega_radps", "f64", "rad/s", 8},
+    {"radius_m", "f64", "m", 8},
+};
+enum { BODY_FIELD_COUNT = sizeof body_fields / sizeof body_fields[0] };
+
+struct surge_publisher {
+    surge_publisher_def def;
+    void *socket;
+    surge_mailbox *mailbox;
+    pthread_t thread;
+    atomic_int wanted;    /* WANT_* of the current subscriptions, written by the publisher thread */
+    atomic_int finishing; /* set by the solver thread before the final frame */
+    /* solver thread */
+    double start_wall_s, last_wall_s;
+    int64_t last_step;
+    /* publisher thread */
+    char subscriptions[MAX_SUBSCRIPTIONS][MAX_SUBSCRIPTION_BYTES + 1];
+    int subscription_count;
+    uint64_t messages_sent, bytes_sent;
+};
+
+static double wall_clock_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+surge_publisher_def surge_default_publisher_def(void)
+{
+    surge_publisher_def d = {.endpoint = "tcp://127.0.0.1:5555", .every_steps = 1, .max_rate_hz = 30.0,
+                             .send_hwm = 4};
+    return d;
+}
+
+/* A message whose topic starts with a subscription reaches that subscriber (ZeroMQ prefix matching). */
+static int subscribed_to(const surge_publisher *p, const char *topic)
+{
+    for (int i = 0; i < p->subscription_count; i++)
+        if (!strncmp(topic, p->subscriptions[i], strlen(p->subscriptions[i])))
+            return 1;
+    return 0;
+}
+
+static void update_wanted(surge_publisher *p)
+{
+    int wanted = 0;
+    for (int i = 0; i < p->subscription_count; i++)
+        if (!strncmp(p->subscriptions[i], "state/", 6))
+            wanted |= WANT_STATE;
+    wanted |= subscribed_to(p, "state") ? WANT_STATE : 0;
+    wanted |= subscribed_to(p, "bodies") ? WANT_BODIES : 0;
+    wanted |= subscribed_to(p, "stats") ? WANT_STATS : 0;
+    atomic_store(&p->wanted, wanted);
+}
+
+/* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. */
+static void read_subscriptions(surge_publisher *p)
+{
+    char buf[MAX_SUBSCRIPTION_BYTES + 2];
+    int n;
+    while ((n = zmq_recv(p->socket, buf, sizeof buf, ZMQ_DONTWAIT)) >= 1) {
+        if (n > (int)sizeof buf - 1) {
+            fprintf(stderr, "surge: publisher: ignoring a subscription longer than %d bytes\n", MAX_SUBSCRIPTION_BYTES);
+            continue;
+        }
+        buf[n] = '\0';
+        const char *topic = buf + 1;
+        int found = -1;
+        for (int i = 0; i < p->subscription_count; i++)
+            if (!strcmp(p->subscriptions[i], topic))
+                found = i;
+        if (buf[0] == 1 && found < 0) {
+            if (p->subscription_count == MAX_SUBSCRIPTIONS) {
+                fprintf(stderr, "surge: publisher: more than %d distinct subscriptions; ignoring '%s'\n",
+                        MAX_SUBSCRIPTIONS, topic);
+                continue;
+            }
+            memcpy(p->subscriptions[p->subscription_count++], topic, (size_t)n);
+        } else if (buf[0] == 0 && found >= 0) {
+            memmove(p->subscriptions[found], p->subscriptions[p->subscription_count - 1], sizeof p->subscriptions[0]);
+            p->subscription_count--;
+        }
+    }
+    update_wanted(p);
+}
+
+static void send_part(surge_publisher *p, const void *data, size_t bytes, int more)
+{
+    if (zmq_send(p->socket, data, bytes, more ? ZMQ_SNDMORE : 0) >= 0)
+        p->bytes_sent += bytes;
+}
+
+/* Topic frame, JSON header frame, then one frame per field. */
+static void send_message(surge_publisher *p, const char *topic, cJSON *header, const void *const *arrays,
+                         const size_t *array_bytes, int array_count)
+{
+    char *text = cJSON_PrintUnformatted(header);
+    if (!text)
+        return;
+    send_part(p, topic, strlen(topic), 1);
+    send_part(p, text, strlen(text), array_count > 0);
+    for (int i = 0; i < array_count; i++)
+        send_part(p, arrays[i], array_bytes[i], i + 1 < array_count);
+    free(text);
+    p->messages_sent++;
+}
+
+static cJSON *common_header(const char *topic, const surge_frame *f)
+{
+    cJSON *h = cJSON_CreateObject();
+    cJSON_AddNumberToObject(h, "schema", SCHEMA_VERSION);
+    cJSON_AddStringToObject(h, "topic", topic);
+    cJSON_AddNumberToObject(h, "seq", (double)f->sequence);
+    cJSON_AddNumberToObject(h, "step", (double)f->diag.step);
+    cJSON_AddNumberToObject(h, "time_s", f->diag.time_s);
+    cJSON_AddNumberToObject(h, "dt_s", f->diag.dt_s);
+    return h;
+}
+
+static void add_field(cJSON *fields, const state_field *field)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddStringToObject(o, "name", field->name);
+    cJSON_AddStringToObject(o, "dtype", field->dtype);
+    cJSON_AddNumberToObject(o, "components", 1);
+    cJSON_AddStringToObject(o, "unit", field->unit);
+    cJSON_AddItemToArray(fields, o);
+}
+
+/* Parses "state/a,b,c" into field indices; 0 when a name is unknown or repeated. */
+static int parse_field_subset(const char *subscription, int *indices, int *count)
+{
+    const char *s = subscription + strlen("state/");
+    *count = 0;
+    while (*s) {
+        const size_t len = strcspn(s, ",");
+        int found = -1;
+        for (int i = 0; i < STATE_FIELD_COUNT; i++)
+            if (strlen(state_fields[i].name) == len && !strncmp(s, state_fields[i].name, len))
+                found = i;
+        for (int k = 0; k < *count; k++)
+            if (indices[k] == found)
+                found = -1;
+        if (found < 0 || *count == STATE_FIELD_COUNT)
+            return 0;
+        indices[(*count)++] = found;
+        s += len + (s[len] == ',');
+    }
+    return *count > 0;
+}
+
+static void send_state(surge_publisher *p, const char *topic, const surge_frame *f, const int *indices, int count)
+{
+    cJSON *h = common_header("state", f);
+    cJSON_AddNumberToObject(h, "count", f->snap.count);
+    cJSON_AddNumberToObject(h, "dp_m", f->params.numerics.dp_m);
+    cJSON_AddNumberToObject(h, "h_m", f->derived.h_m);
+    cJSON_AddNumberToObject(h, "domain_length_m", f->params.domain.length_m);
+    cJSON_AddNumberToObject(h, "domain_height_m", f->params.domain.height_m);
+    cJSON_AddNumberToObject(h, "slope_deg", f->params.body.slope_deg);
+    cJSON *fields = cJSON_AddArrayToObject(h, "fields");
+    const void *arrays[STATE_FIELD_COUNT];
+    size_t bytes[STATE_FIELD_COUNT];
+    for (int k = 0; k < count; k++) {
+        add_field(fields, &state_fields[indices[k]]);
+        arrays[k] = state_field_data(&f->snap, indices[k]);
+        bytes[k] = (size_t)f->snap.count * state_fields[indices[k]].element_bytes;
+    }
+    send_message(p, topic, h, arrays, bytes, count);
+    cJSON_Delete(h);
+}
+
+static void send_bodies(surge_publisher *p, const surge_frame *f)
+{
+    cJSON *h = common_header("bodies", f);
+    cJSON_AddNumberToObject(h, "count", 0);
+    cJSON *fields = cJSON_AddArrayToObject(h, "fields");
+    const void *arrays[BODY_FIELD_COUNT];
+    size_t bytes[BODY_FIELD_COUNT];
+    static const double none[1] = {0};
+    for (int k = 0; k < BODY_FIELD_COUNT; k++) {
+        add_field(fields, &body_fields[k]);
+        arrays[k] = none;
+        bytes[k] = 0;
+    }
+    send_message(p, "bodies", h, arrays, bytes, BODY_FIELD_COUNT);
+    cJSON_Delete(h);
+}
+
+static void add_live_parameters(cJSON *h, const surge_params *params)
+{
+    cJSON *live = cJSON_AddObjectToObject(h, "live");
+    for (int i = 0; i < surge_param_count(); i++) {
+        const surge_param_info *info = surge_param_at(i);
+        if (!info->live)
+            continue;
+        char name[128], text[64];
+        snprintf(name, sizeof name, "%s.%s", info->section, info->key);
+        if (info->type == SURGE_PARAM_ENUM) {
+            surge_param_format(params, info, text, sizeof text);
+            cJSON_AddStringToObject(live, name, text);
+        } else if (info->type == SURGE_PARAM_BOOL) {
+            cJSON_AddBoolToObject(live, name, surge_param_get_number(params, info) != 0);
+        } else {
+            cJSON_AddNumberToObject(live, name, surge_param_get_number(params, info));
+        }
+    }
+}
+
+static void send_stats(surge_publisher *p, const surge_frame *f, uint64_t superseded)
+{
+    cJSON *h = common_header("stats", f);
+    cJSON_AddNumberToObject(h, "wall_s", f->wall_s);
+    cJSON_AddStringToObject(h, "status", f->final ? "final" : "running");
+    cJSON_AddStringToObject(h, "health", surge_health_check_name(f->health));
+    cJSON_AddNumberToObject(h, "fluid_count", f->derived.fluid_count);
+    cJSON_AddNumberToObject(h, "kinetic_energy_jpm", f->diag.kinetic_energy_jpm);
+    cJSON_AddNumberToObject(h, "max_speed_mps", f->diag.max_speed_mps);
+    cJSON_AddNumberToObject(h, "max_density_deviation", f->diag.max_density_deviation);
+    cJSON_AddNumberToObject(h, "fluid_volume_m2", f->diag.fluid_volume_m2);
+    cJSON_AddNumberToObject(h, "mean_vx_mps", f->diag.mean_vx_mps);
+    cJSON_AddNumberToObject(h, "belt_speed_mps", f->diag.bottom_wall_speed_mps);
+    cJSON_AddNumberToObject(h, "frames_superseded", (double)superseded);
+    add_live_parameters(h, &f->params);
+    send_message(p, "stats", h, NULL, NULL, 0);
+    cJSON_Delete(h);
+}
+
+static void publish_frame(surge_publisher *p, const surge_frame *f)
+{
+    if (subscribed_to(p, "state")) {
+        int all[STATE_FIELD_COUNT];
+        for (int i = 0; i < STATE_FIELD_COUNT; i++)
+            all[i] = i;
+        send_state(p, "state", f, all, STATE_FIELD_COUNT);
+    }
+    for (int i = 0; i < p->subscription_count; i++) {
+        int indices[STATE_FIELD_COUNT], count;
+        if (!strncmp(p->subscriptions[i], "state/", 6) && parse_field_subset(p->subscriptions[i], indices, &count))
+            send_state(p, p->subscriptions[i], f, indices, count);
+    }
+    if (subscribed_to(p, "bodies"))
+        send_bodies(p, f);
+    if (subscribed_to(p, "stats"))
+        send_stats(p, f, surge_mailbox_superseded(p->mailbox));
+}
+
+static void *publisher_main(void *arg)
+{
+    surge_publisher *p = arg;
+    for (;;) {
+        read_subscriptions(p);
+        const surge_frame *f = surge_mailbox_take(p->mailbox, 0.02);
+        if (f) {
+            read_subscriptions(p);
+            publish_frame(p, f);
+        } else if (atomic_load(&p->finishing)) {
+            return NULL; /* closed and drained */
+        }
+    }
+}
+
+surge_publisher *surge_publisher_start(void *context, const surge_publisher_def *def, char *err, size_t err_len)
+{
+    if (def->every_steps < 1 || !(def->max_rate_hz >= 0) || def->send_hwm < 1) {
+        snprintf(err, err_len, "publisher: every_steps and send_hwm must be >= 1 and max_rate_hz >= 0");
+        return NULL;
+    }
+    surge_publisher *p = calloc(1, sizeof *p);
+    if (!p) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    p->def = *def;
+    p->last_step = -1;
+    p->socket = zmq_socket(context, ZMQ_XPUB);
+    const int linger_ms = 1000;
+    if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
+        zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
+        zmq_bind(p->socket, def->endpoint) != 0) {
+        snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
+        if (p->socket)
+            zmq_close(p->socket);
+        free(p);
+        return NULL;
+    }
+    p->mailbox = surge_mailbox_create();
+    if (!p->mailbox || pthread_create(&p->thread, NULL, publisher_main, p) != 0) {
+        snprintf(err, err_len, "cannot start the publisher thread");
+        surge_mailbox_destroy(p->mailbox);
+        zmq_close(p->socket);
+        free(p);
+        return NULL;
+    }
+    p->start_wall_s = wall_clock_s();
+    p->last_wall_s = -INFINITY;
+    return p;
+}
+
+void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
+{
+    if (!atomic_load(&p->wanted))
+        return;
+    const int64_t step = surge_sim_step_count(sim);
+    if (p->last_step >= 0 && step - p->last_step < p->def.every_steps)
+        return;
+    const double now = wall_clock_s();
+    if (p->def.max_rate_hz > 0 && now - p->last_wall_s < 1.0 / p->def.max_rate_hz)
+        return;
+    if (surge_mailbox_post(p->mailbox, sim, now - p->start_wall_s, 0) == 0) {
+        p->last_step = step;
+        p->last_wall_s = now;
+    }
+}
+
+void surge_publisher_finish(surge_publisher *p, const surge_sim *sim, surge_publisher_report *report)
+{
+    if (atomic_load(&p->wanted))
+        surge_mailbox_post(p->mailbox, sim, wall_clock_s() - p->start_wall_s, 1);
+    atomic_store(&p->finishing, 1);
+    surge_mailbox_close(p->mailbox);
+    pthread_join(p->thread, NULL);
+    if (report) {
+        report->frames_posted = surge_mailbox_posted(p->mailbox);
+        report->frames_superseded = surge_mailbox_superseded(p->mailbox);
+        report->messages_sent = p->messages_sent;
+        report->bytes_sent = p->bytes_sent;
+    }
+    zmq_close(p->socket);
+    surge_mailbox_destroy(p->mailbox);
+    free(p);
+}

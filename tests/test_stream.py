@@ -1,0 +1,424 @@
+#!/usr/bin/python3
+"""Live state and control of a running surge, through real pyzmq clients (docs/protocol.md).
+
+Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
+  GROUP state     a subscriber's states (full and a field subset) match the same run's snapshots bit for bit;
+                  headers follow the minimum contract; the bodies topic is well formed; stats end with "final".
+  GROUP control   pause holds the step, step N runs N steps, a parameter set mid-run shows in the published
+                  stats from its journaled step on (and not before), and replaying the journal reproduces the
+                  steered run's state hash.
+  GROUP inputs    every malformed control request gets its error reply and the run goes on to finish normally;
+                  an oversize request or a vanished client does not disturb it; stop ends it with its outputs;
+                  bad stream options and journals get clear errors.
+  GROUP stalled   a subscriber that never reads does not hold the solver back: the run finishes, messages were
+                  dropped for it, and the step rate against a run without subscribers is printed (measured in
+                  this run; the check only catches a blocked solver, not noise).
+
+Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
+WORK_DIR, so tests running side by side never share a port. Every wait has a timeout: a hang is a failure.
+"""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+import numpy as np
+import zmq
+
+SURGE, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
+sys.path.insert(0, os.path.join(SOURCE, "tools"))
+import surge_client  # noqa: E402
+import vtp  # noqa: E402
+
+TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
+failures = []
+
+
+def check(name, ok, detail=""):
+    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + detail.replace("\n", "\n    ")))
+    if not ok:
+        failures.append(name)
+    return ok
+
+
+class Surge:
+    """A surge run in the background with ipc:// publisher and control endpoints in its own folder."""
+
+    def __init__(self, name, extra, publish=True, control=True, paused=False, case=TANK):
+        self.dir = os.path.join(WORK, name)
+        shutil.rmtree(self.dir, ignore_errors=True)
+        os.makedirs(self.dir)
+        self.out = os.path.join(self.dir, "out")
+        self.pub = "ipc://" + os.path.join(self.dir, "pub.sock")
+        self.ctl = "ipc://" + os.path.join(self.dir, "ctl.sock")
+        self.args = [SURGE, "run", case, "-o", self.out, "--threads", "1", "-s", "output.progress_interval_s=0"]
+        self.args += (["--publish", self.pub] if publish else []) + (["--control", self.ctl] if control else [])
+        self.args += (["--paused"] if paused else []) + extra
+        self.stderr_path = os.path.join(self.dir, "stderr.txt")
+        env = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
+        self.proc = subprocess.Popen(self.args, stderr=open(self.stderr_path, "w"), stdout=subprocess.DEVNULL, env=env)
+
+    def wait(self, timeout_s=120):
+        try:
+            self.rc = self.proc.wait(timeout_s)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.rc = None
+        with open(self.stderr_path) as f:
+            self.stderr = f.read()
+        return self.rc
+
+    def describe(self):
+        return "command: %s\nexit code: %s\nstderr: %s" % (" ".join(self.args), self.rc, self.stderr.strip())
+
+    def state_hash(self):
+        m = re.search(r"state hash ([0-9a-f]{16})", self.stderr)
+        return m.group(1) if m else None
+
+
+def wait_for(predicate, timeout_s, poll_s=0.02):
+    deadline = time.time() + timeout_s
+    while time.time() < deadline:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(poll_s)
+    return None
+
+
+def collect_until_final(sub, timeout_s):
+    """Every message until the stats message with status "final"; [(topic, header, arrays)]."""
+    messages, deadline = [], time.time() + timeout_s
+    while time.time() < deadline:
+        m = surge_client.receive(sub, 200)
+        if m is None:
+            continue
+        messages.append(m)
+        if m[0] == "stats" and m[1]["status"] == "final":
+            return messages, True
+    return messages, False
+
+
+# ---------------------------------------------------------------------------------------------------------------
+def group_state():
+    run = Surge("state", ["-s", "time.end_s=0.2", "-s", "output.snapshot_interval_s=0.05", "--publish-hz", "0"],
+                paused=True)
+    ctx = zmq.Context.instance()
+    subset_topic = "state/x_m,vx_mps"
+    sub = surge_client.subscribe(run.pub, ["state", "bodies", "stats"], ctx, latest_only=False)
+    sub.setsockopt(zmq.RCVHWM, 100000)
+    ctl = surge_client.Control(run.ctl, 10)
+    # while paused the publisher sends step 0 as soon as it sees a subscription: wait for it, then resume
+    first = wait_for(lambda: surge_client.receive(sub, 100), 20)
+    subset = surge_client.subscribe(run.pub, [subset_topic], ctx, latest_only=False)
+    subset.setsockopt(zmq.RCVHWM, 100000)
+    time.sleep(0.3)  # the subset subscription reaches the publisher thread
+    reply = ctl.request({"cmd": "resume"})
+    check("state: resume after the first state", first is not None and reply.get("ok"), str(reply))
+    messages, finished = collect_until_final(sub, 120)
+    messages = ([first] if first else []) + messages
+    subset_messages, _ = collect_until_final(subset, 5) if finished else ([], False)
+    rc = run.wait()
+    check("state: run finishes with exit 0 and a final stats message", rc == 0 and finished, run.describe())
+
+    states = {h["step"]: (h, a) for t, h, a in messages if t == "state"}
+    bodies = [(h, a) for t, h, a in messages if t == "bodies"]
+    stats = [h for t, h, a in messages if t == "stats"]
+    check("state: many states received", len(states) >= 10, "%d states" % len(states))
+    expected_fields = [("x_m", "f64"), ("y_m", "f64"), ("vx_mps", "f32"), ("vy_mps", "f32"),
+                       ("density_kgpm3", "f32"), ("pressure_pa", "f32"), ("kind", "u8"), ("id", "i32")]
+    bad = []
+    for step, (h, a) in states.items():
+        for key in ("schema", "step", "time_s", "count", "fields"):
+            if key not in h:
+                bad.append("step %d: no %s" % (step, key))
+        if [(f["name"], f["dtype"]) for f in h["fields"]] != expected_fields or any(
+                f["components"] != 1 for f in h["fields"]):
+            bad.append("step %d: fields %s" % (step, h["fields"]))
+    seqs = [h["seq"] for t, h, a in messages if t == "state"]
+    check("state: headers follow the contract, seq increases", not bad and seqs == sorted(set(seqs)),
+          "; ".join(bad[:5]) + " seq %s" % seqs[:20])
+
+    # against the run's own snapshots, at every step both have
+    compared, mismatches = 0, []
+    for name in sorted(os.listdir(run.out)):
+        m = re.match(r"snap_(\d+)\.vtp$", name)
+        if not m or int(m.group(1)) not in states:
+            continue
+        snap = vtp.read_vtp(os.path.join(run.out, name))
+        h, a = states[int(m.group(1))]
+        pairs = [("x_m", snap["points"][:, 0]), ("y_m", snap["points"][:, 1]),
+                 ("vx_mps", snap["velocity_mps"][:, 0]), ("vy_mps", snap["velocity_mps"][:, 1]),
+                 ("density_kgpm3", snap["density_kgpm3"]), ("pressure_pa", snap["pressure_pa"]),
+                 ("kind", snap["kind"]), ("id", snap["id"])]
+        if h["count"] != snap["points"].shape[0] or abs(h["time_s"] - snap["time_s"]) > 0:
+            mismatches.append("%s: count %d/%d time %r/%r" % (name, h["count"], snap["points"].shape[0],
+                                                                h["time_s"], snap["time_s"]))
+        for field, expected in pairs:
+            if not np.array_equal(a[field], expected):
+                mismatches.append("%s: %s differs (max %g)" % (name, field, np.max(np.abs(
+                    a[field].astype(float) - expected.astype(float)))))
+        compared += 1
+    final_step = max(states) if states else -1
+    check("state: decoded arrays equal the snapshots bit for bit (first and final included)",
+          compared >= 2 and not mismatches and os.path.exists(os.path.join(run.out, "snap_%09d.vtp" % final_step))
+          and 0 in states, "compared %d snapshots; %s" % (compared, "; ".join(mismatches[:5])))
+
+    ok_subset = len(subset_messages) > 0
+    detail = ""
+    for t, h, a in subset_messages:
+        if t != subset_topic:
+            continue
+        if [f["name"] for f in h["fields"]] != ["x_m", "vx_mps"]:
+            ok_subset, detail = False, "fields %s" % h["fields"]
+        elif h["step"] in states and not (np.array_equal(a["x_m"], states[h["step"]][1]["x_m"]) and
+                                          np.array_equal(a["vx_mps"], states[h["step"]][1]["vx_mps"])):
+            ok_subset, detail = False, "step %d differs from the full state" % h["step"]
+    check("state: a field-subset subscription gets only its fields, equal to the full state", ok_subset,
+          detail or "%d subset messages" % len(subset_messages))
+
+    names = [f["name"] for f in bodies[0][0]["fields"]] if bodies else []
+    check("state: bodies topic carries count 0 and its documented fields",
+          bodies and all(h["count"] == 0 and all(v.size == 0 for v in a.values()) for h, a in bodies)
+          and names == ["x_m", "y_m", "angle_rad", "vx_mps", "vy_mps", "omega_radps", "radius_m"], str(names))
+    check("state: stats carry time, energies, health and live parameters",
+          stats and all({"step", "time_s", "dt_s", "kinetic_energy_jpm", "health", "live"} <= set(h) for h in stats)
+          and stats[-1]["health"] == "healthy" and "fluid.viscosity_m2ps" in stats[-1]["live"], str(stats[-1:]))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+def group_control():
+    run = Surge("control", ["-s", "time.end_s=0.15", "--publish-hz", "0"], paused=True)
+    ctx = zmq.Context.instance()
+    sub = surge_client.subscribe(run.pub, ["stats"], ctx, latest_only=False)
+    sub.setsockopt(zmq.RCVHWM, 100000)
+    ctl = surge_client.Control(run.ctl, 10)
+    first = wait_for(lambda: surge_client.receive(sub, 100), 20)
+    status = ctl.request({"cmd": "status"})
+    time.sleep(0.3)
+    status2 = ctl.request({"cmd": "status"})
+    check("control: paused at start holds the step", status.get("paused") and status["step"] == 0
+          and status2["step"] == 0 and first is not None, "%s %s" % (status, status2))
+    reply = ctl.request({"cmd": "step", "n": 7})
+    held = wait_for(lambda: (lambda s: s if s["paused"] and s["step"] == 7 else None)(ctl.request({"cmd": "status"})), 20)
+    time.sleep(0.2)
+    after = ctl.request({"cmd": "status"})
+    check("control: step 7 runs exactly 7 steps and pauses", reply.get("ok") and held and after["step"] == 7,
+          "%s %s %s" % (reply, held, after))
+    ctl.request({"cmd": "resume"})
+    wait_for(lambda: ctl.request({"cmd": "status"})["step"] >= 60, 30)
+    ctl.request({"cmd": "pause"})
+    old = ctl.request({"cmd": "get", "key": "fluid.viscosity_m2ps"})["value"]
+    new = old * 4
+    reply = ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": new})
+    set_step = reply.get("step")
+    check("control: set replies with the value applied, the previous one and the step",
+          reply.get("ok") and reply["value"] == new and reply["previous"] == old and set_step >= 60, str(reply))
+    ctl.request({"cmd": "resume"})
+    messages, finished = collect_until_final(sub, 120)
+    rc = run.wait()
+    check("control: run finishes", rc == 0 and finished, run.describe())
+    stats = [h for t, h, a in ([first] if first else []) + messages if t == "stats"]
+    wrong = [(h["step"], h["live"]["fluid.viscosity_m2ps"]) for h in stats
+             if h["live"]["fluid.viscosity_m2ps"] != (new if h["step"] >= set_step else old)]
+    check("control: stats show the new viscosity from the journaled step on, the old one before",
+          not wrong and any(h["step"] < set_step for h in stats) and any(h["step"] >= set_step for h in stats),
+          "set at step %s; wrong: %s" % (set_step, wrong[:10]))
+    journal_path = os.path.join(run.out, "control.jsonl")
+    journal = [json.loads(line) for line in open(journal_path)] if os.path.exists(journal_path) else []
+    sets = [e for e in journal if e["cmd"] == "set"]
+    check("control: the journal records the set with its step and time",
+          len(sets) == 1 and sets[0]["step"] == set_step and sets[0]["key"] == "fluid.viscosity_m2ps"
+          and float(sets[0]["value"]) == new and [e["cmd"] for e in journal] == ["step", "resume", "pause", "set", "resume"],
+          str(journal))
+    replay = Surge("control_replay", ["-s", "time.end_s=0.15", "--replay", journal_path], publish=False, control=False)
+    replay.wait()
+    check("control: replaying the journal reproduces the steered run's state hash",
+          replay.rc == 0 and run.state_hash() and replay.state_hash() == run.state_hash(),
+          "steered %s, replayed %s\n%s" % (run.state_hash(), replay.state_hash(), replay.describe()))
+    plain = Surge("control_plain", ["-s", "time.end_s=0.15"], publish=False, control=False)
+    plain.wait()
+    check("control: (the change mattered: an unsteered run ends in another state)",
+          plain.rc == 0 and plain.state_hash() != run.state_hash(), plain.describe())
+
+
+# ---------------------------------------------------------------------------------------------------------------
+BAD_REQUESTS = [  # (request bytes, words the error must contain)
+    (b"not json", "not valid JSON"),
+    (b"", "not valid JSON"),
+    (b"[1, 2]", "JSON object"),
+    (b'"status"', "JSON object"),
+    (b"{}", '"cmd"'),
+    (b'{"cmd": 3}', '"cmd"'),
+    (b'{"cmd": "explode"}', "unknown command 'explode'"),
+    (b'{"cmd": "get"}', '"key" must be a string'),
+    (b'{"cmd": "get", "key": "fluid.nope"}', "unknown parameter 'fluid.nope'"),
+    (b'{"cmd": "set", "key": "numerics.dp_m", "value": 0.001}', "cannot change while the simulation runs"),
+    (b'{"cmd": "set", "key": "fluid.viscosity_m2ps", "value": "thick"}', "must be a number"),
+    (b'{"cmd": "set", "key": "fluid.viscosity_m2ps"}', "must be a number"),
+    (b'{"cmd": "set", "key": "fluid.viscosity_m2ps", "value": -1}', "fluid.viscosity_m2ps"),
+    (b'{"cmd": "set", "key": "body.slope_deg", "value": 1e300}', "body.slope_deg"),
+    (b'{"cmd": "set", "key": "shifting.form", "value": "sideways"}', "shifting.form"),
+    (b'{"cmd": "set", "key": "shifting.form", "value": 1}', "one of the names"),
+    (b'{"cmd": "set", "key": "fluid.viscosity_m2ps", "vlaue": 0.1}', "unexpected member 'vlaue'"),
+    (b'{"cmd": "step", "n": 0}', '"n" must be a whole number'),
+    (b'{"cmd": "step", "n": 2.5}', '"n" must be a whole number'),
+    (b'{"cmd": "step", "n": "many"}', '"n" must be a whole number'),
+    (b'{"cmd": "status"} trailing', "not valid JSON"),
+    (b'{"cmd": "status\x00"}', "NUL byte"),
+    (b'\xff\xfe{"cmd": 1}', "not valid JSON"),
+]
+
+
+def group_inputs():
+    run = Surge("inputs", ["-s", "time.end_s=0.25"], publish=False, paused=True)
+    ctx = zmq.Context.instance()
+    ctl = surge_client.Control(run.ctl, 10)
+    wrong = []
+    for request, words in BAD_REQUESTS:
+        try:
+            reply = ctl.request(request)
+        except TimeoutError:
+            reply = {"timeout": True}
+        if reply.get("ok") is not False or words not in reply.get("error", ""):
+            wrong.append("%r -> %s" % (request, reply))
+    check("inputs: every malformed request gets its error reply (%d kinds)" % len(BAD_REQUESTS), not wrong,
+          "\n".join(wrong))
+
+    dealer = ctx.socket(zmq.DEALER)
+    dealer.setsockopt(zmq.LINGER, 0)
+    dealer.connect(run.ctl)
+    dealer.send_multipart([b'{"cmd": "status"}', b'{"cmd": "status"}'])
+    multi = json.loads(dealer.recv()) if dealer.poll(5000) else {}
+    dealer.send(b'{"cmd": "status"}')  # a DEALER without the empty delimiter is answered the same way
+    plain = json.loads(dealer.recv()) if dealer.poll(5000) else {}
+    check("inputs: a request of several frames is refused; a DEALER client is served",
+          multi.get("ok") is False and "one frame" in multi.get("error", "") and plain.get("ok") is True,
+          "%s %s" % (multi, plain))
+
+    big = ctx.socket(zmq.REQ)
+    big.setsockopt(zmq.LINGER, 0)
+    big.connect(run.ctl)
+    big.send(b'{"cmd": "status", "pad": "' + b"x" * 100000 + b'"}')
+    answered = big.poll(1000)
+    big.close()
+    gone = ctx.socket(zmq.REQ)
+    gone.setsockopt(zmq.LINGER, 0)
+    gone.connect(run.ctl)
+    gone.send(b'{"cmd": "status"}')
+    gone.close()  # disconnects before its reply
+    status = ctl.request({"cmd": "status"})
+    check("inputs: an oversize request drops only its client; a vanished client leaves the socket working",
+          not answered and status.get("ok") and status["paused"], "answered=%s status=%s" % (answered, status))
+
+    ctl.request({"cmd": "resume"})
+    rc = run.wait()
+    check("inputs: after all that the run finishes normally", rc == 0 and "done" in run.stderr, run.describe())
+
+    stopper = Surge("inputs_stop", ["-s", "time.end_s=100"], publish=False)
+    c2 = surge_client.Control(stopper.ctl, 10)
+    wait_for(lambda: c2.request({"cmd": "status"})["step"] >= 20, 20)
+    snap = c2.request({"cmd": "snapshot"})
+    reply = c2.request({"cmd": "stop"})
+    stopper.wait(30)
+    files = os.listdir(stopper.out) if os.path.isdir(stopper.out) else []
+    check("inputs: snapshot writes the named file; stop ends the run with exit 0, a checkpoint and a final snapshot",
+          reply.get("ok") and stopper.rc == 0 and "stopped by a control request" in stopper.stderr
+          and "checkpoint.bin" in files and snap.get("file") in files
+          and "snap_%09d.vtp" % reply["step"] in files, "%s\n%s\n%s" % (reply, files, stopper.describe()))
+
+    # bad options and journals: exit 2 and a message naming the problem, before anything runs
+    taken = ctx.socket(zmq.PUB)
+    port = taken.bind_to_random_port("tcp://127.0.0.1")
+    bad_journal = os.path.join(WORK, "bad_journal.jsonl")
+    with open(bad_journal, "w") as f:
+        f.write('{"step": 3, "time_s": 0, "source": "control", "cmd": "set", "key": "fluid.viscosity_m2ps", '
+                '"value": "0.01"}\n{"step": "x", "cmd": "stop"}\n')
+    late_journal = os.path.join(WORK, "late_journal.jsonl")
+    with open(late_journal, "w") as f:
+        f.write('{"step": 2, "cmd": "set", "key": "numerics.dp_m", "value": "0.02"}\n')
+    cases = [
+        (["--publish", "nonsense"], "--publish needs an endpoint"),
+        (["--publish"], "--publish needs an endpoint"),
+        (["--control", "0"], "--control needs an endpoint"),
+        (["--publish", "tcp://127.0.0.1:%d" % port], "cannot publish on 'tcp://127.0.0.1:%d'" % port),
+        (["--control", "tcp://999.1.1.1:5"], "cannot open the control socket"),
+        (["--publish-every", "0"], "--publish-every needs"),
+        (["--publish-hz", "-1"], "--publish-hz needs"),
+        (["--publish-hz", "fast"], "--publish-hz needs"),
+        (["--publish-hwm", "0"], "--publish-hwm needs"),
+        (["--paused"], "--paused needs --control"),
+        (["--publish", "5599", "--control", "5599"], "different endpoints"),
+        (["--replay", os.path.join(WORK, "missing.jsonl")], "cannot read the journal"),
+        (["--replay", bad_journal], "bad_journal.jsonl:2: \"step\" must be a whole number"),
+    ]
+    wrong = []
+    for extra, words in cases:
+        args = [SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_bad"), "-s", "time.end_s=0.01"] + extra
+        p = subprocess.run(args, capture_output=True, text=True, timeout=30)
+        if p.returncode != 2 or words not in p.stderr:
+            wrong.append("%s -> exit %d: %s" % (" ".join(extra), p.returncode, p.stderr.strip()[-300:]))
+    p = subprocess.run([SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_late"), "-s", "time.end_s=0.01",
+                        "--replay", late_journal], capture_output=True, text=True, timeout=30)
+    if p.returncode != 2 or "late_journal.jsonl:1: numerics.dp_m cannot change" not in p.stderr:
+        wrong.append("late journal -> exit %d: %s" % (p.returncode, p.stderr.strip()[-300:]))
+    taken.close()
+    check("inputs: bad stream options and journals exit 2 with a message naming them (%d cases)" % (len(cases) + 1),
+          not wrong, "\n".join(wrong))
+
+
+# ---------------------------------------------------------------------------------------------------------------
+def steps_per_s(run):
+    m = re.findall(r"step (\d+) .* ([0-9.]+) steps/s", run.stderr)
+    return float(m[-1][1]) if m else None
+
+
+def group_stalled():
+    case_args = ["-s", "numerics.dp_m=0.004", "-s", "time.end_s=0.06", "-s", "output.snapshot_interval_s=0",
+                 "-s", "output.progress_interval_s=1000", "--publish-hz", "0", "--publish-hwm", "2"]
+    ratios, dropped = [], []
+    ctx = zmq.Context.instance()
+    for attempt in range(2):  # alternate, so a slow spell of the machine does not fall on one side only
+        # both runs start paused and are resumed after the same wait, so their rates cover the same span
+        alone = Surge("stalled_alone_%d" % attempt, case_args, paused=True)
+        time.sleep(0.5)
+        surge_client.Control(alone.ctl, 10).request({"cmd": "resume"})
+        alone.wait(300)
+        stalled = Surge("stalled_sub_%d" % attempt, case_args, paused=True)
+        sub = ctx.socket(zmq.SUB)
+        sub.setsockopt(zmq.RCVHWM, 1)
+        sub.setsockopt(zmq.RCVBUF, 4096)
+        sub.connect(stalled.pub)
+        sub.setsockopt(zmq.SUBSCRIBE, b"state")
+        time.sleep(0.5)  # the subscription reaches the publisher; then the subscriber never reads
+        surge_client.Control(stalled.ctl, 10).request({"cmd": "resume"})
+        stalled.wait(300)
+        received = 0
+        while sub.poll(500):
+            sub.recv_multipart()
+            received += 1
+        sub.close()
+        published = re.search(r"published (\d+) states", stalled.stderr)
+        if not check("stalled: runs finish (attempt %d)" % attempt,
+                     alone.rc == 0 and stalled.rc == 0 and published,
+                     alone.describe() + "\n" + stalled.describe()):
+            return
+        a, s = steps_per_s(alone), steps_per_s(stalled)
+        ratios.append(s / a)
+        dropped.append((int(published.group(1)), received))
+        print("stalled: attempt %d: %.0f steps/s alone, %.0f steps/s with a stalled subscriber (ratio %.3f); "
+              "%d states published, %d reached the stalled subscriber" % (attempt, a, s, s / a, *dropped[-1]))
+    check("stalled: the publisher dropped messages for the stalled subscriber instead of waiting",
+          all(r < p for p, r in dropped), str(dropped))
+    check("stalled: the solver was not held back (ratio %.3f; a blocked solver would be near 0)" % max(ratios),
+          max(ratios) > 0.5, str(ratios))
+
+
+groups = {"state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
+os.makedirs(WORK, exist_ok=True)
+groups[sys.argv[4]]()
+print("%d check(s) failed" % len(failures) if failures else "all checks passed")
+sys.exit(1 if failures else 0)
