@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """stream_bench: what publishing live state costs the solver, and the largest state rate a subscriber gets.
 
-  tools/stream_bench.py [--surge build/surge] [--threads 2] [--end-s 0.03] [--out runs/stream_bench]
+  tools/stream_bench.py [--surge build/surge] [--threads 2] [--end-s 0.03] [--repeat 3] [--out runs/stream_bench]
 
 Runs the benchmark scene (cases/incline_film.ini, 20,000 fluid particles) for --end-s of simulated time in
 these configurations, one after the other in this one invocation:
@@ -12,13 +12,15 @@ these configurations, one after the other in this one invocation:
   stalled       a subscriber that connects and never reads (--publish-every 1 --publish-hz 0)
 and the small still tank (1,472 particles) with fast-all, where the solver is fast enough that the stream is the
 limit. Each run starts paused with a control socket and is resumed once the subscriber is connected, so all
-rates cover the same span. Prints one table: solver steps/s, its ratio to "alone", states received per second
-and MB/s. The subscriber is Python (tools/surge_client.py) decoding every field with numpy.
+rates cover the same span. The configurations are run in turn --repeat times (interleaved, so a slow spell of
+the machine does not fall on one of them only) and the table gives the median of each: solver steps/s, its
+ratio to "alone", states received per second and MB/s. The subscriber is Python (tools/surge_client.py) decoding every field with numpy.
 """
 import argparse
 import os
 import re
 import shutil
+import statistics
 import subprocess
 import sys
 import threading
@@ -98,10 +100,11 @@ def main():
     parser.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--end-s", type=float, default=0.03, help="simulated seconds per run (default 0.03)")
+    parser.add_argument("--repeat", type=int, default=3, help="runs of each configuration (default 3)")
     parser.add_argument("--out", default=os.path.join(ROOT, "runs", "stream_bench"))
     args = parser.parse_args()
-    if args.threads < 1 or args.end_s <= 0:
-        parser.error("--threads must be >= 1 and --end-s > 0")
+    if args.threads < 1 or args.end_s <= 0 or args.repeat < 1:
+        parser.error("--threads and --repeat must be >= 1 and --end-s > 0")
     film = os.path.join(ROOT, "cases", "incline_film.ini")
     tank = os.path.join(ROOT, "cases", "still_tank.ini")
     every = ["--publish-every", "1", "--publish-hz", "0"]
@@ -116,14 +119,19 @@ def main():
     ]
     print("stream_bench: %s, %d solver thread(s), %s" % (time.strftime("%Y-%m-%d"), args.threads,
                                                          " ".join(sys.argv)))
+    results = {name: [] for name, *_ in configs}
+    for _ in range(args.repeat):
+        for name, case, overrides, publish, subscriber, extra in configs:
+            results[name].append(run_config(args, name, case, overrides, publish, subscriber, extra))
     print("%-14s %12s %8s %14s %10s" % ("config", "steps/s", "ratio", "states/s recv", "MB/s recv"))
     baseline = {}
-    for name, case, overrides, publish, subscriber, extra in configs:
-        steps, states, mbps = run_config(args, name, case, overrides, publish, subscriber, extra)
+    for name, case, *_ in configs:
+        steps, states, mbps = (statistics.median(r[k] for r in results[name]) for k in range(3))
         scene = "tank" if case == tank else "film"
         baseline.setdefault(scene, steps)
-        print("%-14s %12.1f %8.3f %14.1f %10.1f" % (name, steps, steps / baseline[scene], states, mbps), flush=True)
-
+        print("%-14s %12.1f %8.3f %14.1f %10.1f" % (name, steps, steps / baseline[scene], states, mbps))
+    print("(medians of %d runs each; steps/s of every run: %s)" % (
+        args.repeat, "; ".join("%s %s" % (n, " ".join("%.1f" % r[0] for r in rs)) for n, rs in results.items())))
 
 if __name__ == "__main__":
     main()
