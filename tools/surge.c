@@ -1,5 +1,5 @@
 /* surge: the command-line program. Wires the solver (sim/) to its outputs, the state publisher and the control
- * socket (stream/). */
+ * socket (stream/) and the renderer (render/). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <limits.h>
@@ -8,6 +8,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <time.h>
 
 #include <zmq.h>
 
@@ -15,8 +17,10 @@
 #include "surge/journal.h"
 #include "surge/params.h"
 #include "surge/publisher.h"
+#include "surge/render.h"
 #include "surge/run.h"
 #include "surge/sim.h"
+#include "surge/vtk_output.h"
 
 extern const char surge_default_case_text[]; /* cases/demo.ini, embedded at build time */
 
@@ -38,6 +42,7 @@ static const char *usage_main =
     "commands:\n"
     "  run [CASE]        run a case file (no CASE: the default demo scene, cases/demo.ini); can publish its\n"
     "                    state over ZeroMQ and take commands on a control socket\n"
+    "  render RUN_DIR    render a finished run's snapshots as PNG frames and/or a movie\n"
     "  check CASE        validate a case file without running it\n"
     "  params            print the parameter reference (Markdown)\n"
     "\n"
@@ -62,8 +67,16 @@ static const char *usage_run =
     "  --restart FILE        continue from a checkpoint; only live parameters may be overridden (time.end_s...)\n"
     "                        and the output goes to the checkpoint's folder unless -o is given\n"
     "\n"
+    "rendering while it runs (settings: the [render] parameters, e.g. -s render.field=vx_rel):\n"
+    "  --frames DIR          a PNG every render.frame_interval_s of simulated time (frame_NNNNNN.png)\n"
+    "  --movie FILE          an MP4 movie of the same frames (the ffmpeg program; H.264 when available)\n"
+    "  --font FILE           TrueType font for the labels (default DejaVu Sans)\n"
+    "  The renderer never holds the solver back: a frame it is too busy to draw is skipped (reported at the\n"
+    "  end; the movie repeats the previous image so that its time stays right).\n"
+    "\n"
     "live state and control (docs/protocol.md; a bare PORT means tcp://127.0.0.1:PORT):\n"
-    "  --publish ENDPOINT    publish topics state, bodies and stats on a ZeroMQ PUB socket\n"
+    "  --publish ENDPOINT    publish topics state, bodies and stats (and frame, when rendering) on a ZeroMQ\n"
+    "                        PUB socket\n"
     "  --publish-every N     at most once every N steps (default 1)\n"
     "  --publish-hz F        and at most F times per wall-clock second (default 30; 0: no limit)\n"
     "  --publish-hwm N       messages queued per subscriber before newer ones are dropped (default 4)\n"
@@ -80,6 +93,13 @@ static const char *usage_check =
     "\n"
     "Reads and validates CASE (with overrides) and builds its scene without running it; prints the derived\n"
     "quantities (h, c0, particle counts) or the first error with file:line.\n";
+
+static const char *usage_render =
+    "usage: surge render RUN_DIR [--frames DIR] [--movie FILE] [-s render.key=value ...] [--font FILE]\n"
+    "\n"
+    "Renders every snapshot listed in RUN_DIR/run.pvd with the run's parameters (RUN_DIR/params.ini) and\n"
+    "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot) and/or a movie at render.movie_fps.\n"
+    "Without --frames or --movie, frames go to RUN_DIR/frames.\n";
 
 static const char *usage_params =
     "usage: surge params\n\nPrints the parameter reference (the source of docs/parameters.md).\n";
@@ -104,6 +124,9 @@ typedef struct cli {
     const char *replay_path;
     surge_publisher_def publisher;
     int paused;
+    const char *frames_dir;
+    const char *movie_path;
+    const char *font_path;
 } cli;
 
 static int parse_int(const char *text, int lo, int hi, int *out)
@@ -220,6 +243,13 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
                 return -1;
             }
             c->replay_path = argv[++i];
+        } else if (allow_run_options && (!strcmp(a, "--frames") || !strcmp(a, "--movie") || !strcmp(a, "--font"))) {
+            if (!has_value || argv[i + 1][0] == '\0') {
+                fprintf(stderr, "surge: %s needs a %s\n", a, !strcmp(a, "--frames") ? "folder" : "file name");
+                return -1;
+            }
+            *(!strcmp(a, "--frames") ? &c->frames_dir : !strcmp(a, "--movie") ? &c->movie_path : &c->font_path) =
+                argv[++i];
         } else if (allow_run_options && !strcmp(a, "--paused")) {
             c->paused = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
@@ -282,8 +312,15 @@ typedef struct live_links {
     surge_control *control;
     surge_replay *replay;
     surge_journal *journal;
+    surge_renderer *renderer;
     char replay_error[1024]; /* set when a journal entry could not be replayed */
 } live_links;
+
+/* Renderer thread: rendered frames also go out on the stream. */
+static void publish_rendered_frame(const uint8_t *png, size_t png_len, int64_t step, double time_s, void *user)
+{
+    surge_publisher_post_png(user, png, png_len, step, time_s);
+}
 
 static int at_step_boundary(surge_sim *sim, void *user)
 {
@@ -299,10 +336,12 @@ static int at_step_boundary(surge_sim *sim, void *user)
         requests |= surge_control_service(l->control, sim, &stop_requested);
     if (l->publisher)
         surge_publisher_offer(l->publisher, sim);
+    if (l->renderer)
+        surge_renderer_offer(l->renderer, sim);
     return requests;
 }
 
-static int open_live_links(const cli *c, const char *outdir, live_links *l)
+static int open_live_links(const cli *c, const char *outdir, const surge_params *params, live_links *l)
 {
     char err[1024], path[4200];
     memset(l, 0, sizeof *l);
@@ -328,14 +367,37 @@ static int open_live_links(const cli *c, const char *outdir, live_links *l)
         if (!(l->publisher = surge_publisher_start(l->zmq_context, &def, err, sizeof err)))
             goto fail;
     }
+    if (c->frames_dir || c->movie_path) {
+        surge_renderer_def def = {.frames_dir = c->frames_dir, .movie_path = c->movie_path, .font_path = c->font_path};
+        if (l->publisher) {
+            def.on_frame = publish_rendered_frame;
+            def.user = l->publisher;
+        }
+        if (!(l->renderer = surge_renderer_start(&def, params, err, sizeof err)))
+            goto fail;
+    }
     return 0;
 fail:
     fprintf(stderr, "surge: %s\n", err);
     return -1;
 }
 
-static void close_live_links(live_links *l, const surge_sim *sim)
+/* Returns -1 when the renderer failed (its message printed). */
+static int close_live_links(live_links *l, const surge_sim *sim)
 {
+    int rc = 0;
+    if (l->renderer) {
+        surge_render_report r;
+        char err[1024];
+        rc = surge_renderer_finish(l->renderer, &r, err, sizeof err);
+        if (rc != 0)
+            fprintf(stderr, "surge: rendering failed: %s\n", err);
+        fprintf(stderr, "surge: rendered %llu of %llu frames due (%llu skipped while the renderer was busy), "
+                        "%.1f ms per frame drawing, %.1f ms encoding\n",
+                (unsigned long long)r.frames_drawn, (unsigned long long)r.frames_due,
+                (unsigned long long)(r.frames_due - r.frames_drawn), r.frames_drawn ? 1e3 * r.draw_s / r.frames_drawn : 0,
+                r.frames_drawn ? 1e3 * r.encode_s / r.frames_drawn : 0);
+    }
     if (l->publisher) {
         surge_publisher_report r;
         surge_publisher_finish(l->publisher, sim, &r);
@@ -348,6 +410,7 @@ static void close_live_links(live_links *l, const surge_sim *sim)
     surge_journal_close(l->journal);
     if (l->zmq_context)
         zmq_ctx_term(l->zmq_context);
+    return rc;
 }
 
 static int command_run(int argc, char **argv)
@@ -396,7 +459,7 @@ static int command_run(int argc, char **argv)
                                                    : (c.case_path ? c.case_path : "default scene (cases/demo.ini)"),
             outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads);
     live_links links;
-    if (open_live_links(&c, outdir, &links) != 0) {
+    if (open_live_links(&c, outdir, surge_sim_params(sim), &links) != 0) {
         close_live_links(&links, sim);
         surge_sim_destroy(sim);
         return EXIT_USAGE;
@@ -412,18 +475,20 @@ static int command_run(int argc, char **argv)
     opt.threads = threads;
     opt.restarted = c.restart_path != NULL;
     opt.stop = &stop_requested;
-    if (links.publisher || links.control || links.replay) {
+    if (links.publisher || links.control || links.replay || links.renderer) {
         opt.at_step_boundary = at_step_boundary;
         opt.user = &links;
     }
     surge_run_result r = surge_run(sim, &opt, err, sizeof err);
-    close_live_links(&links, sim);
+    const int render_failed = close_live_links(&links, sim) != 0;
     const uint64_t hash = surge_sim_state_hash(sim);
     surge_sim_destroy(sim);
     if (links.replay_error[0]) {
         fprintf(stderr, "surge: %s\nsurge: the run stopped there; its outputs are in %s\n", links.replay_error, outdir);
         return EXIT_USAGE;
     }
+    if (render_failed && (r == SURGE_RUN_FINISHED || r == SURGE_RUN_STOPPED))
+        return EXIT_IO;
     switch (r) {
     case SURGE_RUN_FINISHED:
         fprintf(stderr, "surge: done, state hash %016llx, outputs in %s\n", (unsigned long long)hash, outdir);
@@ -444,6 +509,118 @@ static int command_run(int argc, char **argv)
         return EXIT_IO;
     }
     return EXIT_IO;
+}
+
+static double wall_clock_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Draws one snapshot into the frames folder and/or the movie. */
+static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, const surge_params *p,
+                           const char *frames_dir, size_t index, surge_movie *movie, char *err, size_t err_len)
+{
+    const uint8_t *rgba = surge_canvas_draw(canvas, snap, p);
+    if (!rgba) {
+        snprintf(err, err_len, "cannot draw the snapshot of step %lld", (long long)snap->step);
+        return -1;
+    }
+    if (frames_dir) {
+        uint8_t *png;
+        size_t len;
+        char path[4200];
+        snprintf(path, sizeof path, "%s/frame_%06zu.png", frames_dir, index);
+        if (surge_canvas_png(canvas, &png, &len, err, err_len) != 0)
+            return -1;
+        FILE *f = fopen(path, "wb");
+        const int ok = f && fwrite(png, 1, len, f) == len;
+        if ((f && fclose(f) != 0) || !ok) {
+            snprintf(err, err_len, "cannot write '%.900s': %s", path, strerror(errno));
+            free(png);
+            return -1;
+        }
+        free(png);
+    }
+    return movie ? surge_movie_add(movie, rgba, err, err_len) : 0;
+}
+
+static int command_render(int argc, char **argv)
+{
+    if (wants_help(argc, argv)) {
+        fputs(usage_render, stdout);
+        return EXIT_OK;
+    }
+    cli c;
+    if (parse_cli(argc, argv, &c, 1) != 0)
+        return EXIT_USAGE;
+    if (!c.case_path) {
+        fprintf(stderr, "surge: render needs a RUN_DIR (a folder written by surge run)\n%s", usage_render);
+        return EXIT_USAGE;
+    }
+    if (c.publish[0] || c.control[0] || c.restart_path || c.replay_path || c.threads) {
+        fprintf(stderr, "surge: render takes only --frames, --movie, --font and -s render.key=value\n");
+        return EXIT_USAGE;
+    }
+    char path[4200], err[1024], frames_dir[4200];
+    cli with_params = c;
+    snprintf(path, sizeof path, "%s/params.ini", c.case_path);
+    with_params.case_path = path;
+    surge_params p;
+    if (load_case(&with_params, &p) != 0)
+        return EXIT_USAGE;
+    snprintf(path, sizeof path, "%s/run.pvd", c.case_path);
+    surge_pvd *pvd = surge_pvd_read(path, err, sizeof err);
+    if (!pvd) {
+        fprintf(stderr, "surge: %s\n", err);
+        return EXIT_USAGE;
+    }
+    if (!c.frames_dir && !c.movie_path) {
+        snprintf(frames_dir, sizeof frames_dir, "%s/frames", c.case_path);
+        c.frames_dir = frames_dir;
+    }
+    if (c.frames_dir && mkdir(c.frames_dir, 0777) != 0 && errno != EEXIST) {
+        fprintf(stderr, "surge: cannot create the frames folder '%s': %s\n", c.frames_dir, strerror(errno));
+        surge_pvd_close(pvd);
+        return EXIT_IO;
+    }
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, c.font_path, err, sizeof err);
+    surge_movie *movie = NULL;
+    if (!canvas || (c.movie_path && !(movie = surge_movie_open(c.movie_path, p.render.width_px, p.render.height_px,
+                                                                 p.render.movie_fps, err, sizeof err)))) {
+        fprintf(stderr, "surge: %s\n", err);
+        surge_canvas_destroy(canvas);
+        surge_pvd_close(pvd);
+        return EXIT_IO;
+    }
+    surge_snapshot snap = {0};
+    int rc = EXIT_OK;
+    const double start = wall_clock_s();
+    const size_t count = surge_pvd_count(pvd);
+    for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
+        snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, i));
+        if (surge_vtp_read(path, &snap, err, sizeof err) != 0) {
+            rc = EXIT_USAGE;
+        } else if (render_snapshot(canvas, &snap, &p, c.frames_dir, i, movie, err, sizeof err) != 0) {
+            rc = EXIT_IO;
+        }
+    }
+    if (rc != EXIT_OK)
+        fprintf(stderr, "surge: %s\n", err);
+    if (movie && surge_movie_close(movie, err, sizeof err) != 0) {
+        fprintf(stderr, "surge: %s\n", err);
+        rc = rc == EXIT_OK ? EXIT_IO : rc;
+    }
+    const double elapsed = wall_clock_s() - start;
+    if (rc == EXIT_OK)
+        fprintf(stderr, "surge: rendered %zu snapshots of %s in %.1f s (%.1f frames/s)%s%s%s%s\n", count, c.case_path,
+                elapsed, elapsed > 0 ? count / elapsed : 0, c.frames_dir ? ": frames in " : "",
+                c.frames_dir ? c.frames_dir : "", c.movie_path ? ", movie " : "", c.movie_path ? c.movie_path : "");
+    surge_snapshot_free(&snap);
+    surge_canvas_destroy(canvas);
+    surge_pvd_close(pvd);
+    return rc;
 }
 
 static int command_check(int argc, char **argv)
@@ -485,6 +662,8 @@ int main(int argc, char **argv)
         return command_run(argc - 2, argv + 2);
     if (!strcmp(argv[1], "check"))
         return command_check(argc - 2, argv + 2);
+    if (!strcmp(argv[1], "render"))
+        return command_render(argc - 2, argv + 2);
     if (!strcmp(argv[1], "params")) {
         if (wants_help(argc - 2, argv + 2)) {
             fputs(usage_params, stdout);

@@ -116,6 +116,36 @@ static const surge_param_info registry[] = {
     {"output", "progress_interval_s", SURGE_PARAM_REAL, "s (wall)", 2, 0, 1e5, true, NULL,
      "Wall-clock seconds between progress lines on stderr (0: silent).", OFF(output.progress_interval_s)},
 
+    {"render", "frame_interval_s", SURGE_PARAM_REAL, "s", 0.04, 1e-9, 1e7, true, NULL,
+     "Simulated time between rendered frames (--frames, --movie).", OFF(render.frame_interval_s)},
+    {"render", "width_px", SURGE_PARAM_INT, "px", 1280, 16, 8192, false, NULL, "Frame width.", OFF(render.width_px)},
+    {"render", "height_px", SURGE_PARAM_INT, "px", 720, 16, 8192, false, NULL, "Frame height.",
+     OFF(render.height_px)},
+    {"render", "field", SURGE_PARAM_ENUM, "-", SURGE_FIELD_SPEED, 0, 4, true, "speed|vx_rel|vx|pressure|density",
+     "Field that colours the fluid: speed, x velocity relative to the belt, x velocity, pressure, density.",
+     OFF(render.field)},
+    {"render", "colormap", SURGE_PARAM_ENUM, "-", SURGE_COLORMAP_VIRIDIS, 0, 1, true, "viridis|cividis",
+     "Perceptually uniform colour map.", OFF(render.colormap)},
+    {"render", "color_min", SURGE_PARAM_REAL, "field unit", 0, -BIG, BIG, true, NULL,
+     "Low end of the colour range (equal to color_max: each frame's own range).", OFF(render.color_min)},
+    {"render", "color_max", SURGE_PARAM_REAL, "field unit", 0, -BIG, BIG, true, NULL,
+     "High end of the colour range.", OFF(render.color_max)},
+    {"render", "view", SURGE_PARAM_ENUM, "-", SURGE_VIEW_WHOLE, 0, 2, true, "whole|follow|fixed",
+     "What the frame shows: every particle, a window following the surge front, or a fixed window.",
+     OFF(render.view)},
+    {"render", "view_x0_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, true, NULL, "Left end of the fixed view.",
+     OFF(render.view_x0_m)},
+    {"render", "view_x1_m", SURGE_PARAM_REAL, "m", 0.1, -1e4, 1e4, true, NULL, "Right end of the fixed view.",
+     OFF(render.view_x1_m)},
+    {"render", "view_width_m", SURGE_PARAM_REAL, "m", 0.2, 1e-6, 1e4, true, NULL,
+     "Width of the follow view; the front (the most downstream fluid particle) stays at 3/4 of it.",
+     OFF(render.view_width_m)},
+    {"render", "true_slope", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+     "Draw the bed at its slope with gravity pointing down the image (false: bed along the image's x axis, as "
+     "the paper's Fig. 7).", OFF(render.true_slope)},
+    {"render", "movie_fps", SURGE_PARAM_REAL, "1/s", 25, 1, 240, false, NULL, "Frames per second of the movie.",
+     OFF(render.movie_fps)},
+
     {"health", "max_density_deviation", SURGE_PARAM_REAL, "-", 0.1, 1e-4, 10, true, NULL,
      "A fluid particle with |rho/rho0 - 1| above this fails the run.", OFF(health.max_density_deviation)},
     {"health", "min_dt_ratio", SURGE_PARAM_REAL, "-", 1e-3, 0, 1, true, NULL,
@@ -456,6 +486,16 @@ int surge_params_wall_layers(const surge_params *p)
 
 int surge_params_validate(const surge_params *p, char *err, size_t err_len)
 {
+    if (p->render.view_x1_m <= p->render.view_x0_m) {
+        fail(err, err_len, "render.view_x1_m (%g) must be greater than render.view_x0_m (%g)", p->render.view_x1_m,
+             p->render.view_x0_m);
+        return -1;
+    }
+    if (p->render.color_max < p->render.color_min) {
+        fail(err, err_len, "render.color_max (%g) must not be below render.color_min (%g)", p->render.color_max,
+             p->render.color_min);
+        return -1;
+    }
     const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
     const double support = 2.0 * p->numerics.ch * sqrt(2.0) * dp;
     const int layers = surge_params_wall_layers(p);

@@ -6,6 +6,7 @@
 
 #include <errno.h>
 #include <inttypes.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -648,4 +649,157 @@ void surge_pvd_close(surge_pvd *pvd)
     free(pvd->entries);
     free(pvd->path);
     free(pvd);
+}
+
+surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len)
+{
+    surge_pvd *pvd = calloc(1, sizeof *pvd);
+    if (pvd == NULL || (pvd->path = dup_string(pvd_path)) == NULL) {
+        free(pvd);
+        set_err(err, err_len, "out of memory");
+        return NULL;
+    }
+    FILE *probe = fopen(pvd_path, "rb");
+    if (probe == NULL) {
+        set_err(err, err_len, "cannot read '%s': %s", pvd_path, strerror(errno));
+        surge_pvd_close(pvd);
+        return NULL;
+    }
+    fclose(probe);
+    if (pvd_load(pvd, INFINITY, err, err_len) != 0) {
+        surge_pvd_close(pvd);
+        return NULL;
+    }
+    return pvd;
+}
+
+size_t surge_pvd_count(const surge_pvd *pvd) { return pvd->count; }
+double surge_pvd_time(const surge_pvd *pvd, size_t index) { return pvd->entries[index].time_s; }
+const char *surge_pvd_file(const surge_pvd *pvd, size_t index) { return pvd->entries[index].file; }
+
+/* ------------------------------------------------------------------------------------------------
+ * Reading our own .vtp files back
+ * --------------------------------------------------------------------------------------------- */
+
+typedef struct vtp_source {
+    const char *path;
+    const unsigned char *data;
+    size_t len;
+    const unsigned char *appended; /* first byte after the '_' of <AppendedData> */
+} vtp_source;
+
+/* Finds the DataArray named name, checks its type and components, and copies its block of expected_bytes. */
+static int vtp_array(const vtp_source *v, const char *name, const char *type, int components, void *out,
+                     size_t expected_bytes, char *err, size_t err_len)
+{
+    char needle[96];
+    snprintf(needle, sizeof needle, "Name=\"%s\"", name);
+    const char *text = (const char *)v->data;
+    const char *hit = strstr(text, needle);
+    const char *begin = hit ? hit : NULL;
+    while (begin && begin > text && *begin != '<')
+        begin--;
+    const char *end = begin ? tag_end(begin) : NULL;
+    const char *value = NULL;
+    size_t len = 0;
+    if (!end || strncmp(begin, "<DataArray", 10) != 0) {
+        set_err(err, err_len, "%s: no DataArray named %s (not a surge snapshot?)", v->path, name);
+        return -1;
+    }
+    if (find_attr(begin, end, "type", &value, &len) != 0 || len != strlen(type) || strncmp(value, type, len) != 0) {
+        set_err(err, err_len, "%s: array %s is not of type %s", v->path, name, type);
+        return -1;
+    }
+    if (components > 1 && (find_attr(begin, end, "NumberOfComponents", &value, &len) != 0 ||
+                           strtol(value, NULL, 10) != components)) {
+        set_err(err, err_len, "%s: array %s does not have %d components", v->path, name, components);
+        return -1;
+    }
+    if (find_attr(begin, end, "offset", &value, &len) != 0) {
+        set_err(err, err_len, "%s: array %s has no offset", v->path, name);
+        return -1;
+    }
+    const unsigned long long offset = strtoull(value, NULL, 10);
+    const size_t available = v->len - (size_t)(v->appended - v->data);
+    uint64_t bytes = 0;
+    if (offset + 8 > available || (memcpy(&bytes, v->appended + offset, 8), bytes != expected_bytes) ||
+        offset + 8 + bytes > available) {
+        set_err(err, err_len, "%s: array %s is truncated or has the wrong size", v->path, name);
+        return -1;
+    }
+    memcpy(out, v->appended + offset + 8, expected_bytes);
+    return 0;
+}
+
+int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len)
+{
+    if (!host_is_little_endian()) {
+        set_err(err, err_len, "reading snapshots needs a little-endian machine");
+        return -1;
+    }
+    FILE *f = fopen(path, "rb");
+    if (f == NULL) {
+        set_err(err, err_len, "cannot read '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    unsigned char *data = NULL;
+    long size = -1;
+    if (fseek(f, 0, SEEK_END) == 0 && (size = ftell(f)) >= 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (data = malloc((size_t)size + 1)) != NULL && fread(data, 1, (size_t)size, f) != (size_t)size) {
+        free(data);
+        data = NULL;
+    }
+    fclose(f);
+    if (data == NULL) {
+        set_err(err, err_len, "cannot read '%s'", path);
+        return -1;
+    }
+    data[size] = '\0';
+    vtp_source v = {path, data, (size_t)size, NULL};
+    const char *marker = strstr((const char *)data, "<AppendedData encoding=\"raw\">");
+    const char *underscore = marker ? strchr(marker, '_') : NULL;
+    const char *pieces = strstr((const char *)data, "<Piece ");
+    const char *value = NULL;
+    size_t len = 0;
+    int rc = -1;
+    if (!underscore || !pieces || strncmp((const char *)data, "<?xml", 5) != 0 ||
+        !strstr((const char *)data, "header_type=\"UInt64\"")) {
+        set_err(err, err_len, "%s: not a surge snapshot (VTK PolyData with raw appended data)", path);
+    } else if (find_attr(pieces + 6, tag_end(pieces), "NumberOfPoints", &value, &len) != 0 ||
+               strtol(value, NULL, 10) < 0 || strtol(value, NULL, 10) > INT32_MAX) {
+        set_err(err, err_len, "%s: bad NumberOfPoints", path);
+    } else if (surge_snapshot_reserve(snap, (int32_t)strtol(value, NULL, 10)) != 0) {
+        set_err(err, err_len, "%s: out of memory", path);
+    } else {
+        v.appended = (const unsigned char *)underscore + 1;
+        const size_t n = (size_t)snap->count;
+        double *points = malloc(3 * 8 * n + 8);
+        float *velocity = malloc(3 * 4 * n + 4);
+        int64_t step = 0;
+        if (points && velocity &&
+            vtp_array(&v, "time_s", "Float64", 1, &snap->time_s, 8, err, err_len) == 0 &&
+            vtp_array(&v, "step", "Int64", 1, &step, 8, err, err_len) == 0 &&
+            vtp_array(&v, "Points", "Float64", 3, points, 3 * 8 * n, err, err_len) == 0 &&
+            vtp_array(&v, "velocity_mps", "Float32", 3, velocity, 3 * 4 * n, err, err_len) == 0 &&
+            vtp_array(&v, "density_kgpm3", "Float32", 1, snap->density_kgpm3, 4 * n, err, err_len) == 0 &&
+            vtp_array(&v, "pressure_pa", "Float32", 1, snap->pressure_pa, 4 * n, err, err_len) == 0 &&
+            vtp_array(&v, "kind", "UInt8", 1, snap->kind, n, err, err_len) == 0 &&
+            vtp_array(&v, "id", "Int32", 1, snap->id, 4 * n, err, err_len) == 0) {
+            for (size_t i = 0; i < n; i++) {
+                snap->x_m[i] = points[3 * i];
+                snap->y_m[i] = points[3 * i + 1];
+                snap->vx_mps[i] = velocity[3 * i];
+                snap->vy_mps[i] = velocity[3 * i + 1];
+            }
+            snap->step = step;
+            snap->dt_s = 0;
+            rc = 0;
+        } else if (!points || !velocity) {
+            set_err(err, err_len, "%s: out of memory", path);
+        }
+        free(points);
+        free(velocity);
+    }
+    free(data);
+    return rc;
 }

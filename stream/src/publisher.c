@@ -24,6 +24,17 @@
 enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256 };
 enum { WANT_STATE = 1, WANT_BODIES = 2, WANT_STATS = 4 };
 
+/* The newest rendered frame, handed over by the renderer thread. */
+typedef struct png_slot {
+    pthread_mutex_t lock;
+    uint8_t *png;
+    size_t len;
+    int64_t step;
+    double time_s;
+    uint64_t sequence;
+    int fresh;
+} png_slot;
+
 /* The particle fields of the "state" topic, in the order they are sent. */
 typedef struct state_field {
     const char *name, *dtype, *unit;
@@ -78,6 +89,7 @@ struct surge_publisher {
     char subscriptions[MAX_SUBSCRIPTIONS][MAX_SUBSCRIPTION_BYTES + 1];
     int subscription_count;
     uint64_t messages_sent, bytes_sent;
+    png_slot frame;
 };
 
 static double wall_clock_s(void)
@@ -307,6 +319,58 @@ static void publish_frame(surge_publisher *p, const surge_frame *f)
         send_stats(p, f, surge_mailbox_superseded(p->mailbox));
 }
 
+void surge_publisher_post_png(surge_publisher *p, const uint8_t *png, size_t png_len, int64_t step, double time_s)
+{
+    uint8_t *copy = malloc(png_len);
+    if (!copy)
+        return;
+    memcpy(copy, png, png_len);
+    pthread_mutex_lock(&p->frame.lock);
+    free(p->frame.png);
+    p->frame.png = copy;
+    p->frame.len = png_len;
+    p->frame.step = step;
+    p->frame.time_s = time_s;
+    p->frame.sequence++;
+    p->frame.fresh = 1;
+    pthread_mutex_unlock(&p->frame.lock);
+}
+
+/* Sends the newest rendered frame, once, as topic "frame": one u8 field holding the PNG file. */
+static void publish_png(surge_publisher *p)
+{
+    pthread_mutex_lock(&p->frame.lock);
+    uint8_t *png = p->frame.fresh ? p->frame.png : NULL;
+    const size_t len = p->frame.len;
+    const int64_t step = p->frame.step;
+    const double time_s = p->frame.time_s;
+    const uint64_t sequence = p->frame.sequence;
+    if (png) {
+        p->frame.png = NULL;
+        p->frame.fresh = 0;
+    }
+    pthread_mutex_unlock(&p->frame.lock);
+    if (!png)
+        return;
+    if (subscribed_to(p, "frame")) {
+        cJSON *h = cJSON_CreateObject();
+        cJSON_AddNumberToObject(h, "schema", SCHEMA_VERSION);
+        cJSON_AddStringToObject(h, "topic", "frame");
+        cJSON_AddNumberToObject(h, "seq", (double)sequence);
+        cJSON_AddNumberToObject(h, "step", (double)step);
+        cJSON_AddNumberToObject(h, "time_s", time_s);
+        cJSON_AddNumberToObject(h, "count", (double)len);
+        cJSON *fields = cJSON_AddArrayToObject(h, "fields");
+        static const state_field png_field = {"png", "u8", "PNG file", 1};
+        add_field(fields, &png_field);
+        const void *arrays[1] = {png};
+        const size_t bytes[1] = {len};
+        send_message(p, "frame", h, arrays, bytes, 1);
+        cJSON_Delete(h);
+    }
+    free(png);
+}
+
 static void *publisher_main(void *arg)
 {
     surge_publisher *p = arg;
@@ -316,9 +380,10 @@ static void *publisher_main(void *arg)
         if (f) {
             read_subscriptions(p);
             publish_frame(p, f);
-        } else if (atomic_load(&p->finishing)) {
-            return NULL; /* closed and drained */
         }
+        publish_png(p);
+        if (!f && atomic_load(&p->finishing))
+            return NULL; /* closed and drained */
     }
 }
 
@@ -335,6 +400,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     }
     p->def = *def;
     p->last_step = -1;
+    pthread_mutex_init(&p->frame.lock, NULL);
     p->socket = zmq_socket(context, ZMQ_XPUB);
     const int linger_ms = 1000;
     if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
@@ -390,5 +456,7 @@ void surge_publisher_finish(surge_publisher *p, const surge_sim *sim, surge_publ
     }
     zmq_close(p->socket);
     surge_mailbox_destroy(p->mailbox);
+    free(p->frame.png);
+    pthread_mutex_destroy(&p->frame.lock);
     free(p);
 }

@@ -19,6 +19,25 @@ typedef enum surge_fluid_shape {
     SURGE_SHAPE_LUBRICATION = 1, /* steady lubrication front with the block's volume, from x0 downstream */
 } surge_fluid_shape;
 
+typedef enum surge_color_field {
+    SURGE_FIELD_SPEED = 0,    /* |v| */
+    SURGE_FIELD_VX_REL = 1,   /* vx - belt speed: velocity relative to the belt */
+    SURGE_FIELD_VX = 2,
+    SURGE_FIELD_PRESSURE = 3,
+    SURGE_FIELD_DENSITY = 4,
+} surge_color_field;
+
+typedef enum surge_colormap_choice {
+    SURGE_COLORMAP_VIRIDIS = 0,
+    SURGE_COLORMAP_CIVIDIS = 1,
+} surge_colormap_choice;
+
+typedef enum surge_view_mode {
+    SURGE_VIEW_WHOLE = 0,  /* every particle */
+    SURGE_VIEW_FOLLOW = 1, /* a window of view_width_m that keeps the surge front at 3/4 of its width */
+    SURGE_VIEW_FIXED = 2,  /* x from view_x0_m to view_x1_m */
+} surge_view_mode;
+
 typedef struct surge_params {
     struct {
         double length_m;  /* x extent; the period when periodic */
@@ -73,6 +92,18 @@ typedef struct surge_params {
         double checkpoint_interval_s;  /* 0: only the final checkpoint */
         double progress_interval_s;    /* wall-clock seconds between progress lines; 0: none */
     } output;
+    struct { /* read by the renderer (render/); the solver ignores them */
+        double frame_interval_s;  /* simulated time between rendered frames */
+        int width_px, height_px;
+        int field;                /* surge_color_field */
+        int colormap;             /* surge_colormap_choice */
+        double color_min, color_max; /* colour range; equal: from each frame's data */
+        int view;                 /* surge_view_mode */
+        double view_x0_m, view_x1_m; /* the fixed view */
+        double view_width_m;      /* the follow view */
+        bool true_slope;          /* draw the bed at its slope (gravity down the image), not along x */
+        double movie_fps;         /* frames per second of the movie */
+    } render;
     struct {
         double max_density_deviation; /* |rho/rho0 - 1| above this is a failure */
         double min_dt_ratio;          /* dt below this fraction of the first step's dt is a failure */

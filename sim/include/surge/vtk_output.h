@@ -21,6 +21,10 @@
  * not NULL and err_len > 0). */
 int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, size_t err_len);
 
+/* Reads a file written by surge_vtp_write into snap (resized as needed). -1 with err naming the file and the
+ * problem when it is not such a file. */
+int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len);
+
 /* A .pvd time collection (VTKFile type="Collection") being built; opaque. */
 typedef struct surge_pvd surge_pvd;
 
@@ -36,6 +40,12 @@ surge_pvd *surge_pvd_open(const char *pvd_path, double resume_before_time_s, cha
  * relative_file is relative to the .pvd's folder; it is XML-escaped on output. Returns 0 on
  * success; on failure returns -1 with a message in err, and the entry is not kept. */
 int surge_pvd_add(surge_pvd *pvd, double time_s, const char *relative_file, char *err, size_t err_len);
+
+/* Reads an existing collection without writing it (for rendering a finished run). NULL with err. */
+surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len);
+size_t surge_pvd_count(const surge_pvd *pvd);
+double surge_pvd_time(const surge_pvd *pvd, size_t index);
+const char *surge_pvd_file(const surge_pvd *pvd, size_t index); /* relative to the .pvd's folder */
 
 /* Frees the collection (the file on disk stays as last written). NULL is allowed. */
 void surge_pvd_close(surge_pvd *pvd);

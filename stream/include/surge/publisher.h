@@ -37,6 +37,11 @@ surge_publisher *surge_publisher_start(void *zmq_context, const surge_publisher_
 /* Solver thread, at a step boundary: posts the state when a subscriber wants one and the cadence allows. */
 void surge_publisher_offer(surge_publisher *publisher, const surge_sim *sim);
 
+/* Any thread (the renderer's): hands a rendered frame (PNG bytes, copied) to the publisher, which sends the
+ * newest one on topic "frame" to subscribers of that topic. */
+void surge_publisher_post_png(surge_publisher *publisher, const uint8_t *png, size_t png_len, int64_t step,
+                              double time_s);
+
 /* Solver thread, once the run has ended: posts the final state (status "final" in stats) whatever the
  * cadence, lets the thread send it, stops it and closes the socket. report may be NULL. */
 void surge_publisher_finish(surge_publisher *publisher, const surge_sim *sim, surge_publisher_report *report);

@@ -1,0 +1,472 @@
+/* Drawing one snapshot off-screen: OSMesa context, particles as instanced anti-aliased discs (OpenGL 3.3
+ * core), then the overlays (colour bar, time, length scale) composited on the CPU (see surge/render.h). */
+#define _POSIX_C_SOURCE 200809L
+#define GL_GLEXT_PROTOTYPES
+#include "surge/render.h"
+
+#include <GL/osmesa.h>
+#include <GL/gl.h>
+#include <GL/glext.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "png_encode.h"
+
+static const double pi = 3.14159265358979323846;
+#include "colormaps.h"
+#include "text.h"
+
+/* Colours of what is not fluid (sRGB). */
+static const uint8_t background_rgb[3] = {255, 255, 255};
+static const uint8_t wall_rgb[3] = {150, 150, 150};  /* fixed walls: grey */
+static const uint8_t belt_rgb[3] = {205, 110, 40};   /* the moving belt: orange-brown, outside both colour maps */
+static const uint8_t ink_rgb[3] = {0, 0, 0};
+
+typedef struct instance {
+    float x_px, y_px;
+    float r, g, b;
+} instance;
+
+struct surge_canvas {
+    int width, height;
+    OSMesaContext context;
+    uint8_t *pixels; /* RGBA, top row first (OSMESA_Y_UP = 0) */
+    GLuint program, vao, quad_vbo, instance_vbo;
+    GLint uniform_viewport, uniform_radius;
+    instance *instances;
+    int instance_capacity;
+    surge_text *text;
+    surge_canvas_layout layout;
+};
+
+static const char *vertex_shader =
+    "#version 330 core\n"
+    "layout(location = 0) in vec2 corner;\n"   /* (-1,-1)..(1,1) */
+    "layout(location = 1) in vec2 center_px;\n"
+    "layout(location = 2) in vec3 color;\n"
+    "uniform vec2 viewport_px;\n"
+    "uniform float radius_px;\n"
+    "out vec2 offset_px;\n"
+    "out vec3 disc_color;\n"
+    "void main() {\n"
+    "    offset_px = corner * (radius_px + 1.0);\n"
+    "    vec2 p = center_px + offset_px;\n"
+    "    gl_Position = vec4(2.0 * p.x / viewport_px.x - 1.0, 1.0 - 2.0 * p.y / viewport_px.y, 0.0, 1.0);\n"
+    "    disc_color = color;\n"
+    "}\n";
+
+/* Coverage of a disc of radius r at distance d from its centre, over a one-pixel-wide edge; a disc smaller
+ * than a pixel fades with its area rather than vanishing. */
+static const char *fragment_shader =
+    "#version 330 core\n"
+    "in vec2 offset_px;\n"
+    "in vec3 disc_color;\n"
+    "uniform float radius_px;\n"
+    "out vec4 frag;\n"
+    "void main() {\n"
+    "    float coverage = clamp(radius_px + 0.5 - length(offset_px), 0.0, 1.0);\n"
+    "    coverage *= min(1.0, 2.0 * radius_px);\n"
+    "    if (coverage <= 0.0) discard;\n"
+    "    frag = vec4(disc_color, coverage);\n"
+    "}\n";
+
+static GLuint compile(GLenum kind, const char *source, char *err, size_t err_len)
+{
+    GLuint shader = glCreateShader(kind);
+    glShaderSource(shader, 1, &source, NULL);
+    glCompileShader(shader);
+    GLint ok = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[512];
+        glGetShaderInfoLog(shader, sizeof log, NULL, log);
+        snprintf(err, err_len, "OpenGL shader does not compile: %s", log);
+        glDeleteShader(shader);
+        return 0;
+    }
+    return shader;
+}
+
+static int build_program(surge_canvas *c, char *err, size_t err_len)
+{
+    GLuint vs = compile(GL_VERTEX_SHADER, vertex_shader, err, err_len);
+    GLuint fs = vs ? compile(GL_FRAGMENT_SHADER, fragment_shader, err, err_len) : 0;
+    if (!fs)
+        return -1;
+    c->program = glCreateProgram();
+    glAttachShader(c->program, vs);
+    glAttachShader(c->program, fs);
+    glLinkProgram(c->program);
+    glDeleteShader(vs);
+    glDeleteShader(fs);
+    GLint ok = 0;
+    glGetProgramiv(c->program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        snprintf(err, err_len, "OpenGL program does not link");
+        return -1;
+    }
+    c->uniform_viewport = glGetUniformLocation(c->program, "viewport_px");
+    c->uniform_radius = glGetUniformLocation(c->program, "radius_px");
+    static const float quad[] = {-1, -1, 1, -1, -1, 1, 1, 1};
+    glGenVertexArrays(1, &c->vao);
+    glBindVertexArray(c->vao);
+    glGenBuffers(1, &c->quad_vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, c->quad_vbo);
+    glBufferData(GL_ARRAY_BUFFER, sizeof quad, quad, GL_STATIC_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 0, NULL);
+    glGenBuffers(1, &c->instance_vbo);
+    glBindBuffer(GL_ARRAY_BUFFER, c->instance_vbo);
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, sizeof(instance), (void *)offsetof(instance, x_px));
+    glVertexAttribDivisor(1, 1);
+    glEnableVertexAttribArray(2);
+    glVertexAttribPointer(2, 3, GL_FLOAT, GL_FALSE, sizeof(instance), (void *)offsetof(instance, r));
+    glVertexAttribDivisor(2, 1);
+    return glGetError() == GL_NO_ERROR ? 0 : (snprintf(err, err_len, "OpenGL set-up failed"), -1);
+}
+
+surge_canvas *surge_canvas_create(int width_px, int height_px, const char *font_path, char *err, size_t err_len)
+{
+    if (width_px < 16 || height_px < 16 || width_px > 8192 || height_px > 8192) {
+        snprintf(err, err_len, "frame size %d x %d px is outside 16..8192 px", width_px, height_px);
+        return NULL;
+    }
+    surge_canvas *c = calloc(1, sizeof *c);
+    if (!c) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    c->width = width_px;
+    c->height = height_px;
+    c->pixels = malloc((size_t)width_px * (size_t)height_px * 4);
+    c->text = c->pixels ? surge_text_open(font_path ? font_path : SURGE_DEFAULT_FONT, height_px, err, err_len) : NULL;
+    if (!c->text) {
+        if (!c->pixels)
+            snprintf(err, err_len, "out of memory for a %d x %d frame", width_px, height_px);
+        surge_canvas_destroy(c);
+        return NULL;
+    }
+    const int attributes[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_STENCIL_BITS, 0,
+                              OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 3,
+                              OSMESA_CONTEXT_MINOR_VERSION, 3, 0};
+    c->context = OSMesaCreateContextAttribs(attributes, NULL);
+    if (!c->context || surge_canvas_bind(c) != 0) {
+        snprintf(err, err_len, "cannot create an OSMesa OpenGL 3.3 context (libosmesa6)");
+        surge_canvas_destroy(c);
+        return NULL;
+    }
+    if (build_program(c, err, err_len) != 0) {
+        surge_canvas_destroy(c);
+        return NULL;
+    }
+    return c;
+}
+
+int surge_canvas_bind(surge_canvas *c)
+{
+    if (!OSMesaMakeCurrent(c->context, c->pixels, GL_UNSIGNED_BYTE, c->width, c->height))
+        return -1;
+    OSMesaPixelStore(OSMESA_Y_UP, 0);
+    return 0;
+}
+
+void surge_canvas_destroy(surge_canvas *c)
+{
+    if (!c)
+        return;
+    if (c->context) {
+        if (c->program && surge_canvas_bind(c) == 0) {
+            glDeleteBuffers(1, &c->quad_vbo);
+            glDeleteBuffers(1, &c->instance_vbo);
+            glDeleteVertexArrays(1, &c->vao);
+            glDeleteProgram(c->program);
+        }
+        OSMesaDestroyContext(c->context);
+    }
+    surge_text_close(c->text);
+    free(c->instances);
+    free(c->pixels);
+    free(c);
+}
+
+const surge_canvas_layout *surge_canvas_last_layout(const surge_canvas *c) { return &c->layout; }
+
+const uint8_t *surge_canvas_pixels(const surge_canvas *c) { return c->pixels; }
+
+void surge_colormap_rgb(int colormap, double value, double min, double max, uint8_t rgb[3])
+{
+    double u = max > min ? (value - min) / (max - min) : 0.5;
+    u = u < 0 ? 0 : (u > 1 ? 1 : u);
+    const int k = (int)lround(u * 255.0);
+    const unsigned char(*table)[3] = surge_colormap_table((surge_colormap)colormap);
+    memcpy(rgb, table[k], 3);
+}
+
+/* ---- the view ---- */
+
+static double field_value(const surge_snapshot *s, int i, int field, double belt_mps)
+{
+    switch (field) {
+    case SURGE_FIELD_VX_REL: return s->vx_mps[i] - belt_mps;
+    case SURGE_FIELD_VX: return s->vx_mps[i];
+    case SURGE_FIELD_PRESSURE: return s->pressure_pa[i];
+    case SURGE_FIELD_DENSITY: return s->density_kgpm3[i];
+    default: return hypot(s->vx_mps[i], s->vy_mps[i]);
+    }
+}
+
+/* The bed frame (x along the bed, y normal) or, with true_slope, the world frame with gravity down. */
+static void world_position(const surge_snapshot *s, int i, double cos_t, double sin_t, double *X, double *Y)
+{
+    *X = s->x_m[i] * cos_t + s->y_m[i] * sin_t;
+    *Y = -s->x_m[i] * sin_t + s->y_m[i] * cos_t;
+}
+
+/* The x window along the bed the view shows. */
+static void view_window(const surge_snapshot *s, const surge_params *p, double *x0, double *x1)
+{
+    *x0 = -INFINITY;
+    *x1 = INFINITY;
+    if (p->render.view == SURGE_VIEW_FIXED) {
+        *x0 = p->render.view_x0_m;
+        *x1 = p->render.view_x1_m;
+    } else if (p->render.view == SURGE_VIEW_FOLLOW) {
+        double front = -INFINITY;
+        for (int i = 0; i < s->count; i++)
+            if (s->kind[i] == SURGE_KIND_FLUID && s->x_m[i] > front)
+                front = s->x_m[i];
+        if (!isfinite(front))
+            front = 0;
+        *x0 = front - 0.75 * p->render.view_width_m;
+        *x1 = front + 0.25 * p->render.view_width_m;
+    }
+}
+
+static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double belt_mps)
+{
+    surge_canvas_layout *l = &c->layout;
+    const int W = c->width, H = c->height;
+    l->plot_x0 = (int)(0.03 * W);
+    l->plot_x1 = (int)(0.86 * W);
+    l->plot_y0 = (int)(0.10 * H);
+    l->plot_y1 = (int)(0.86 * H);
+    l->colorbar_x0 = (int)(0.885 * W);
+    l->colorbar_x1 = l->colorbar_x0 + (int)fmax(4, 0.015 * W);
+    l->colorbar_y0 = l->plot_y0 + (int)(0.06 * H);
+    l->colorbar_y1 = l->plot_y1;
+    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
+    const double cos_t = cos(slope), sin_t = sin(slope);
+    double wx0, wx1;
+    view_window(s, p, &wx0, &wx1);
+    double X0 = INFINITY, X1 = -INFINITY, Y0 = INFINITY, Y1 = -INFINITY;
+    double vmin = INFINITY, vmax = -INFINITY;
+    for (int i = 0; i < s->count; i++) {
+        if (s->x_m[i] < wx0 || s->x_m[i] > wx1)
+            continue;
+        double X, Y;
+        world_position(s, i, cos_t, sin_t, &X, &Y);
+        X0 = fmin(X0, X);
+        X1 = fmax(X1, X);
+        Y0 = fmin(Y0, Y);
+        Y1 = fmax(Y1, Y);
+        if (s->kind[i] == SURGE_KIND_FLUID) {
+            const double v = field_value(s, i, p->render.field, belt_mps);
+            vmin = fmin(vmin, v);
+            vmax = fmax(vmax, v);
+        }
+    }
+    if (!(X1 >= X0)) { /* nothing in the window: show the window itself */
+        X0 = isfinite(wx0) ? wx0 : 0;
+        X1 = isfinite(wx1) ? wx1 : 1;
+        Y0 = 0;
+        Y1 = 0.1 * (X1 - X0);
+    }
+    if (p->render.view != SURGE_VIEW_WHOLE && !p->render.true_slope) {
+        X0 = wx0; /* the window's own width, even where it holds no particles */
+        X1 = wx1;
+    }
+    const double margin = p->numerics.dp_m;
+    X0 -= margin, X1 += margin, Y0 -= margin, Y1 += margin;
+    const double plot_w = l->plot_x1 - l->plot_x0, plot_h = l->plot_y1 - l->plot_y0;
+    l->scale_px_per_m = fmin(plot_w / (X1 - X0), plot_h / (Y1 - Y0));
+    /* centred across, resting on the bottom of the plot area */
+    l->world_x0_m = 0.5 * (X0 + X1) - 0.5 * plot_w / l->scale_px_per_m;
+    l->world_y0_m = Y0;
+    l->radius_px = 0.5 * p->numerics.dp_m * l->scale_px_per_m;
+    if (p->render.color_max > p->render.color_min) {
+        l->color_min = p->render.color_min;
+        l->color_max = p->render.color_max;
+    } else if (vmax > vmin) {
+        l->color_min = vmin;
+        l->color_max = vmax;
+    } else {
+        l->color_min = isfinite(vmin) ? vmin - 0.5 : 0;
+        l->color_max = isfinite(vmin) ? vmin + 0.5 : 1;
+    }
+    return 0;
+}
+
+static int fill_instances(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double belt_mps)
+{
+    if (s->count > c->instance_capacity) {
+        instance *grown = realloc(c->instances, (size_t)s->count * sizeof *grown);
+        if (!grown)
+            return -1;
+        c->instances = grown;
+        c->instance_capacity = s->count;
+    }
+    const surge_canvas_layout *l = &c->layout;
+    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
+    const double cos_t = cos(slope), sin_t = sin(slope);
+    /* walls first, fluid on top */
+    int n = 0;
+    for (int pass = 0; pass < 2; pass++)
+        for (int i = 0; i < s->count; i++) {
+            const int fluid = s->kind[i] == SURGE_KIND_FLUID;
+            if (fluid != pass)
+                continue;
+            double X, Y;
+            world_position(s, i, cos_t, sin_t, &X, &Y);
+            uint8_t rgb[3];
+            if (fluid)
+                surge_colormap_rgb(p->render.colormap, field_value(s, i, p->render.field, belt_mps), l->color_min,
+                                   l->color_max, rgb);
+            else
+                memcpy(rgb, s->kind[i] == SURGE_KIND_MOVING_WALL ? belt_rgb : wall_rgb, 3);
+            instance *in = &c->instances[n++];
+            in->x_px = (float)(l->plot_x0 + (X - l->world_x0_m) * l->scale_px_per_m);
+            in->y_px = (float)(l->plot_y1 - (Y - l->world_y0_m) * l->scale_px_per_m);
+            in->r = rgb[0] / 255.0f;
+            in->g = rgb[1] / 255.0f;
+            in->b = rgb[2] / 255.0f;
+        }
+    return n;
+}
+
+/* ---- overlays, on the CPU ---- */
+
+static void fill_rect(surge_canvas *c, int x0, int y0, int x1, int y1, const uint8_t rgb[3])
+{
+    x0 = x0 < 0 ? 0 : x0;
+    y0 = y0 < 0 ? 0 : y0;
+    x1 = x1 > c->width ? c->width : x1;
+    y1 = y1 > c->height ? c->height : y1;
+    for (int y = y0; y < y1; y++)
+        for (int x = x0; x < x1; x++) {
+            uint8_t *px = c->pixels + 4 * ((size_t)y * c->width + x);
+            px[0] = rgb[0], px[1] = rgb[1], px[2] = rgb[2], px[3] = 255;
+        }
+}
+
+static void outline_rect(surge_canvas *c, int x0, int y0, int x1, int y1)
+{
+    fill_rect(c, x0 - 1, y0 - 1, x1 + 1, y0, ink_rgb);
+    fill_rect(c, x0 - 1, y1, x1 + 1, y1 + 1, ink_rgb);
+    fill_rect(c, x0 - 1, y0, x0, y1, ink_rgb);
+    fill_rect(c, x1, y0, x1 + 1, y1, ink_rgb);
+}
+
+static const char *field_label(int field)
+{
+    static const char *const labels[] = {"speed (m/s)", "vx - belt (m/s)", "vx (m/s)", "pressure (Pa)",
+                                         "density (kg/m\xc2\xb3)"};
+    return field >= 0 && field < 5 ? labels[field] : "?";
+}
+
+static void draw_colorbar(surge_canvas *c, const surge_params *p)
+{
+    const surge_canvas_layout *l = &c->layout;
+    const int h = l->colorbar_y1 - l->colorbar_y0;
+    for (int y = l->colorbar_y0; y < l->colorbar_y1; y++) {
+        uint8_t rgb[3];
+        const double u = 1.0 - (y - l->colorbar_y0 + 0.5) / h; /* top = max */
+        surge_colormap_rgb(p->render.colormap, l->color_min + u * (l->color_max - l->color_min), l->color_min,
+                           l->color_max, rgb);
+        fill_rect(c, l->colorbar_x0, y, l->colorbar_x1, y + 1, rgb);
+    }
+    outline_rect(c, l->colorbar_x0, l->colorbar_y0, l->colorbar_x1, l->colorbar_y1);
+    const int size = surge_text_size(c->text);
+    for (int k = 0; k <= 4; k++) {
+        const double value = l->color_min + (l->color_max - l->color_min) * k / 4.0;
+        const int y = l->colorbar_y1 - (int)lround(k / 4.0 * h);
+        fill_rect(c, l->colorbar_x1, y, l->colorbar_x1 + size / 3, y + 1, ink_rgb);
+        char label[32];
+        snprintf(label, sizeof label, "%.3g", value);
+        surge_text_draw(c->text, c->pixels, c->width, c->height, l->colorbar_x1 + size / 2, y + size / 3, label,
+                        ink_rgb);
+    }
+    surge_text_draw(c->text, c->pixels, c->width, c->height, l->colorbar_x0 - size, l->colorbar_y0 - size,
+                    field_label(p->render.field), ink_rgb);
+}
+
+/* A bar of a round length (1, 2 or 5 times a power of ten) near a fifth of the plot width. */
+static void draw_length_scale(surge_canvas *c)
+{
+    const surge_canvas_layout *l = &c->layout;
+    const double target_m = 0.2 * (l->plot_x1 - l->plot_x0) / l->scale_px_per_m;
+    const double decade = pow(10.0, floor(log10(target_m)));
+    const double length_m = target_m >= 5 * decade ? 5 * decade : (target_m >= 2 * decade ? 2 * decade : decade);
+    const int px = (int)lround(length_m * l->scale_px_per_m);
+    const int size = surge_text_size(c->text);
+    const int x0 = l->plot_x0, y = c->height - size;
+    fill_rect(c, x0, y - size / 4, x0 + px, y, ink_rgb);
+    char label[32];
+    if (length_m >= 1)
+        snprintf(label, sizeof label, "%g m", length_m);
+    else if (length_m >= 0.01)
+        snprintf(label, sizeof label, "%g cm", length_m * 100);
+    else
+        snprintf(label, sizeof label, "%g mm", length_m * 1000);
+    surge_text_draw(c->text, c->pixels, c->width, c->height, x0 + px + size / 2, y, label, ink_rgb);
+}
+
+const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+{
+    double belt_mps = 0;
+    for (int i = 0; i < s->count; i++)
+        if (s->kind[i] == SURGE_KIND_MOVING_WALL) {
+            belt_mps = s->vx_mps[i];
+            break;
+        }
+    if (layout_view(c, s, p, belt_mps) != 0)
+        return NULL;
+    const int n = fill_instances(c, s, p, belt_mps);
+    if (n < 0)
+        return NULL;
+    const surge_canvas_layout *l = &c->layout;
+    glViewport(0, 0, c->width, c->height);
+    glDisable(GL_SCISSOR_TEST);
+    glClearColor(background_rgb[0] / 255.0f, background_rgb[1] / 255.0f, background_rgb[2] / 255.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    glEnable(GL_SCISSOR_TEST); /* particles stay inside the plot area; GL's y runs up from the bottom */
+    glScissor(l->plot_x0, c->height - l->plot_y1, l->plot_x1 - l->plot_x0, l->plot_y1 - l->plot_y0);
+    glEnable(GL_BLEND);
+    glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    glUseProgram(c->program);
+    glUniform2f(c->uniform_viewport, (float)c->width, (float)c->height);
+    glUniform1f(c->uniform_radius, (float)l->radius_px);
+    glBindVertexArray(c->vao);
+    glBindBuffer(GL_ARRAY_BUFFER, c->instance_vbo);
+    glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)n * sizeof(instance)), c->instances, GL_STREAM_DRAW);
+    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, n);
+    glFinish();
+    if (glGetError() != GL_NO_ERROR)
+        return NULL;
+
+    outline_rect(c, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1);
+    draw_colorbar(c, p);
+    draw_length_scale(c);
+    char label[96];
+    snprintf(label, sizeof label, "t = %.3f s", s->time_s);
+    const int size = surge_text_size(c->text);
+    surge_text_draw(c->text, c->pixels, c->width, c->height, l->plot_x0, l->plot_y0 - size / 2, label, ink_rgb);
+    return c->pixels;
+}
+
+int surge_canvas_png(const surge_canvas *c, uint8_t **png, size_t *png_len, char *err, size_t err_len)
+{
+    return surge_png_encode_rgba(c->pixels, c->width, c->height, png, png_len, err, err_len);
+}

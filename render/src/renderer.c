@@ -1,0 +1,218 @@
+/* Rendering alongside the solver: a thread with its own canvas, fed by a mailbox (see surge/render.h). */
+#define _POSIX_C_SOURCE 200809L
+#include "surge/render.h"
+
+#include <errno.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "surge/mailbox.h"
+
+struct surge_renderer {
+    surge_renderer_def def;
+    char frames_dir[4096];
+    surge_canvas *canvas;
+    surge_movie *movie;
+    surge_mailbox *mailbox;
+    pthread_t thread;
+    atomic_int finishing;
+    double next_frame_s; /* solver thread: simulated time of the next frame due */
+    /* renderer thread */
+    uint64_t last_sequence, frames_drawn, movie_frames;
+    double draw_s, encode_s;
+    char error[1024]; /* the first failure; later frames are not attempted */
+};
+
+static double wall_clock_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int write_file(const char *path, const uint8_t *data, size_t len, char *err, size_t err_len)
+{
+    char tmp[4300];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "wb");
+    if (!f || fwrite(data, 1, len, f) != len || fclose(f) != 0 || rename(tmp, path) != 0) {
+        snprintf(err, err_len, "cannot write the frame '%.900s': %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
+/* Draws one frame and writes it everywhere it goes; frames skipped since the previous one repeat the
+ * previous image in the movie, so the movie keeps simulated time. */
+static int render_frame(surge_renderer *r, const surge_frame *f)
+{
+    char *err = r->error;
+    const size_t err_len = sizeof r->error;
+    if (r->movie && r->frames_drawn > 0)
+        for (uint64_t k = r->last_sequence + 1; k < f->sequence; k++, r->movie_frames++)
+            if (surge_movie_add(r->movie, surge_canvas_pixels(r->canvas), err, err_len) != 0)
+                return -1;
+    const double t0 = wall_clock_s();
+    const uint8_t *rgba = surge_canvas_draw(r->canvas, &f->snap, &f->params);
+    const double t1 = wall_clock_s();
+    r->draw_s += t1 - t0;
+    if (!rgba) {
+        snprintf(err, err_len, "cannot draw the frame of step %lld", (long long)f->diag.step);
+        return -1;
+    }
+    r->frames_drawn++;
+    r->last_sequence = f->sequence;
+    if (r->frames_dir[0] || r->def.on_frame) {
+        uint8_t *png = NULL;
+        size_t len = 0;
+        if (surge_canvas_png(r->canvas, &png, &len, err, err_len) != 0)
+            return -1;
+        int rc = 0;
+        if (r->frames_dir[0]) {
+            char path[4200];
+            snprintf(path, sizeof path, "%s/frame_%06llu.png", r->frames_dir, (unsigned long long)(f->sequence - 1));
+            rc = write_file(path, png, len, err, err_len);
+        }
+        if (rc == 0 && r->def.on_frame)
+            r->def.on_frame(png, len, f->diag.step, f->diag.time_s, r->def.user);
+        free(png);
+        if (rc != 0)
+            return -1;
+    }
+    if (r->movie) {
+        if (surge_movie_add(r->movie, rgba, err, err_len) != 0)
+            return -1;
+        r->movie_frames++;
+    }
+    r->encode_s += wall_clock_s() - t1;
+    return 0;
+}
+
+static void *renderer_main(void *arg)
+{
+    surge_renderer *r = arg;
+    if (surge_canvas_bind(r->canvas) != 0) {
+        snprintf(r->error, sizeof r->error, "cannot make the OSMesa context current in the renderer thread");
+        return NULL;
+    }
+    for (;;) {
+        const surge_frame *f = surge_mailbox_take(r->mailbox, 0.1);
+        if (f && !r->error[0])
+            render_frame(r, f);
+        else if (!f && atomic_load(&r->finishing))
+            return NULL;
+    }
+}
+
+static int make_folder(const char *path, char *err, size_t err_len)
+{
+    char buf[4096];
+    snprintf(buf, sizeof buf, "%s", path);
+    for (char *p = buf + 1;; p++)
+        if (*p == '/' || *p == '\0') {
+            const char saved = *p;
+            *p = '\0';
+            if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
+                snprintf(err, err_len, "cannot create the frames folder '%s': %s", buf, strerror(errno));
+                return -1;
+            }
+            *p = saved;
+            if (!saved)
+                break;
+        }
+    char probe[4200];
+    snprintf(probe, sizeof probe, "%s/.surge_write_test", path);
+    FILE *f = fopen(probe, "wb");
+    if (!f) {
+        snprintf(err, err_len, "cannot write into the frames folder '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    fclose(f);
+    remove(probe);
+    return 0;
+}
+
+surge_renderer *surge_renderer_start(const surge_renderer_def *def, const surge_params *params, char *err,
+                                     size_t err_len)
+{
+    surge_renderer *r = calloc(1, sizeof *r);
+    if (!r) {
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
+    r->def = *def;
+    if (def->frames_dir) {
+        if (strlen(def->frames_dir) >= sizeof r->frames_dir - 32) {
+            snprintf(err, err_len, "frames folder name too long");
+            free(r);
+            return NULL;
+        }
+        snprintf(r->frames_dir, sizeof r->frames_dir, "%s", def->frames_dir);
+    }
+    const int w = params->render.width_px, h = params->render.height_px;
+    if ((def->frames_dir && make_folder(def->frames_dir, err, err_len) != 0) ||
+        !(r->canvas = surge_canvas_create(w, h, def->font_path, err, err_len)) ||
+        (def->movie_path && !(r->movie = surge_movie_open(def->movie_path, w, h, params->render.movie_fps, err,
+                                                          err_len)))) {
+        surge_canvas_destroy(r->canvas);
+        free(r);
+        return NULL;
+    }
+    r->mailbox = surge_mailbox_create();
+    if (!r->mailbox || pthread_create(&r->thread, NULL, renderer_main, r) != 0) {
+        snprintf(err, err_len, "cannot start the renderer thread");
+        char ignored[256];
+        if (r->movie)
+            surge_movie_close(r->movie, ignored, sizeof ignored);
+        surge_mailbox_destroy(r->mailbox);
+        surge_canvas_destroy(r->canvas);
+        free(r);
+        return NULL;
+    }
+    r->next_frame_s = -INFINITY;
+    return r;
+}
+
+void surge_renderer_offer(surge_renderer *r, const surge_sim *sim)
+{
+    const double t = surge_sim_time(sim);
+    if (t < r->next_frame_s)
+        return;
+    const double interval = surge_sim_params(sim)->render.frame_interval_s;
+    if (surge_mailbox_post(r->mailbox, sim, 0, 0) == 0)
+        r->next_frame_s = (floor(t / interval + 1e-9) + 1.0) * interval;
+}
+
+int surge_renderer_finish(surge_renderer *r, surge_render_report *report, char *err, size_t err_len)
+{
+    atomic_store(&r->finishing, 1);
+    surge_mailbox_close(r->mailbox);
+    pthread_join(r->thread, NULL);
+    int rc = 0;
+    if (r->error[0]) {
+        snprintf(err, err_len, "%s", r->error);
+        rc = -1;
+    }
+    char movie_err[1024];
+    if (r->movie && surge_movie_close(r->movie, movie_err, sizeof movie_err) != 0 && rc == 0) {
+        snprintf(err, err_len, "%s", movie_err);
+        rc = -1;
+    }
+    if (report) {
+        report->frames_due = surge_mailbox_posted(r->mailbox);
+        report->frames_drawn = r->frames_drawn;
+        report->movie_frames = r->movie_frames;
+        report->draw_s = r->draw_s;
+        report->encode_s = r->encode_s;
+    }
+    surge_mailbox_destroy(r->mailbox);
+    surge_canvas_destroy(r->canvas);
+    free(r);
+    return rc;
+}

@@ -1,0 +1,289 @@
+/* The renderer on synthetic snapshots: PNG frames decoded with libpng must show each particle in the colour the
+ * map gives for its value, at its place and size; background, walls, belt and colour bar where they belong;
+ * the slope turns the picture; bad settings give clear errors.
+ *
+ * usage: test_render GROUP WORK_DIR   (GROUP: colours, slope, errors) */
+#define _POSIX_C_SOURCE 200809L
+#include <math.h>
+#include <png.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "surge/params.h"
+#include "surge/render.h"
+#include "surge/snapshot.h"
+
+static int failures = 0;
+
+static void check(const char *name, int ok, const char *detail)
+{
+    printf("%s: %s%s%s\n", name, ok ? "ok" : "FAILED", ok ? "" : "\n    ", ok ? "" : detail);
+    failures += !ok;
+}
+
+typedef struct image {
+    int width, height;
+    uint8_t *rgb;
+} image;
+
+/* Writes the canvas's PNG to path and reads it back with libpng (the round trip the users' tools make). */
+static int png_round_trip(surge_canvas *canvas, const char *path, image *out)
+{
+    uint8_t *png;
+    size_t len;
+    char err[256];
+    if (surge_canvas_png(canvas, &png, &len, err, sizeof err) != 0)
+        return -1;
+    FILE *f = fopen(path, "wb");
+    fwrite(png, 1, len, f);
+    fclose(f);
+    free(png);
+    png_image img;
+    memset(&img, 0, sizeof img);
+    img.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&img, path))
+        return -1;
+    img.format = PNG_FORMAT_RGB;
+    out->width = (int)img.width;
+    out->height = (int)img.height;
+    out->rgb = malloc(PNG_IMAGE_SIZE(img));
+    if (!png_image_finish_read(&img, NULL, out->rgb, 0, NULL))
+        return -1;
+    return 0;
+}
+
+static const uint8_t *pixel(const image *im, double x, double y)
+{
+    int px = (int)floor(x), py = (int)floor(y);
+    px = px < 0 ? 0 : (px >= im->width ? im->width - 1 : px);
+    py = py < 0 ? 0 : (py >= im->height ? im->height - 1 : py);
+    return im->rgb + 3 * ((size_t)py * (size_t)im->width + (size_t)px);
+}
+
+static int near_rgb(const uint8_t *a, const uint8_t *b, int tolerance)
+{
+    for (int k = 0; k < 3; k++)
+        if (abs((int)a[k] - (int)b[k]) > tolerance)
+            return 0;
+    return 1;
+}
+
+/* A 10 x 4 block of fluid particles over 3 wall rows (the bottom one moving: the belt), dp = 1 cm.
+ * Fluid particle k has speed k / 39 m/s (vx only), so the speeds span [0, 1]. */
+static void synthetic(surge_snapshot *s)
+{
+    const double dp = 0.01;
+    surge_snapshot_reserve(s, 40 + 30);
+    int n = 0;
+    for (int j = 0; j < 4; j++)
+        for (int i = 0; i < 10; i++, n++) {
+            s->x_m[n] = (i + 0.5) * dp;
+            s->y_m[n] = (j + 0.5) * dp;
+            s->vx_mps[n] = (float)(n / 39.0);
+            s->vy_mps[n] = 0;
+            s->kind[n] = SURGE_KIND_FLUID;
+        }
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 10; i++, n++) {
+            s->x_m[n] = (i + 0.5) * dp;
+            s->y_m[n] = -(j + 0.5) * dp;
+            s->vx_mps[n] = j == 2 ? -0.5f : 0.0f;
+            s->vy_mps[n] = 0;
+            s->kind[n] = j == 2 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL;
+        }
+    for (int k = 0; k < n; k++) {
+        s->density_kgpm3[k] = 1000;
+        s->pressure_pa[k] = 0;
+        s->id[k] = k;
+    }
+    s->time_s = 1.25;
+    s->step = 100;
+}
+
+static surge_params synthetic_params(void)
+{
+    surge_params p = surge_default_params();
+    p.numerics.dp_m = 0.01;
+    p.render.width_px = 800;
+    p.render.height_px = 450;
+    p.render.field = SURGE_FIELD_SPEED;
+    p.render.color_min = 0;
+    p.render.color_max = 1;
+    p.render.view = SURGE_VIEW_WHOLE;
+    return p;
+}
+
+static void group_colours(const char *work)
+{
+    surge_snapshot s = {0};
+    synthetic(&s);
+    surge_params p = synthetic_params();
+    char err[512], path[4096], detail[512];
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
+    if (!canvas) {
+        check("colours: canvas", 0, err);
+        return;
+    }
+    const int drawn = surge_canvas_draw(canvas, &s, &p) != NULL;
+    snprintf(path, sizeof path, "%s/synthetic.png", work);
+    image im;
+    if (!drawn || png_round_trip(canvas, path, &im) != 0) {
+        check("colours: draw and PNG round trip", 0, path);
+        return;
+    }
+    const surge_canvas_layout *l = surge_canvas_last_layout(canvas);
+    check("colours: PNG has the frame size", im.width == 800 && im.height == 450, "");
+    snprintf(detail, sizeof detail, "radius %.2f px", l->radius_px);
+    check("colours: discs are dp across at the view's scale",
+          fabs(l->radius_px - 0.5 * 0.01 * l->scale_px_per_m) < 1e-9 && l->radius_px > 8, detail);
+
+    /* every fluid particle: its centre and a point 0.6 radius out have the map's colour for its speed; a point
+     * just outside the block's top row is background */
+    int wrong = 0;
+    for (int k = 0; k < 40; k++) {
+        const double cx = l->plot_x0 + (s.x_m[k] - l->world_x0_m) * l->scale_px_per_m;
+        const double cy = l->plot_y1 - (s.y_m[k] - l->world_y0_m) * l->scale_px_per_m;
+        uint8_t expected[3];
+        surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, s.vx_mps[k], 0, 1, expected);
+        if (!near_rgb(pixel(&im, cx, cy), expected, 1) ||
+            !near_rgb(pixel(&im, cx + 0.6 * l->radius_px, cy), expected, 1)) {
+            if (!wrong)
+                snprintf(detail, sizeof detail, "particle %d at (%.1f, %.1f) px: (%d,%d,%d), expected (%d,%d,%d)", k,
+                         cx, cy, pixel(&im, cx, cy)[0], pixel(&im, cx, cy)[1], pixel(&im, cx, cy)[2], expected[0],
+                         expected[1], expected[2]);
+            wrong++;
+        }
+    }
+    check("colours: each particle has the viridis colour of its speed at its place", wrong == 0, detail);
+    const uint8_t white[3] = {255, 255, 255}, grey[3] = {150, 150, 150}, belt[3] = {205, 110, 40};
+    const double top_y = l->plot_y1 - (0.04 + 0.5 * 0.01 - l->world_y0_m) * l->scale_px_per_m;
+    const double mid_x = l->plot_x0 + (0.05 - l->world_x0_m) * l->scale_px_per_m;
+    check("colours: background above the fluid is white", near_rgb(pixel(&im, mid_x, top_y - 2 * l->radius_px), white, 0)
+                                                              && near_rgb(pixel(&im, l->plot_x0 + 3, l->plot_y0 + 3), white, 0), "");
+    const double wall_y = l->plot_y1 - (-0.005 - l->world_y0_m) * l->scale_px_per_m;
+    const double belt_y = l->plot_y1 - (-0.025 - l->world_y0_m) * l->scale_px_per_m;
+    check("colours: fixed wall grey, belt orange-brown",
+          near_rgb(pixel(&im, mid_x, wall_y), grey, 1) && near_rgb(pixel(&im, mid_x, belt_y), belt, 1), "");
+    /* the colour bar: bottom = color_min, top = color_max, middle = the middle of the map */
+    const double bar_x = 0.5 * (l->colorbar_x0 + l->colorbar_x1);
+    const int bar_h = l->colorbar_y1 - l->colorbar_y0;
+    uint8_t lo[3], hi[3], mid[3];
+    surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 0, 0, 1, lo);
+    surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 1, 0, 1, hi);
+    surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 0.5, 0, 1, mid);
+    check("colours: colour bar right of the plot runs from color_min (bottom) to color_max (top)",
+          l->colorbar_x0 > l->plot_x1 && near_rgb(pixel(&im, bar_x, l->colorbar_y1 - 1.5), lo, 3) &&
+              near_rgb(pixel(&im, bar_x, l->colorbar_y0 + 1.5), hi, 3) &&
+              near_rgb(pixel(&im, bar_x, l->colorbar_y0 + 0.5 * bar_h), mid, 3), "");
+    int ink = 0; /* the time label above the plot: some dark pixels */
+    for (int y = 0; y < l->plot_y0; y++)
+        for (int x = l->plot_x0; x < l->plot_x0 + 100; x++)
+            ink += pixel(&im, x, y)[0] < 100;
+    check("colours: a label is drawn above the plot", ink > 20, "");
+
+    /* another field and map: x velocity relative to the belt (-0.5 m/s) on cividis */
+    p.render.field = SURGE_FIELD_VX_REL;
+    p.render.colormap = SURGE_COLORMAP_CIVIDIS;
+    p.render.color_min = 0.5;
+    p.render.color_max = 1.5;
+    surge_canvas_draw(canvas, &s, &p);
+    snprintf(path, sizeof path, "%s/synthetic_vx_rel.png", work);
+    image im2;
+    png_round_trip(canvas, path, &im2);
+    l = surge_canvas_last_layout(canvas);
+    const int k = 25;
+    const double cx = l->plot_x0 + (s.x_m[k] - l->world_x0_m) * l->scale_px_per_m;
+    const double cy = l->plot_y1 - (s.y_m[k] - l->world_y0_m) * l->scale_px_per_m;
+    uint8_t expected[3];
+    surge_colormap_rgb(SURGE_COLORMAP_CIVIDIS, s.vx_mps[k] + 0.5, 0.5, 1.5, expected);
+    check("colours: vx_rel on cividis subtracts the belt speed", near_rgb(pixel(&im2, cx, cy), expected, 1), "");
+    free(im.rgb);
+    free(im2.rgb);
+    surge_canvas_destroy(canvas);
+    surge_snapshot_free(&s);
+}
+
+/* true_slope: the bed descends to the right by the slope angle. */
+static void group_slope(const char *work)
+{
+    surge_snapshot s = {0};
+    synthetic(&s);
+    surge_params p = synthetic_params();
+    p.body.slope_deg = 20;
+    char err[512], path[4096], detail[256];
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
+    if (!canvas) {
+        check("slope: canvas", 0, err);
+        return;
+    }
+    double angle_deg[2];
+    for (int tilted = 0; tilted < 2; tilted++) {
+        p.render.true_slope = tilted;
+        surge_canvas_draw(canvas, &s, &p);
+        snprintf(path, sizeof path, "%s/slope_%d.png", work, tilted);
+        image im;
+        png_round_trip(canvas, path, &im);
+        /* the first and the last particle of the bottom fluid row have colours no other particle has: the
+         * centroids of their exactly-coloured pixels give the row's direction in the image */
+        double cx[2] = {0, 0}, cy[2] = {0, 0}, n[2] = {0, 0};
+        for (int e = 0; e < 2; e++) {
+            uint8_t rgb[3];
+            surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, s.vx_mps[e ? 9 : 0], 0, 1, rgb);
+            for (int y = 0; y < im.height; y++)
+                for (int x = 0; x < im.width; x++)
+                    if (near_rgb(pixel(&im, x, y), rgb, 0)) {
+                        cx[e] += x + 0.5, cy[e] += y + 0.5, n[e]++;
+                    }
+        }
+        angle_deg[tilted] = n[0] > 0 && n[1] > 0
+                                ? atan2(cy[1] / n[1] - cy[0] / n[0], cx[1] / n[1] - cx[0] / n[0]) * 180 / 3.14159265358979
+                                : NAN;
+        free(im.rgb);
+    }
+    snprintf(detail, sizeof detail, "row direction %.2f deg flat, %.2f deg tilted (image y down; expected 0 and 20)",
+             angle_deg[0], angle_deg[1]);
+    check("slope: the bed runs along the image when flat and falls 20 deg to the right when tilted",
+          fabs(angle_deg[0]) < 0.5 && fabs(angle_deg[1] - 20) < 0.5, detail);
+    surge_canvas_destroy(canvas);
+    surge_snapshot_free(&s);
+}
+
+static void group_errors(const char *work)
+{
+    char err[512] = "", path[4096];
+    surge_canvas *c = surge_canvas_create(0, 100, NULL, err, sizeof err);
+    check("errors: a zero-width frame is refused by name", !c && strstr(err, "0 x 100"), err);
+    c = surge_canvas_create(100000, 100, NULL, err, sizeof err);
+    check("errors: an absurd frame size is refused", !c && strstr(err, "16..8192"), err);
+    c = surge_canvas_create(64, 64, "/nonexistent/font.ttf", err, sizeof err);
+    check("errors: a missing font is named", !c && strstr(err, "/nonexistent/font.ttf"), err);
+    surge_params p = synthetic_params();
+    surge_renderer_def def = {.frames_dir = "/proc/surge_cannot_write_here"};
+    surge_renderer *r = surge_renderer_start(&def, &p, err, sizeof err);
+    check("errors: an unwritable frames folder is named", !r && strstr(err, "/proc/surge_cannot_write_here"), err);
+    snprintf(path, sizeof path, "%s/no/such/folder/movie.mp4", work);
+    surge_renderer_def movie_def = {.movie_path = path};
+    r = surge_renderer_start(&movie_def, &p, err, sizeof err);
+    check("errors: a movie in a missing folder is named", !r && strstr(err, "movie.mp4"), err);
+}
+
+int main(int argc, char **argv)
+{
+    if (argc != 3) {
+        fprintf(stderr, "usage: test_render colours|slope|errors WORK_DIR\n");
+        return 2;
+    }
+    if (!strcmp(argv[1], "colours"))
+        group_colours(argv[2]);
+    else if (!strcmp(argv[1], "slope"))
+        group_slope(argv[2]);
+    else if (!strcmp(argv[1], "errors"))
+        group_errors(argv[2]);
+    else {
+        fprintf(stderr, "unknown group '%s'\n", argv[1]);
+        return 2;
+    }
+    printf(failures ? "%d check(s) failed\n" : "all checks passed\n", failures);
+    return failures ? 1 : 0;
+}

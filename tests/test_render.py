@@ -1,0 +1,147 @@
+#!/usr/bin/python3
+"""Rendering through the surge program: frames and movies while it runs and from a finished run.
+
+Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
+  GROUP live     --frames and --movie during a run: one PNG per frame drawn, a movie with one frame per frame
+                 due (ffprobe: count, size, duration), a rendered frame on the stream's "frame" topic, and the
+                 solver's final state hash equal to the same run without rendering.
+  GROUP offline  `surge render RUN_DIR` turns the run's snapshots into as many PNG frames and movie frames.
+  GROUP inputs   bad rendering options get exit status 2 or 3 and a message naming the problem.
+
+Each check prints "name: ok" or "name: FAILED ..."; exits 1 if any failed. Every command has a timeout.
+"""
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import time
+
+import zmq
+
+SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
+sys.path.insert(0, os.path.join(SOURCE, "tools"))
+import surge_client  # noqa: E402
+
+TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
+COMMON = ["-s", "time.end_s=0.2", "-s", "render.width_px=640", "-s", "render.height_px=360",
+          "-s", "render.frame_interval_s=0.02", "-s", "render.movie_fps=10", "-s", "output.snapshot_interval_s=0.05",
+          "--threads", "1"]
+ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
+failures = []
+
+
+def check(name, ok, detail=""):
+    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + str(detail).replace("\n", "\n    ")))
+    if not ok:
+        failures.append(name)
+
+
+def run(args, timeout=180):
+    p = subprocess.run([SURGE] + args, capture_output=True, text=True, timeout=timeout, env=ENV)
+    return p.returncode, p.stderr
+
+
+def probe(path):
+    p = subprocess.run(["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+                        "stream=nb_read_frames,width,height,codec_name:format=duration", "-of", "json", path],
+                       capture_output=True, text=True, timeout=60)
+    if p.returncode != 0:
+        return None
+    info = json.loads(p.stdout)
+    stream = info["streams"][0]
+    return (int(stream["nb_read_frames"]), stream["width"], stream["height"], float(info["format"]["duration"]),
+            stream["codec_name"])
+
+
+def state_hash(stderr):
+    m = re.search(r"state hash ([0-9a-f]{16})", stderr)
+    return m.group(1) if m else None
+
+
+def fresh(name):
+    d = os.path.join(WORK, name)
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    return d
+
+
+def group_live():
+    d = fresh("live")
+    pub = "ipc://" + os.path.join(d, "pub.sock")
+    ctl = "ipc://" + os.path.join(d, "ctl.sock")
+    args = ["run", TANK, "-o", os.path.join(d, "out"), "--frames", os.path.join(d, "frames"),
+            "--movie", os.path.join(d, "movie.mp4"), "--publish", pub, "--control", ctl, "--paused"] + COMMON
+    proc = subprocess.Popen([SURGE] + args, stderr=subprocess.PIPE, text=True, env=ENV)
+    sub = surge_client.subscribe(pub, ["frame"], latest_only=False)
+    time.sleep(0.5)
+    surge_client.Control(ctl, 10).request({"cmd": "resume"})
+    frame = surge_client.receive(sub, 60000)
+    _, stderr = proc.communicate(timeout=180)
+    check("live: run with --frames and --movie finishes", proc.returncode == 0, stderr)
+    m = re.search(r"rendered (\d+) of (\d+) frames due", stderr)
+    drawn, due = (int(m.group(1)), int(m.group(2))) if m else (0, 0)
+    check("live: 11 frames due over 0.2 s at 0.02 s, all reported", due == 11 and 0 < drawn <= due, stderr[-500:])
+    frames = sorted(f for f in os.listdir(os.path.join(d, "frames")) if f.endswith(".png"))
+    heads = [open(os.path.join(d, "frames", f), "rb").read(8) for f in frames]
+    check("live: one PNG file per frame drawn", len(frames) == drawn and all(h == b"\x89PNG\r\n\x1a\n" for h in heads),
+          "%d files, %d drawn" % (len(frames), drawn))
+    info = probe(os.path.join(d, "movie.mp4"))
+    check("live: the movie has one frame per frame due, the frame size, and due/fps seconds",
+          info is not None and info[0] == due and info[1:3] == (640, 360) and abs(info[3] - due / 10) < 0.051,
+          "ffprobe: %s, %d due" % (info, due))
+    check("live: a rendered frame arrives on the stream's frame topic as a PNG",
+          frame is not None and frame[0] == "frame" and bytes(frame[2]["png"][:8]) == b"\x89PNG\r\n\x1a\n",
+          str(frame[1] if frame else None))
+    code, plain = run(["run", TANK, "-o", os.path.join(d, "plain")] + COMMON)
+    check("live: rendering does not change the solver's results (same state hash)",
+          code == 0 and state_hash(plain) and state_hash(plain) == state_hash(stderr),
+          "%s vs %s" % (state_hash(stderr), state_hash(plain)))
+
+
+def group_offline():
+    d = fresh("offline")
+    code, stderr = run(["run", TANK, "-o", os.path.join(d, "out")] + COMMON)
+    snapshots = [f for f in os.listdir(os.path.join(d, "out")) if f.startswith("snap_")]
+    code2, stderr2 = run(["render", os.path.join(d, "out"), "--movie", os.path.join(d, "movie.mp4"),
+                          "--frames", os.path.join(d, "frames"), "-s", "render.field=pressure", "-s",
+                          "render.view=fixed", "-s", "render.view_x0_m=0", "-s", "render.view_x1_m=0.2"])
+    frames = [f for f in os.listdir(os.path.join(d, "frames"))] if os.path.isdir(os.path.join(d, "frames")) else []
+    info = probe(os.path.join(d, "movie.mp4"))
+    check("offline: surge render makes one frame and one movie frame per snapshot",
+          code == 0 and code2 == 0 and len(snapshots) == 5 and len(frames) == 5 and info and info[0] == 5,
+          "%d snapshots, %d frames, ffprobe %s\n%s" % (len(snapshots), len(frames), info, stderr2))
+    code3, stderr3 = run(["render", os.path.join(d, "out")])
+    check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
+          code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
+
+
+def group_inputs():
+    d = fresh("inputs")
+    out = os.path.join(d, "out")
+    cases = [
+        (["run", TANK, "-o", out, "--frames", "/proc/surge_no_such_dir"], (2,), "/proc/surge_no_such_dir"),
+        (["run", TANK, "-o", out, "--movie", os.path.join(d, "missing", "m.mp4")], (2,), "m.mp4"),
+        (["run", TANK, "-o", out, "--frames"], (2,), "--frames needs a folder"),
+        (["run", TANK, "-o", out, "--frames", d, "-s", "render.width_px=100000"], (2,), "render.width_px"),
+        (["run", TANK, "-o", out, "--frames", d, "-s", "render.field=temperature"], (2,), "render.field"),
+        (["run", TANK, "-o", out, "--frames", d, "-s", "render.view_x1_m=-1"], (2,), "render.view_x1_m"),
+        (["run", TANK, "-o", out, "--frames", d, "--font", "/nonexistent.ttf"], (2,), "/nonexistent.ttf"),
+        (["render", os.path.join(d, "nothing_here")], (2,), "params.ini"),
+        (["render"], (2,), "render needs a RUN_DIR"),
+        (["render", d, "--publish", "5555"], (2,), "render takes only"),
+    ]
+    wrong = []
+    for args, codes, words in cases:
+        code, stderr = run(args[:2] + ["-s", "time.end_s=0.001"] + args[2:] if args[0] == "run" else args, timeout=60)
+        if code not in codes or words not in stderr:
+            wrong.append("%s -> exit %d: %s" % (" ".join(args), code, stderr.strip()[-300:]))
+    check("inputs: bad rendering options exit 2 with a message naming them (%d cases)" % len(cases), not wrong,
+          "\n".join(wrong))
+
+
+os.makedirs(WORK, exist_ok=True)
+{"live": group_live, "offline": group_offline, "inputs": group_inputs}[GROUP]()
+print("%d check(s) failed" % len(failures) if failures else "all checks passed")
+sys.exit(1 if failures else 0)
