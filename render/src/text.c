@@ -19,7 +19,7 @@ surge_text *surge_text_open(const char *font_path, int image_height_px, char *er
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
-    t->size_px = image_height_px / 40 < 9 ? 9 : image_height_px / 40;
+    t->size_px = image_height_px / 36 < 12 ? 12 : image_height_px / 36;
     if (FT_Init_FreeType(&t->library) != 0) {
         snprintf(err, err_len, "cannot start FreeType");
         free(t);
