@@ -11,14 +11,8 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "surge/platform.h"
 #include "surge/render.h"
-
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void block(surge_snapshot *s, int fluid_count, double dp)
 {
@@ -63,12 +57,12 @@ int main(int argc, char **argv)
         surge_params p = surge_default_params();
         p.numerics.dp_m = 0.001;
         surge_canvas_draw(canvas, &s, &p); /* warm-up */
-        double t0 = wall_clock_s();
+        double t0 = surge_wall_clock_s();
         for (int f = 0; f < frames; f++)
             surge_canvas_draw(canvas, &s, &p);
-        const double draw_s = (wall_clock_s() - t0) / frames;
+        const double draw_s = (surge_wall_clock_s() - t0) / frames;
         size_t bytes = 0;
-        t0 = wall_clock_s();
+        t0 = surge_wall_clock_s();
         for (int f = 0; f < frames; f++) {
             uint8_t *png;
             size_t len;
@@ -80,7 +74,7 @@ int main(int argc, char **argv)
             bytes = len;
             free(png);
         }
-        const double png_s = (wall_clock_s() - t0) / frames;
+        const double png_s = (surge_wall_clock_s() - t0) / frames;
         printf("%10d %16.1f %22.1f %14.0f\n", s.count, 1 / draw_s, 1 / png_s, bytes / 1e3);
         surge_snapshot_free(&s);
     }

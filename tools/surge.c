@@ -8,11 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
 
 #include <zmq.h>
 
+#include "surge/platform.h"
 #include "surge/control.h"
 #include "surge/journal.h"
 #include "surge/params.h"
@@ -511,13 +511,6 @@ static int command_run(int argc, char **argv)
     return EXIT_IO;
 }
 
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Draws one snapshot into the frames folder and/or the movie. */
 static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, const surge_params *p,
                            const char *frames_dir, size_t index, surge_movie *movie, char *err, size_t err_len)
@@ -580,8 +573,8 @@ static int command_render(int argc, char **argv)
         snprintf(frames_dir, sizeof frames_dir, "%s/frames", c.case_path);
         c.frames_dir = frames_dir;
     }
-    if (c.frames_dir && mkdir(c.frames_dir, 0777) != 0 && errno != EEXIST) {
-        fprintf(stderr, "surge: cannot create the frames folder '%s': %s\n", c.frames_dir, strerror(errno));
+    if (c.frames_dir && surge_make_folders(c.frames_dir, "the frames", err, sizeof err) != 0) {
+        fprintf(stderr, "surge: %s\n", err);
         surge_pvd_close(pvd);
         return EXIT_IO;
     }
@@ -596,7 +589,7 @@ static int command_render(int argc, char **argv)
     }
     surge_snapshot snap = {0};
     int rc = EXIT_OK;
-    const double start = wall_clock_s();
+    const double start = surge_wall_clock_s();
     const size_t count = surge_pvd_count(pvd);
     for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
         snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, i));
@@ -612,7 +605,7 @@ static int command_render(int argc, char **argv)
         fprintf(stderr, "surge: %s\n", err);
         rc = rc == EXIT_OK ? EXIT_IO : rc;
     }
-    const double elapsed = wall_clock_s() - start;
+    const double elapsed = surge_wall_clock_s() - start;
     if (rc == EXIT_OK)
         fprintf(stderr, "surge: rendered %zu snapshots of %s in %.1f s (%.1f frames/s)%s%s%s%s\n", count, c.case_path,
                 elapsed, elapsed > 0 ? count / elapsed : 0, c.frames_dir ? ": frames in " : "",

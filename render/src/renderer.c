@@ -1,5 +1,6 @@
 /* Rendering alongside the solver: a thread with its own canvas, fed by a mailbox (see surge/render.h). */
 #define _POSIX_C_SOURCE 200809L
+#include "surge/platform.h"
 #include "surge/render.h"
 
 #include <errno.h>
@@ -29,13 +30,6 @@ struct surge_renderer {
     char error[1024]; /* the first failure; later frames are not attempted */
 };
 
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 static int write_file(const char *path, const uint8_t *data, size_t len, char *err, size_t err_len)
 {
     char tmp[4300];
@@ -58,9 +52,9 @@ static int render_frame(surge_renderer *r, const surge_frame *f)
         for (uint64_t k = r->last_sequence + 1; k < f->sequence; k++, r->movie_frames++)
             if (surge_movie_add(r->movie, surge_canvas_pixels(r->canvas), err, err_len) != 0)
                 return -1;
-    const double t0 = wall_clock_s();
+    const double t0 = surge_wall_clock_s();
     const uint8_t *rgba = surge_canvas_draw(r->canvas, &f->snap, &f->params);
-    const double t1 = wall_clock_s();
+    const double t1 = surge_wall_clock_s();
     r->draw_s += t1 - t0;
     if (!rgba) {
         snprintf(err, err_len, "cannot draw the frame of step %lld", (long long)f->diag.step);
@@ -90,7 +84,7 @@ static int render_frame(surge_renderer *r, const surge_frame *f)
             return -1;
         r->movie_frames++;
     }
-    r->encode_s += wall_clock_s() - t1;
+    r->encode_s += surge_wall_clock_s() - t1;
     return 0;
 }
 
@@ -110,22 +104,11 @@ static void *renderer_main(void *arg)
     }
 }
 
+/* Creates the frames folder and checks that files can be written into it. */
 static int make_folder(const char *path, char *err, size_t err_len)
 {
-    char buf[4096];
-    snprintf(buf, sizeof buf, "%s", path);
-    for (char *p = buf + 1;; p++)
-        if (*p == '/' || *p == '\0') {
-            const char saved = *p;
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
-                snprintf(err, err_len, "cannot create the frames folder '%s': %s", buf, strerror(errno));
-                return -1;
-            }
-            *p = saved;
-            if (!saved)
-                break;
-        }
+    if (surge_make_folders(path, "the frames", err, err_len) != 0)
+        return -1;
     char probe[4200];
     snprintf(probe, sizeof probe, "%s/.surge_write_test", path);
     FILE *f = fopen(probe, "wb");

@@ -1,4 +1,5 @@
 #define _POSIX_C_SOURCE 200809L
+#include "surge/platform.h"
 #include "surge/run.h"
 
 #include <errno.h>
@@ -18,13 +19,6 @@ typedef struct run_outputs {
     int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
 } run_outputs;
 
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 surge_run_options surge_default_run_options(void)
 {
     surge_run_options o;
@@ -32,31 +26,6 @@ surge_run_options surge_default_run_options(void)
     o.output_dir = "out";
     o.threads = 1;
     return o;
-}
-
-static int make_dirs(const char *path, char *err, size_t err_len)
-{
-    char buf[4096];
-    snprintf(buf, sizeof buf, "%s", path);
-    for (char *p = buf + 1; ; p++) {
-        if (*p == '/' || *p == '\0') {
-            char saved = *p;
-            *p = '\0';
-            if (mkdir(buf, 0777) != 0 && errno != EEXIST) {
-                snprintf(err, err_len, "cannot create output folder '%s': %s", buf, strerror(errno));
-                return -1;
-            }
-            *p = saved;
-            if (saved == '\0')
-                break;
-        }
-    }
-    struct stat st;
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        snprintf(err, err_len, "output path '%s' is not a folder", path);
-        return -1;
-    }
-    return 0;
 }
 
 static void join(char *out, size_t len, const char *dir, const char *name) { snprintf(out, len, "%s/%s", dir, name); }
@@ -136,7 +105,7 @@ static double next_time(double t, double interval)
 static void print_progress(const surge_sim *sim, double start_wall, double held_s, int64_t start_step,
                            double start_time)
 {
-    const double elapsed = wall_clock_s() - start_wall - held_s, t = surge_sim_time(sim);
+    const double elapsed = surge_wall_clock_s() - start_wall - held_s, t = surge_sim_time(sim);
     const double end = surge_sim_params(sim)->time.end_s;
     const double steps = (double)(surge_sim_step_count(sim) - start_step);
     const double rate = elapsed > 0 ? steps / elapsed : 0;
@@ -151,10 +120,10 @@ static int call_boundary(const surge_run_options *opt, surge_sim *sim, double *h
 {
     if (!opt->at_step_boundary)
         return SURGE_CONTINUE;
-    const double from = wall_clock_s();
+    const double from = surge_wall_clock_s();
     const int requests = opt->at_step_boundary(sim, opt->user);
     if (requests & SURGE_REQUEST_AGAIN)
-        *held_s += wall_clock_s() - from;
+        *held_s += surge_wall_clock_s() - from;
     return requests;
 }
 
@@ -163,7 +132,7 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1};
     surge_run_result result = SURGE_RUN_IO_ERROR;
     char path[4096];
-    if (make_dirs(opt->output_dir, err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
+    if (surge_make_folders(opt->output_dir, "the output", err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
         return SURGE_RUN_IO_ERROR;
     join(path, sizeof path, o.dir, "run.pvd");
     /* a restart keeps the earlier run's entries up to and including its final snapshot (this state) */
@@ -188,7 +157,7 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     double next_snapshot = next_time(surge_sim_time(sim), p->output.snapshot_interval_s);
     double next_diag = next_time(surge_sim_time(sim), p->output.diagnostics_interval_s);
     double next_checkpoint = next_time(surge_sim_time(sim), p->output.checkpoint_interval_s);
-    const double start_wall = wall_clock_s(), start_time = surge_sim_time(sim);
+    const double start_wall = surge_wall_clock_s(), start_time = surge_sim_time(sim);
     const int64_t start_step = surge_sim_step_count(sim);
     double next_progress = start_wall + p->output.progress_interval_s;
     double held_s = 0;
@@ -236,9 +205,9 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
                 goto done;
             next_checkpoint = next_time(t, p->output.checkpoint_interval_s);
         }
-        if (p->output.progress_interval_s > 0 && wall_clock_s() >= next_progress) {
+        if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= next_progress) {
             print_progress(sim, start_wall, held_s, start_step, start_time);
-            next_progress = wall_clock_s() + p->output.progress_interval_s;
+            next_progress = surge_wall_clock_s() + p->output.progress_interval_s;
         }
         requests = call_boundary(opt, sim, &held_s);
     }

@@ -2,6 +2,7 @@
  * surge/control.h; commands and errors in docs/protocol.md). ROUTER rather than REP so that several clients
  * may be connected and a client that vanishes mid-request leaves nothing stuck: its reply is dropped. */
 #define _POSIX_C_SOURCE 200809L
+#include "surge/platform.h"
 #include "surge/control.h"
 
 #include <cjson/cJSON.h>
@@ -25,13 +26,6 @@ struct surge_control {
     double start_wall_s;
     int64_t start_step;
 };
-
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 surge_control_def surge_default_control_def(void)
 {
@@ -254,7 +248,7 @@ static cJSON *command_step(surge_control *c, const cJSON *request, surge_sim *si
 static cJSON *command_status(const surge_control *c, const surge_sim *sim)
 {
     cJSON *r = ok_reply("status", sim);
-    const double elapsed = wall_clock_s() - c->start_wall_s;
+    const double elapsed = surge_wall_clock_s() - c->start_wall_s;
     cJSON_AddNumberToObject(r, "dt_s", surge_sim_last_dt(sim));
     cJSON_AddNumberToObject(r, "end_s", surge_sim_params(sim)->time.end_s);
     cJSON_AddBoolToObject(r, "paused", c->paused);
@@ -420,7 +414,7 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
 int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_t *stop_signal)
 {
     if (c->start_wall_s < 0) {
-        c->start_wall_s = wall_clock_s();
+        c->start_wall_s = surge_wall_clock_s();
         c->start_step = surge_sim_step_count(sim);
     }
     if (c->pause_at_step >= 0 && surge_sim_step_count(sim) >= c->pause_at_step) {

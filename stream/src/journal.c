@@ -26,7 +26,7 @@ surge_journal *surge_journal_open(const char *path, int append, char *err, size_
         return NULL;
     }
     j->append = append;
-    if (!append && remove(path) != 0 && errno != ENOENT) {
+    if (!append && remove(path) != 0 && errno != ENOENT && errno != ENOTDIR) {
         snprintf(err, err_len, "cannot remove the old journal '%s': %s", path, strerror(errno));
         free(j->path);
         free(j);

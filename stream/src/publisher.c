@@ -3,6 +3,7 @@
  * nothing is copied out of the solver while nobody listens, and a subscriber may ask for a subset of the
  * particle fields by subscribing to "state/name,name,...". */
 #define _POSIX_C_SOURCE 200809L
+#include "surge/platform.h"
 #include "surge/publisher.h"
 
 #include <cjson/cJSON.h>
@@ -91,13 +92,6 @@ struct surge_publisher {
     uint64_t messages_sent, bytes_sent;
     png_slot frame;
 };
-
-static double wall_clock_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 surge_publisher_def surge_default_publisher_def(void)
 {
@@ -420,7 +414,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         free(p);
         return NULL;
     }
-    p->start_wall_s = wall_clock_s();
+    p->start_wall_s = surge_wall_clock_s();
     p->last_wall_s = -INFINITY;
     return p;
 }
@@ -432,7 +426,7 @@ void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
     const int64_t step = surge_sim_step_count(sim);
     if (p->last_step >= 0 && step - p->last_step < p->def.every_steps)
         return;
-    const double now = wall_clock_s();
+    const double now = surge_wall_clock_s();
     if (p->def.max_rate_hz > 0 && now - p->last_wall_s < 1.0 / p->def.max_rate_hz)
         return;
     if (surge_mailbox_post(p->mailbox, sim, now - p->start_wall_s, 0) == 0) {
@@ -444,7 +438,7 @@ void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
 void surge_publisher_finish(surge_publisher *p, const surge_sim *sim, surge_publisher_report *report)
 {
     if (atomic_load(&p->wanted))
-        surge_mailbox_post(p->mailbox, sim, wall_clock_s() - p->start_wall_s, 1);
+        surge_mailbox_post(p->mailbox, sim, surge_wall_clock_s() - p->start_wall_s, 1);
     atomic_store(&p->finishing, 1);
     surge_mailbox_close(p->mailbox);
     pthread_join(p->thread, NULL);
