@@ -4,9 +4,11 @@
 usage: test_freydier_coarse.py SURGE SOURCE_DIR WORK_DIR
 
 dp = 2 mm (9 particles in h_n = 18.8 mm, half the paper's minimum of 15), C_h = 1.3, started from the lubrication
-front and run for 8 s; metrics over the last 3 s (tools/freydier_metrics.py). At this resolution the front is
-not converged (docs/validation/freydier.md gives the measured errors): the bounds catch a broken belt, wall,
-body force or viscosity (a front that runs away or collapses), not the paper's targets.
+front and run for 8 s; metrics over the last 3 s (tools/freydier_metrics.py). The front is not steady by 8 s,
+so the toe speed has a coarse bound (it catches a front that runs away or collapses: a broken belt, wall, body
+force or viscosity). The uniform depth is held to the paper's converged target, 5 %: measured 0.8 % with the
+renormalised continuity equation (2026-11-22), 11.9 % without it, where the particles drift apart from their
+densities (docs/validation/freydier.md); this bound catches that drift coming back.
 """
 import os
 import subprocess
@@ -16,7 +18,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "tools"))
 import freydier_metrics  # noqa: E402
 
-BOUNDS = {"zeta_h": 0.25, "zeta_f": 0.15}
+BOUNDS = {"zeta_h": 0.05, "zeta_f": 0.15}
 
 
 def main():

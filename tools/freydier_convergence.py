@@ -4,7 +4,8 @@ its own folder, resumable from checkpoints, and appends one row per finished run
 error against wall time (one point per run).
 
   tools/freydier_convergence.py run [--cases id1,id2] [--dp 0.001,0.0005] [--ch 1,1.3,1.5,1.8,2.2]
-        [--shifting lind] [--shape block] [--end-s 40] [--threads 2] [--budget-s SECONDS]
+        [--shifting lind] [--shape block] [--continuity renormalised|plain] [--end-s 40] [--threads 2]
+        [--budget-s SECONDS]
         [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
   tools/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
 
@@ -25,7 +26,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import study  # noqa: E402
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status"]
+           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity"]
 METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
 
 
@@ -33,8 +34,14 @@ def fail(message):
     study.fail("freydier_convergence", message)
 
 
-def run_name(case, dp, ch, shifting, shape):
-    return "%s_dp%g_ch%g_%s_%s" % (case, dp, ch, shifting, shape)
+def run_name(case, dp, ch, shifting, shape, continuity):
+    """Runs with the plain continuity equation keep the names they had before the choice existed."""
+    return "%s_dp%g_ch%g_%s_%s%s" % (case, dp, ch, shifting, shape, "" if continuity == "plain" else "_" + continuity)
+
+
+def continuity_of(row):
+    """Rows written before the continuity column existed used the plain form."""
+    return row.get("continuity") or "plain"
 
 
 def read_progress(folder):
@@ -54,8 +61,8 @@ def finished_rows(csv_path):
     if not os.path.isfile(csv_path):
         return set()
     with open(csv_path) as f:
-        return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"))
-                for r in csv.DictReader(f)}
+        return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
+                 continuity_of(r)) for r in csv.DictReader(f)}
 
 
 def particle_steps(folder):
@@ -72,7 +79,7 @@ def particle_steps(folder):
 
 
 def run_one(args, case, dp, ch, deadline):
-    name = run_name(case, dp, ch, args.shifting, args.shape)
+    name = run_name(case, dp, ch, args.shifting, args.shape, args.continuity)
     folder = os.path.join(args.runs_dir, name)
     os.makedirs(folder, exist_ok=True)
     progress = read_progress(folder)
@@ -85,6 +92,7 @@ def run_one(args, case, dp, ch, deadline):
         argv = [args.surge, "run", os.path.join(ROOT, "cases", "freydier_%s.ini" % case),
                 "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
                 "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
+                "-s", "numerics.continuity_correction=%s" % ("true" if args.continuity == "renormalised" else "false"),
                 "-o", folder] + common
     print("freydier_convergence: %s: %s" % (name, " ".join(argv)), flush=True)
     progress["status"] = "running"
@@ -109,6 +117,7 @@ def run_one(args, case, dp, ch, deadline):
         return False
     steps, sim_time = particle_steps(folder)
     row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
+           "continuity": args.continuity,
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
            "sim_time_s": "%.3f" % sim_time}
     if rc == 0:
@@ -139,7 +148,7 @@ def command_run(args):
             fail("--cases: unknown case '%s' (id1, id2)" % case)
         for dp in study.positive_numbers("freydier_convergence", args.dp, "dp"):
             for ch in study.positive_numbers("freydier_convergence", args.ch, "ch"):
-                if (case, dp, ch, args.shifting, args.shape) in done:
+                if (case, dp, ch, args.shifting, args.shape, args.continuity) in done:
                     continue
                 if deadline and time.time() > deadline:
                     print("freydier_convergence: budget spent; run again to continue", flush=True)
@@ -166,22 +175,30 @@ def command_chart(args):
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), sharex=True)
     for ax, metric in zip(axes.flat, METRICS):
         for case, marker in (("id1", "o"), ("id2", "s")):
-            for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
-                sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp]
-                xs = [float(r["wall_s"]) for r in sel]
-                ys = [float(r[metric]) for r in sel]
-                ax.scatter(xs, ys, marker=marker, label="%s dp=%g mm" % (case.upper(), dp * 1e3))
-                for r, x, y in zip(sel, xs, ys):
-                    ax.annotate("C_h %s" % r["ch"], (x, y), fontsize=7, xytext=(3, 3), textcoords="offset points")
+            for continuity in ("plain", "renormalised"):
+                for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
+                    sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp
+                           and continuity_of(r) == continuity]
+                    if not sel:
+                        continue
+                    xs = [float(r["wall_s"]) for r in sel]
+                    ys = [float(r[metric]) for r in sel]
+                    ax.scatter(xs, ys, marker=marker, facecolors="none" if continuity == "plain" else None,
+                               edgecolors="C%d" % (int(round(dp * 1e4)) % 10),
+                               color=None if continuity == "plain" else "C%d" % (int(round(dp * 1e4)) % 10),
+                               label="%s dp=%g mm, %s continuity" % (case.upper(), dp * 1e3, continuity))
+                    for r, x, y in zip(sel, xs, ys):
+                        ax.annotate("C_h %s, %s thr" % (r["ch"], r["threads"]), (x, y), fontsize=6, xytext=(3, 3),
+                                    textcoords="offset points")
         ax.axhline(targets[metric], color="grey", ls="--", lw=1)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.xaxis.set_minor_formatter(NullFormatter())
         ax.set_title("%s (target %g, dashed)" % (metric, targets[metric]))
-        ax.set_xlabel("wall time (s, %s threads)" % rows[0]["threads"])
+        ax.set_xlabel("wall time (s)")
         ax.set_ylabel("error (fraction)")
     axes.flat[0].legend(fontsize=8)
-    fig.suptitle("Freydier surges: accuracy against cost, one point per run")
+    fig.suptitle("Freydier surges: accuracy against cost, one point per run (hollow: plain continuity)")
     fig.tight_layout()
     fig.savefig(args.png, dpi=110)
     print("freydier_convergence: wrote %s from %d runs" % (args.png, len(rows)))
@@ -197,6 +214,8 @@ def main():
     run.add_argument("--ch", default="1,1.3,1.5,1.8,2.2")
     run.add_argument("--shifting", default="lind", choices=["none", "velocity", "lind"])
     run.add_argument("--shape", default="block", choices=["block", "lubrication"])
+    run.add_argument("--continuity", default="renormalised", choices=["renormalised", "plain"],
+                     help="numerics.continuity_correction true (renormalised, the default) or false (plain)")
     run.add_argument("--end-s", type=float, default=40.0)
     run.add_argument("--threads", type=int, default=2)
     run.add_argument("--budget-s", type=float, default=0.0)

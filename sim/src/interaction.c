@@ -39,6 +39,7 @@ void interaction_compute(surge_sim *sim, int corrector)
         const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a], inv_rhoa = inv_rho[a];
         real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_rate = 0;
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
+        real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
         int near_surface = surface[a];
         const int cx = grid_cell_x(g, xa), cy = grid_cell_y(g, ya);
         cell_span spans[2];
@@ -64,6 +65,9 @@ void interaction_compute(surge_sim *sim, int corrector)
                     acc_x += pressure_term * f * dx + viscous_term * dvx;
                     acc_y += pressure_term * f * dy + viscous_term * dvy;
                     div_v += vol * f * (dvx * dx + dvy * dy);                                      /* eq. 6 */
+                    const real vf = vol * f;
+                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                    g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
                     diffusion -= (rho[b] - rhoa - rho_h_per_m * dy) * f * vol;                    /* Fourtakas */
                     const real rate = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
                     visc_rate = rate > visc_rate ? rate : visc_rate;
@@ -88,6 +92,9 @@ void interaction_compute(surge_sim *sim, int corrector)
                     acc_x += pressure_term * f * dx + viscous_term * nsx;
                     acc_y += pressure_term * f * dy + viscous_term * nsy;
                     div_v += vol * f * ((vxa - vx[b]) * dx + (vya - vy[b]) * dy);
+                    const real vf = vol * f, wdx = vxa - vx[b], wdy = vya - vy[b];
+                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                    g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
                     const real rate = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
                     visc_rate = rate > visc_rate ? rate : visc_rate;
                     grad_c_x += vol * f * dx;
@@ -98,6 +105,12 @@ void interaction_compute(surge_sim *sim, int corrector)
         }
         sim->ax[a] = acc_x + gx;
         sim->ay[a] = acc_y + gy;
+        const real det = m_xx * m_yy - m_xy * m_xy;
+        if (sim->params.numerics.continuity_correction && det > (real)0.25) {
+            /* div v = tr(G M^-1): exact for linear velocity fields even with a truncated kernel */
+            const real inv = (real)1 / det;
+            div_v = -inv * (g_xx * m_yy - g_xy * m_xy - g_yx * m_xy + g_yy * m_xx);
+        }
         sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
         sim->visc_rate[a] = visc_rate;
         sim->div_r[a] = div_r;

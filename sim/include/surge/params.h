@@ -73,6 +73,7 @@ typedef struct surge_params {
         double c0_mps;            /* 0: derived from the scene's scales */
         double c0_factor;         /* c0 = c0_factor * largest expected speed when derived */
         double density_diffusion; /* Fourtakas delta */
+        bool continuity_correction; /* velocity divergence renormalised by the kernel moment matrix */
         bool viscous_dt_limit;
         double dt_fixed_s;        /* 0: variable time step */
     } numerics;
