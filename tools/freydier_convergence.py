@@ -98,7 +98,7 @@ def run_one(args, case, dp, ch, deadline):
     progress["status"] = "running"
     write_progress(folder, progress)
     start = time.time()
-    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL)
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, env=study.solver_environment())
     try:
         while proc.poll() is None:
             if deadline and time.time() > deadline:

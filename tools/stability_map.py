@@ -85,7 +85,7 @@ def run_cell(args, shifting, ch, cfl, c0f):
             "-s", "time.end_s=%g" % args.end_s, "-s", "output.snapshot_interval_s=0.5",
             "-s", "output.progress_interval_s=0", "--threads", str(args.threads), "-o", folder]
     start = time.time()
-    r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True)
+    r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, env=study.solver_environment())
     wall = time.time() - start
     message = ""
     if r.returncode == 0:

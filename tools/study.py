@@ -31,3 +31,11 @@ def append_row(csv_path, columns, row):
         if new:
             writer.writeheader()
         writer.writerow(row)
+
+
+def solver_environment():
+    """The environment for surge runs: idle OpenMP threads sleep instead of spinning (OMP_WAIT_POLICY=PASSIVE,
+    unless set), so a run sharing its cores with other work does not slow down several-fold."""
+    env = dict(os.environ)
+    env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    return env
