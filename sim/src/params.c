@@ -85,7 +85,7 @@ static const surge_param_info registry[] = {
     {"numerics", "density_diffusion", SURGE_PARAM_REAL, "-", 0.1, 0, 1, false, NULL,
      "Fourtakas density-diffusion coefficient delta (0: off); fluid-fluid pairs only.",
      OFF(numerics.density_diffusion)},
-    {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
+    {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",
      OFF(numerics.continuity_correction)},
