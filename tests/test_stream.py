@@ -222,11 +222,16 @@ def group_control():
     rc = run.wait()
     check("control: run finishes", rc == 0 and finished, run.describe())
     stats = [h for t, h, a in ([first] if first else []) + messages if t == "stats"]
+    # the state of step S may have gone out before the change (applied after step S, while paused there); the
+    # change is then published at once, so the last message of step S and every later one show it
+    at_set = [h for h in stats if h["step"] == set_step]
     wrong = [(h["step"], h["live"]["fluid.viscosity_m2ps"]) for h in stats
-             if h["live"]["fluid.viscosity_m2ps"] != (new if h["step"] >= set_step else old)]
-    check("control: stats show the new viscosity from the journaled step on, the old one before",
-          not wrong and any(h["step"] < set_step for h in stats) and any(h["step"] >= set_step for h in stats),
-          "set at step %s; wrong: %s" % (set_step, wrong[:10]))
+             if h["step"] != set_step and h["live"]["fluid.viscosity_m2ps"] != (new if h["step"] > set_step else old)]
+    check("control: stats show the new viscosity from the journaled step on (its last message there), the old "
+          "one before", not wrong and at_set and at_set[-1]["live"]["fluid.viscosity_m2ps"] == new
+          and any(h["step"] < set_step for h in stats) and any(h["step"] > set_step for h in stats),
+          "set at step %s; wrong: %s; at that step: %s" % (set_step, wrong[:10],
+                                                          [h["live"]["fluid.viscosity_m2ps"] for h in at_set]))
     journal_path = os.path.join(run.out, "control.jsonl")
     journal = [json.loads(line) for line in open(journal_path)] if os.path.exists(journal_path) else []
     sets = [e for e in journal if e["cmd"] == "set"]

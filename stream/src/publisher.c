@@ -86,6 +86,7 @@ struct surge_publisher {
     /* solver thread */
     double start_wall_s, last_wall_s;
     int64_t last_step;
+    surge_params last_params; /* as posted last: a change of a live parameter is posted at once */
     /* publisher thread */
     char subscriptions[MAX_SUBSCRIPTIONS][MAX_SUBSCRIPTION_BYTES + 1];
     int subscription_count;
@@ -419,19 +420,33 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     return p;
 }
 
+/* Whether a live parameter differs from the last state posted. */
+static int live_parameters_changed(const surge_params *a, const surge_params *b)
+{
+    for (int i = 0; i < surge_param_count(); i++) {
+        const surge_param_info *info = surge_param_at(i);
+        if (info->live && surge_param_get_number(a, info) != surge_param_get_number(b, info))
+            return 1;
+    }
+    return 0;
+}
+
 void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
 {
     if (!atomic_load(&p->wanted))
         return;
     const int64_t step = surge_sim_step_count(sim);
-    if (p->last_step >= 0 && step - p->last_step < p->def.every_steps)
-        return;
     const double now = surge_wall_clock_s();
-    if (p->def.max_rate_hz > 0 && now - p->last_wall_s < 1.0 / p->def.max_rate_hz)
+    /* a parameter changed at this step boundary goes out at once, so that stats show it from its step on */
+    const int changed = p->last_step >= 0 && live_parameters_changed(&p->last_params, surge_sim_params(sim));
+    if (!changed && p->last_step >= 0 && step - p->last_step < p->def.every_steps)
+        return;
+    if (!changed && p->def.max_rate_hz > 0 && now - p->last_wall_s < 1.0 / p->def.max_rate_hz)
         return;
     if (surge_mailbox_post(p->mailbox, sim, now - p->start_wall_s, 0) == 0) {
         p->last_step = step;
         p->last_wall_s = now;
+        p->last_params = *surge_sim_params(sim);
     }
 }
 
