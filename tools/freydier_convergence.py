@@ -164,10 +164,7 @@ def command_chart(args):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
-    if not os.path.isfile(args.csv):
-        fail("%s: no such file" % args.csv)
-    with open(args.csv) as f:
-        rows = [r for r in csv.DictReader(f) if r["status"] == "ok"]
+    rows = [r for r in study.read_rows("freydier_convergence", args.csv) if r["status"] == "ok"]
     if not rows:
         fail("%s: no finished runs to chart" % args.csv)
     targets = {"zeta_f": 0.01, "zeta_h": 0.05, "zeta_fs": 0.10, "zeta_u_076": 0.05, "zeta_u_150": 0.05,

@@ -132,12 +132,7 @@ def command_chart(args):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    if not os.path.isfile(args.csv):
-        fail("%s: no such file" % args.csv)
-    with open(args.csv) as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        fail("%s: empty" % args.csv)
+    rows = study.read_rows("stability_map", args.csv)
     forms = ["none", "velocity", "lind"]
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
     for ax, form in zip(axes, forms):

@@ -39,3 +39,14 @@ def solver_environment():
     env = dict(os.environ)
     env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     return env
+
+
+def read_rows(tool, csv_path):
+    """The rows of a study's CSV table; fails with a message naming the file when it is missing or empty."""
+    if not os.path.isfile(csv_path):
+        fail(tool, "%s: no such file" % csv_path)
+    with open(csv_path) as f:
+        rows = list(csv.DictReader(f))
+    if not rows:
+        fail(tool, "%s: no rows" % csv_path)
+    return rows
