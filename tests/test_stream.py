@@ -191,7 +191,9 @@ def group_state():
 
 # ---------------------------------------------------------------------------------------------------------------
 def group_control():
-    run = Surge("control", ["-s", "time.end_s=0.15", "--publish-hz", "0"], paused=True)
+    # every message kept (the default queue drops under load, which group stalled covers): this group checks
+    # that each published stats message carries the value in force at its step
+    run = Surge("control", ["-s", "time.end_s=0.15", "--publish-hz", "0", "--publish-hwm", "1000000"], paused=True)
     ctx = zmq.Context.instance()
     sub = surge_client.subscribe(run.pub, ["stats"], ctx, latest_only=False)
     sub.setsockopt(zmq.RCVHWM, 100000)

@@ -7,6 +7,7 @@
 #include "surge/publisher.h"
 
 #include <cjson/cJSON.h>
+#include <errno.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -24,6 +25,11 @@
 
 enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256 };
 enum { WANT_STATE = 1, WANT_BODIES = 2, WANT_STATS = 4 };
+
+/* The final frame is not dropped at a full queue: the publisher waits up to this long for room, so a
+   subscriber that keeps reading gets the run's last state and its "final" stats; a stalled one delays the
+   end of the run by at most this. */
+static const double FINAL_DELIVERY_WAIT_S = 2.0;
 
 /* The newest rendered frame, handed over by the renderer thread. */
 typedef struct png_slot {
@@ -91,6 +97,7 @@ struct surge_publisher {
     char subscriptions[MAX_SUBSCRIPTIONS][MAX_SUBSCRIPTION_BYTES + 1];
     int subscription_count;
     uint64_t messages_sent, bytes_sent;
+    double deliver_until_s; /* > 0 while sending the final frame: wait for queue room until this wall time */
     png_slot frame;
 };
 
@@ -153,25 +160,37 @@ static void read_subscriptions(surge_publisher *p)
     update_wanted(p);
 }
 
-static void send_part(surge_publisher *p, const void *data, size_t bytes, int more)
+/* One frame of a message; 0 when it could not be queued (only while delivering the final frame: a normal
+   send to a full queue is dropped by ZeroMQ and counts as sent). */
+static int send_part(surge_publisher *p, const void *data, size_t bytes, int more)
 {
-    if (zmq_send(p->socket, data, bytes, more ? ZMQ_SNDMORE : 0) >= 0)
-        p->bytes_sent += bytes;
+    const int flags = (more ? ZMQ_SNDMORE : 0) | (p->deliver_until_s > 0 ? ZMQ_DONTWAIT : 0);
+    for (;;) {
+        if (zmq_send(p->socket, data, bytes, flags) >= 0) {
+            p->bytes_sent += bytes;
+            return 1;
+        }
+        if (zmq_errno() != EAGAIN || surge_wall_clock_s() > p->deliver_until_s)
+            return 0;
+        nanosleep(&(struct timespec){.tv_nsec = 1000000}, NULL);
+    }
 }
 
-/* Topic frame, JSON header frame, then one frame per field. */
+/* Topic frame, JSON header frame, then one frame per field. ZeroMQ takes the rest of a message once its
+   first frame is queued, so only the first frame can fail. */
 static void send_message(surge_publisher *p, const char *topic, cJSON *header, const void *const *arrays,
                          const size_t *array_bytes, int array_count)
 {
     char *text = cJSON_PrintUnformatted(header);
     if (!text)
         return;
-    send_part(p, topic, strlen(topic), 1);
-    send_part(p, text, strlen(text), array_count > 0);
-    for (int i = 0; i < array_count; i++)
-        send_part(p, arrays[i], array_bytes[i], i + 1 < array_count);
+    if (send_part(p, topic, strlen(topic), 1)) {
+        send_part(p, text, strlen(text), array_count > 0);
+        for (int i = 0; i < array_count; i++)
+            send_part(p, arrays[i], array_bytes[i], i + 1 < array_count);
+        p->messages_sent++;
+    }
     free(text);
-    p->messages_sent++;
 }
 
 static cJSON *common_header(const char *topic, const surge_frame *f)
@@ -297,6 +316,11 @@ static void send_stats(surge_publisher *p, const surge_frame *f, uint64_t supers
 
 static void publish_frame(surge_publisher *p, const surge_frame *f)
 {
+    if (f->final) {
+        const int no_drop = 1;
+        zmq_setsockopt(p->socket, ZMQ_XPUB_NODROP, &no_drop, sizeof no_drop);
+        p->deliver_until_s = surge_wall_clock_s() + FINAL_DELIVERY_WAIT_S;
+    }
     if (subscribed_to(p, "state")) {
         int all[STATE_FIELD_COUNT];
         for (int i = 0; i < STATE_FIELD_COUNT; i++)
