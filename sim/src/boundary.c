@@ -5,7 +5,8 @@
 
 #include "sim_internal.h"
 
-/* Smooth start of moving walls: v(t) = v_target (1 - cos(pi t / T)) / 2 for t < T. */
+/* Smooth start of moving walls: v(t) = v_target (1 - cos(pi t / T)) / 2 for t < T. Sets the velocity of every
+ * wall particle but the boulders' (theirs follows their disc). */
 void boundary_wall_speeds(surge_sim *sim, double time_s)
 {
     const surge_params *p = &sim->params;
@@ -15,6 +16,13 @@ void boundary_wall_speeds(surge_sim *sim, double time_s)
     sim->wall_speed[WALL_FIXED] = 0.0;
     sim->wall_speed[WALL_BOTTOM] = ramp * p->walls.bottom_speed_mps;
     sim->wall_speed[WALL_TOP] = ramp * p->walls.top_speed_mps;
+    sim->wall_speed[WALL_BOULDER] = 0.0;
+    for (int b = 0; b < sim->wall_count; b++) {
+        if (sim->wall_of[b] != WALL_BOULDER) {
+            sim->vx[b] = (real)sim->wall_speed[sim->wall_of[b]];
+            sim->vy[b] = 0;
+        }
+    }
 }
 
 /* Below this determinant of the correction matrix the first-order interpolation is ill-conditioned and the
@@ -37,41 +45,34 @@ void boundary_update(surge_sim *sim)
         double a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
         double rhs_rho[3] = {0, 0, 0}, rhs_vx[3] = {0, 0, 0}, rhs_vy[3] = {0, 0, 0};
         const double xg_wrapped = g->period_m > 0 ? xg - g->period_m * floor(xg / g->period_m) : xg;
-        const int cx = grid_cell_x(g, xg_wrapped), cy = grid_cell_y(g, yg);
-        cell_span spans[2];
-        const int nspans = grid_row_spans(g, cx, spans);
-        for (int row = cy - 1; row <= cy + 1; row++) {
-            if (row < 0 || row >= g->ncy)
-                continue;
-            for (int s = 0; s < nspans; s++) {
-                const int begin = g->fluid_start[row * g->ncx + spans[s].first_cell];
-                const int end = g->fluid_start[row * g->ncx + spans[s].last_cell + 1];
-                for (int j = begin; j < end; j++) {
-                    const double dx = xg_wrapped - (x[j] + spans[s].shift_x), dy = yg - y[j];
-                    const double r2 = dx * dx + dy * dy;
-                    if (r2 >= k->support2)
-                        continue;
-                    const double r = sqrt(r2);
-                    const double w = kernel2d_w(k, (real)r);
-                    const double f = kernel2d_grad_factor(k, (real)r);
-                    const double vol = mass / rho[j];
-                    const double wx = f * dx, wy = f * dy; /* gradient at the ghost node */
-                    const double rx = -dx, ry = -dy;       /* r_j - r_ghost */
-                    a00 += w * vol;  a01 += rx * w * vol;  a02 += ry * w * vol;
-                    a10 += wx * vol; a11 += rx * wx * vol; a12 += ry * wx * vol;
-                    a20 += wy * vol; a21 += rx * wy * vol; a22 += ry * wy * vol;
-                    const double fields[3] = {rho[j], vx[j], vy[j]};
-                    double *rhs[3] = {rhs_rho, rhs_vx, rhs_vy};
-                    for (int q = 0; q < 3; q++) {
-                        rhs[q][0] += fields[q] * w * vol;
-                        rhs[q][1] += fields[q] * wx * vol;
-                        rhs[q][2] += fields[q] * wy * vol;
-                    }
+        neighbour_ranges nr;
+        grid_neighbour_ranges(g, g->fluid_start, xg_wrapped, yg, &nr);
+        for (int s = 0; s < nr.count; s++) {
+            for (int j = nr.begin[s]; j < nr.end[s]; j++) {
+                const double dx = xg_wrapped - (x[j] + nr.shift_x[s]), dy = yg - y[j];
+                const double r2 = dx * dx + dy * dy;
+                if (r2 >= k->support2)
+                    continue;
+                const double r = sqrt(r2);
+                const double w = kernel2d_w(k, (real)r);
+                const double f = kernel2d_grad_factor(k, (real)r);
+                const double vol = mass / rho[j];
+                const double wx = f * dx, wy = f * dy; /* gradient at the ghost node */
+                const double rx = -dx, ry = -dy;       /* r_j - r_ghost */
+                a00 += w * vol;  a01 += rx * w * vol;  a02 += ry * w * vol;
+                a10 += wx * vol; a11 += rx * wx * vol; a12 += ry * wx * vol;
+                a20 += wy * vol; a21 += rx * wy * vol; a22 += ry * wy * vol;
+                const double fields[3] = {rho[j], vx[j], vy[j]};
+                double *rhs[3] = {rhs_rho, rhs_vx, rhs_vy};
+                for (int q = 0; q < 3; q++) {
+                    rhs[q][0] += fields[q] * w * vol;
+                    rhs[q][1] += fields[q] * wx * vol;
+                    rhs[q][2] += fields[q] * wy * vol;
                 }
             }
         }
-        const double wall_v = sim->wall_speed[sim->wall_of[b]];
-        double rho_b = rho0, vgx = wall_v, vgy = 0;
+        const double wall_vx = vx[b], wall_vy = vy[b];
+        double rho_b = rho0, vgx = wall_vx, vgy = wall_vy;
         const double det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) +
                            a02 * (a10 * a21 - a11 * a20);
         if (fabs(det) >= MIN_DETERMINANT) {
@@ -97,9 +98,7 @@ void boundary_update(surge_sim *sim)
         }
         /* walls never pull fluid: no density below rho0 (no tensile wall pressure) */
         sim->rho[b] = (real)fmax(rho_b, rho0);
-        sim->wall_vx[b] = (real)(2.0 * wall_v - vgx);
-        sim->wall_vy[b] = (real)(-vgy);
-        sim->vx[b] = (real)wall_v;
-        sim->vy[b] = 0;
+        sim->wall_vx[b] = (real)(2.0 * wall_vx - vgx);
+        sim->wall_vy[b] = (real)(2.0 * wall_vy - vgy);
     }
 }

@@ -3,7 +3,11 @@
  *
  * Layout: "SURGECK1" | u32 version | u32 sizeof(real) | u64 params length | params text |
  *         i64 step | f64 time_s | f64 dt_s | f64 first_dt_s | i32 count | i32 wall_count |
- *         fluid x[f64] y[f64] vx[real] vy[real] rho[real] id[i32] | u64 state hash */
+ *         fluid x[f64] y[f64] vx[real] vy[real] rho[real] id[i32] |
+ *         (version 2, when the scene has boulders) boulders x y angle vx vy omega [f64 each] |
+ *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
+ *         u64 state hash
+ * Version 1 (no boulder block) is still read for scenes without boulders. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <stdlib.h>
@@ -12,10 +16,56 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 1u
+#define CHECKPOINT_VERSION 2u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len, f) == len ? 0 : -1; }
+
+static int write_boulders(FILE *f, const boulder_set *b)
+{
+    const size_t n = (size_t)b->count * sizeof(double);
+    if (b->count == 0)
+        return 0;
+    const int32_t contacts = contact_solver_cache_count(b->contacts);
+    int64_t *keys = malloc((size_t)(contacts + 1) * sizeof *keys);
+    double *lambda_n = malloc((size_t)(contacts + 1) * sizeof *lambda_n);
+    double *lambda_t = malloc((size_t)(contacts + 1) * sizeof *lambda_t);
+    int rc = -1;
+    if (keys && lambda_n && lambda_t) {
+        contact_solver_cache_get(b->contacts, keys, lambda_n, lambda_t);
+        rc = write_all(f, b->x, n) | write_all(f, b->y, n) | write_all(f, b->angle, n) | write_all(f, b->vx, n) |
+             write_all(f, b->vy, n) | write_all(f, b->omega, n) | write_all(f, &contacts, 4) |
+             write_all(f, keys, (size_t)contacts * 8) | write_all(f, lambda_n, (size_t)contacts * 8) |
+             write_all(f, lambda_t, (size_t)contacts * 8);
+    }
+    free(keys);
+    free(lambda_n);
+    free(lambda_t);
+    return rc;
+}
+
+static int read_boulders(FILE *f, boulder_set *b)
+{
+    const size_t n = (size_t)b->count * sizeof(double);
+    if (b->count == 0)
+        return 0;
+    int32_t contacts = 0;
+    if (read_all(f, b->x, n) || read_all(f, b->y, n) || read_all(f, b->angle, n) || read_all(f, b->vx, n) ||
+        read_all(f, b->vy, n) || read_all(f, b->omega, n) || read_all(f, &contacts, 4) || contacts < 0 ||
+        contacts > 64 * b->count + 1024)
+        return -1;
+    int64_t *keys = malloc((size_t)(contacts + 1) * sizeof *keys);
+    double *lambda_n = malloc((size_t)(contacts + 1) * sizeof *lambda_n);
+    double *lambda_t = malloc((size_t)(contacts + 1) * sizeof *lambda_t);
+    int rc = -1;
+    if (keys && lambda_n && lambda_t && !read_all(f, keys, (size_t)contacts * 8) &&
+        !read_all(f, lambda_n, (size_t)contacts * 8) && !read_all(f, lambda_t, (size_t)contacts * 8))
+        rc = contact_solver_cache_set(b->contacts, contacts, keys, lambda_n, lambda_t);
+    free(keys);
+    free(lambda_n);
+    free(lambda_t);
+    return rc;
+}
 
 int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err, size_t err_len)
 {
@@ -48,7 +98,7 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->x + w, nf * sizeof(double)) | write_all(f, sim->y + w, nf * sizeof(double)) |
              write_all(f, sim->vx + w, nf * sizeof(real)) | write_all(f, sim->vy + w, nf * sizeof(real)) |
              write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
-             write_all(f, &hash, 8);
+             write_boulders(f, &sim->boulders) | write_all(f, &hash, 8);
     free(params_text);
     if (fclose(f) != 0 || rc != 0 || rename(tmp, path) != 0) {
         snprintf(err, err_len, "cannot write checkpoint '%s': %s", path, strerror(errno));
@@ -76,7 +126,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: not a surge checkpoint", path);
         goto done;
     }
-    if (version != CHECKPOINT_VERSION || real_size != sizeof(real)) {
+    if ((version != CHECKPOINT_VERSION && version != 1) || real_size != sizeof(real)) {
         snprintf(err, err_len, "%s: checkpoint version %u with %u-byte reals; this build reads version %u with "
                  "%zu-byte reals", path, version, real_size, CHECKPOINT_VERSION, sizeof(real));
         goto done;
@@ -112,7 +162,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     if (read_all(f, sim->x + w, nf * sizeof(double)) || read_all(f, sim->y + w, nf * sizeof(double)) ||
         read_all(f, sim->vx + w, nf * sizeof(real)) || read_all(f, sim->vy + w, nf * sizeof(real)) ||
         read_all(f, sim->rho + w, nf * sizeof(real)) || read_all(f, sim->id + w, nf * sizeof(int32_t)) ||
-        read_all(f, &hash, 8)) {
+        (version == 1 && sim->boulders.count > 0) || read_boulders(f, &sim->boulders) || read_all(f, &hash, 8)) {
         snprintf(err, err_len, "%s: truncated checkpoint", path);
         goto fail;
     }
@@ -131,6 +181,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         goto fail;
     }
     boundary_wall_speeds(sim, t);
+    boulders_place_particles(sim);
     goto done;
 fail:
     surge_sim_destroy(sim);

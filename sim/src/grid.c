@@ -1,4 +1,5 @@
-/* Cell-linked lists with particles sorted by cell: wall particles once, fluid particles every step. */
+/* Cell-linked lists with particles sorted by cell: fluid particles every step, wall particles once (every step
+ * when boulders move theirs). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -79,9 +80,28 @@ int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2])
     return 1;
 }
 
-/* Stable counting sort of particles [first, first+n) by cell; fills start (ncells+1 entries, indices absolute)
- * and writes the gather order into order[0..n). */
-static void counting_sort(const surge_sim *sim, int first, int n, int *start, int32_t *key, int32_t *order)
+void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, double y, neighbour_ranges *r)
+{
+    const int cx = grid_cell_x(g, x), cy = grid_cell_y(g, y);
+    cell_span spans[2];
+    const int nspans = grid_row_spans(g, cx, spans);
+    r->count = 0;
+    for (int row = cy - 1; row <= cy + 1; row++) {
+        if (row < 0 || row >= g->ncy)
+            continue;
+        for (int s = 0; s < nspans; s++) {
+            r->begin[r->count] = start[row * g->ncx + spans[s].first_cell];
+            r->end[r->count] = start[row * g->ncx + spans[s].last_cell + 1];
+            r->shift_x[r->count] = spans[s].shift_x;
+            r->count++;
+        }
+    }
+}
+
+/* Stable counting sort of particles [first, first+n) by cell, visited in the order visit gives (NULL: index
+ * order); fills start (ncells+1 entries, indices absolute) and writes the gather order into order[0..n). */
+static void counting_sort(const surge_sim *sim, int first, int n, const int32_t *visit, int *start, int32_t *key,
+                          int32_t *order)
 {
     const cell_grid *g = &sim->grid;
     const int ncells = g->ncx * g->ncy;
@@ -94,8 +114,10 @@ static void counting_sort(const surge_sim *sim, int first, int n, int *start, in
     start[0] = first;
     for (int c = 0; c < ncells; c++)
         start[c + 1] += start[c];
-    for (int i = 0; i < n; i++)
+    for (int v = 0; v < n; v++) {
+        const int i = visit ? visit[v] : v;
         order[start[key[i]]++ - first] = first + i;
+    }
     /* start[c] now holds the end of cell c: shift back to beginnings */
     for (int c = ncells; c > 0; c--)
         start[c] = start[c - 1];
@@ -130,7 +152,10 @@ void grid_sort_walls(surge_sim *sim)
 {
     const int n = sim->wall_count;
     int32_t *order = sim->sort_key + sim->count; /* second half of the key buffer */
-    counting_sort(sim, 0, n, sim->grid.wall_start, sim->sort_key, order);
+    int32_t *by_id = sim->sort_scratch_i;        /* wall ids are 0..n-1 */
+    for (int i = 0; i < n; i++)
+        by_id[sim->id[i]] = i;
+    counting_sort(sim, 0, n, by_id, sim->grid.wall_start, sim->sort_key, order);
     gather_d(sim->x, sim->sort_scratch_d, order, 0, n);
     gather_d(sim->y, sim->sort_scratch_d, order, 0, n);
     gather_r(sim->vx, sim->sort_scratch_r, order, 0, n);
@@ -149,7 +174,7 @@ void grid_sort_fluid(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count - sim->wall_count;
     int32_t *order = sim->sort_key + sim->count;
-    counting_sort(sim, first, n, sim->grid.fluid_start, sim->sort_key, order);
+    counting_sort(sim, first, n, NULL, sim->grid.fluid_start, sim->sort_key, order);
     gather_d(sim->x, sim->sort_scratch_d, order, first, n);
     gather_d(sim->y, sim->sort_scratch_d, order, first, n);
     gather_r(sim->vx, sim->sort_scratch_r, order, first, n);

@@ -1,4 +1,4 @@
-/* The health monitor: every step, every fluid particle, the checks of surge_health_check. */
+/* The health monitor: every step, every fluid particle and every boulder, the checks of surge_health_check. */
 #include <math.h>
 #include <stdio.h>
 
@@ -83,6 +83,24 @@ int health_check(surge_sim *sim)
         }
         snprintf(h->message, sizeof h->message, "health check failed: %s at particle %d, step %lld, t = %.9g s (%s)",
                  surge_health_check_name(h->check), h->particle_id, (long long)h->step, h->time_s, detail);
+        return -1;
+    }
+    /* boulders: finite state, centre inside the domain (a disc through a wall is the contact solver failing) */
+    const boulder_set *b = &sim->boulders;
+    const double H = sim->params.domain.height_m, L = sim->params.domain.length_m;
+    for (int i = 0; i < b->count; i++) {
+        const int finite = isfinite(b->x[i]) && isfinite(b->y[i]) && isfinite(b->vx[i]) && isfinite(b->vy[i]) &&
+                           isfinite(b->omega[i]) && isfinite(b->angle[i]);
+        const int inside = b->y[i] >= 0 && (!sim->params.walls.top || b->y[i] <= H) &&
+                           (sim->params.domain.periodic_x || (b->x[i] >= 0 && b->x[i] <= L));
+        if (finite && inside)
+            continue;
+        h->check = finite ? SURGE_CHECK_LEFT_DOMAIN : SURGE_CHECK_NOT_FINITE;
+        h->value = finite ? b->y[i] : b->vx[i];
+        snprintf(h->message, sizeof h->message,
+                 "health check failed: %s at boulder %d, step %lld, t = %.9g s (centre (%.6g, %.6g) m, v = (%.4g, "
+                 "%.4g) m/s, omega = %.4g rad/s)", surge_health_check_name(h->check), i + 1, (long long)h->step,
+                 h->time_s, b->x[i], b->y[i], b->vx[i], b->vy[i], b->omega[i]);
         return -1;
     }
     if (sim->params.numerics.dt_fixed_s == 0 && sim->first_dt_s > 0 &&

@@ -95,6 +95,50 @@ static const surge_param_info registry[] = {
      "Fixed time step instead of the variable one (0: variable). For tests of the health monitor.",
      OFF(numerics.dt_fixed_s)},
 
+    {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 2, false, "none|list|random",
+     "Rigid discs (boulders): none, the list in list_m, or random non-overlapping discs up to solid_fraction.",
+     OFF(boulders.placement)},
+    {"boulders", "list_m", SURGE_PARAM_TEXT, "m, m s^-1, rad s^-1", 0, 0, 0, false, NULL,
+     "Discs for placement = list: 'x y r' or 'x y r vx vy omega' per disc, discs separated by commas.",
+     OFF(boulders.list_m)},
+    {"boulders", "solid_fraction", SURGE_PARAM_REAL, "-", 0.1, 0, 0.8, false, NULL,
+     "Random placement: total disc area over the region's area (phi).", OFF(boulders.solid_fraction)},
+    {"boulders", "radius_m", SURGE_PARAM_REAL, "m", 0.01, 1e-6, 1e3, false, NULL,
+     "Random placement: disc radius (the smallest one when radius_max_m is larger).", OFF(boulders.radius_m)},
+    {"boulders", "radius_max_m", SURGE_PARAM_REAL, "m", 0, 0, 1e3, false, NULL,
+     "Random placement: radii uniform in [radius_m, radius_max_m]; at or below radius_m all discs are equal.",
+     OFF(boulders.radius_max_m)},
+    {"boulders", "region_x0_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, false, NULL,
+     "Random placement: region of the disc centres, lower x (x0 = x1: the fluid block's extent).",
+     OFF(boulders.region_x0_m)},
+    {"boulders", "region_x1_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, false, NULL,
+     "Random placement: region, upper x.", OFF(boulders.region_x1_m)},
+    {"boulders", "region_y0_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, false, NULL,
+     "Random placement: region, lower y (y0 = y1: from the bed to the fluid depth).", OFF(boulders.region_y0_m)},
+    {"boulders", "region_y1_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, false, NULL,
+     "Random placement: region, upper y.", OFF(boulders.region_y1_m)},
+    {"boulders", "min_gap_m", SURGE_PARAM_REAL, "m", 0, 0, 1e3, false, NULL,
+     "Random placement: smallest gap between two discs and between a disc and a wall (0: one dp).",
+     OFF(boulders.min_gap_m)},
+    {"boulders", "seed", SURGE_PARAM_INT, "-", 1, 0, 2147483647, false, NULL,
+     "Random placement: seed of the random sequence (same seed, same discs).", OFF(boulders.seed)},
+    {"boulders", "density_ratio", SURGE_PARAM_REAL, "-", 1, 0.01, 100, false, NULL,
+     "Disc density over the fluid's rho0 (1: neutrally buoyant).", OFF(boulders.density_ratio)},
+
+    {"contacts", "friction", SURGE_PARAM_REAL, "-", 0.5, 0, 10, true, NULL,
+     "Coulomb friction coefficient mu between discs and between discs and walls.", OFF(contacts.friction)},
+    {"contacts", "restitution", SURGE_PARAM_REAL, "-", 0, 0, 1, true, NULL,
+     "Normal restitution coefficient e (0: no bounce).", OFF(contacts.restitution)},
+    {"contacts", "restitution_min_mps", SURGE_PARAM_REAL, "m s^-1", 0.01, 0, 1e3, true, NULL,
+     "Approach speeds below this do not bounce (resting contacts stay at rest).",
+     OFF(contacts.restitution_min_mps)},
+    {"contacts", "substeps", SURGE_PARAM_INT, "-", 4, 1, 1000, true, NULL,
+     "Contact sub-steps inside one SPH step.", OFF(contacts.substeps)},
+    {"contacts", "iterations", SURGE_PARAM_INT, "-", 30, 1, 10000, true, NULL,
+     "Projected Gauss-Seidel sweeps over all contacts per sub-step.", OFF(contacts.iterations)},
+    {"contacts", "erp", SURGE_PARAM_REAL, "-", 0.2, 0, 1, true, NULL,
+     "Fraction of an overlap removed per sub-step (error reduction).", OFF(contacts.erp)},
+
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",
      OFF(shifting.form)},
@@ -207,6 +251,7 @@ surge_params surge_default_params(void)
         case SURGE_PARAM_INT:
         case SURGE_PARAM_ENUM: *(int *)field(&p, r) = (int)r->default_value; break;
         case SURGE_PARAM_BOOL: *(bool *)field(&p, r) = r->default_value != 0; break;
+        case SURGE_PARAM_TEXT: break; /* empty */
         }
     }
     return p;
@@ -219,6 +264,7 @@ double surge_param_get_number(const surge_params *p, const surge_param_info *inf
     case SURGE_PARAM_INT:
     case SURGE_PARAM_ENUM: return *(const int *)cfield(p, info);
     case SURGE_PARAM_BOOL: return *(const bool *)cfield(p, info) ? 1 : 0;
+    case SURGE_PARAM_TEXT: return 0;
     }
     return 0;
 }
@@ -251,6 +297,7 @@ void surge_param_format(const surge_params *p, const surge_param_info *info, cha
         if (!enum_name(info->enum_names, *(const int *)cfield(p, info), buf, len))
             snprintf(buf, len, "?");
         break;
+    case SURGE_PARAM_TEXT: snprintf(buf, len, "%s", (const char *)cfield(p, info)); break;
     }
 }
 
@@ -261,6 +308,7 @@ static void describe_allowed(const surge_param_info *info, char *buf, size_t len
     case SURGE_PARAM_INT: snprintf(buf, len, "an integer in [%d, %d]", (int)info->min_value, (int)info->max_value); break;
     case SURGE_PARAM_BOOL: snprintf(buf, len, "true or false"); break;
     case SURGE_PARAM_ENUM: snprintf(buf, len, "one of %s", info->enum_names); break;
+    case SURGE_PARAM_TEXT: snprintf(buf, len, "text of at most %d characters", SURGE_TEXT_PARAM_BYTES - 1); break;
     }
 }
 
@@ -270,6 +318,15 @@ int surge_param_set(surge_params *p, const surge_param_info *info, const char *v
     describe_allowed(info, allowed, sizeof allowed);
     while (isspace((unsigned char)*value))
         value++;
+    if (info->type == SURGE_PARAM_TEXT) {
+        const size_t len = strlen(value);
+        if (len >= SURGE_TEXT_PARAM_BYTES) {
+            fail(err, err_len, "%s.%s: %zu characters; expected %s", info->section, info->key, len, allowed);
+            return -1;
+        }
+        memcpy(field(p, info), value, len + 1);
+        return 0;
+    }
     if (*value == '\0') {
         fail(err, err_len, "%s.%s: empty value; expected %s", info->section, info->key, allowed);
         return -1;
@@ -323,6 +380,7 @@ int surge_param_set(surge_params *p, const surge_param_info *info, const char *v
         fail(err, err_len, "%s.%s: '%s' is not allowed; expected %s", info->section, info->key, value, allowed);
         return -1;
     }
+    case SURGE_PARAM_TEXT: break; /* handled above */
     }
     return -1;
 }
@@ -369,11 +427,15 @@ int surge_params_load_text(surge_params *p, const char *text, const char *source
             *close = '\0';
             char *name = trim(s + 1);
             bool known = false;
-            for (int i = 0; i < REGISTRY_COUNT; i++)
+            char sections[400] = "";
+            for (int i = 0; i < REGISTRY_COUNT; i++) {
                 known = known || !strcmp(registry[i].section, name);
+                if (i == 0 || strcmp(registry[i].section, registry[i - 1].section))
+                    snprintf(sections + strlen(sections), sizeof sections - strlen(sections), "%s%s",
+                             i ? ", " : "", registry[i].section);
+            }
             if (!known) {
-                fail(err, err_len, "%s:%d: unknown section [%s]; sections are domain, fluid, walls, body, "
-                     "numerics, shifting, time, output, health", source, line_no, name);
+                fail(err, err_len, "%s:%d: unknown section [%s]; sections are %s", source, line_no, name, sections);
                 return -1;
             }
             snprintf(section, sizeof section, "%s", name);
@@ -575,7 +637,7 @@ void surge_params_write(const surge_params *p, FILE *out)
             fprintf(out, "%s[%s]\n", i ? "\n" : "", r->section);
             section = r->section;
         }
-        char value[64];
+        char value[SURGE_TEXT_PARAM_BYTES];
         surge_param_format(p, r, value, sizeof value);
         fprintf(out, "%s = %s\n", r->key, value);
     }
@@ -599,12 +661,13 @@ void surge_params_write_reference(FILE *out)
         surge_params defaults = surge_default_params();
         char def[64], allowed[160];
         surge_param_format(&defaults, r, def, sizeof def);
-        static const char *type_names[] = {"real", "integer", "boolean", "choice"};
+        static const char *type_names[] = {"real", "integer", "boolean", "choice", "text"};
         switch (r->type) {
         case SURGE_PARAM_REAL: snprintf(allowed, sizeof allowed, "[%g, %g]", r->min_value, r->max_value); break;
         case SURGE_PARAM_INT: snprintf(allowed, sizeof allowed, "[%d, %d]", (int)r->min_value, (int)r->max_value); break;
         case SURGE_PARAM_BOOL: snprintf(allowed, sizeof allowed, "true, false"); break;
         case SURGE_PARAM_ENUM: snprintf(allowed, sizeof allowed, "%s", r->enum_names); break;
+        case SURGE_PARAM_TEXT: snprintf(allowed, sizeof allowed, "up to %d characters", SURGE_TEXT_PARAM_BYTES - 1); break;
         }
         for (char *c = allowed; *c; c++)
             if (*c == '|')

@@ -14,6 +14,7 @@
 typedef struct run_outputs {
     const char *dir;
     surge_pvd *pvd;
+    surge_pvd *boulder_pvd; /* boulders.pvd, when the scene has boulders */
     FILE *csv;
     surge_snapshot snap;
     int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
@@ -69,6 +70,15 @@ static int write_snapshot(const surge_sim *sim, run_outputs *o, const char *name
         return -1;
     if (add_to_collection && surge_pvd_add(o->pvd, surge_sim_time(sim), file, err, err_len) != 0)
         return -1;
+    if (o->boulder_pvd) { /* boulders_<same suffix> next to the particles' file */
+        char boulder_file[80];
+        snprintf(boulder_file, sizeof boulder_file, "boulders_%s", strncmp(file, "snap_", 5) ? file : file + 5);
+        join(path, sizeof path, o->dir, boulder_file);
+        if (surge_vtp_write_boulders(path, &o->snap, err, err_len) != 0)
+            return -1;
+        if (add_to_collection && surge_pvd_add(o->boulder_pvd, surge_sim_time(sim), boulder_file, err, err_len) != 0)
+            return -1;
+    }
     if (add_to_collection)
         o->last_snapshot_step = surge_sim_step_count(sim);
     return 0;
@@ -139,6 +149,15 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     o.pvd = surge_pvd_open(path, opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0, err, err_len);
     if (!o.pvd)
         return SURGE_RUN_IO_ERROR;
+    if (surge_sim_derived(sim)->boulder_count > 0) {
+        join(path, sizeof path, o.dir, "boulders.pvd");
+        o.boulder_pvd = surge_pvd_open(path, opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0, err,
+                                       err_len);
+        if (!o.boulder_pvd) {
+            surge_pvd_close(o.pvd);
+            return SURGE_RUN_IO_ERROR;
+        }
+    }
     join(path, sizeof path, o.dir, "diagnostics.csv");
     o.csv = fopen(path, opt->restarted ? "a" : "w");
     if (!o.csv) {
@@ -230,6 +249,7 @@ done:
         result = SURGE_RUN_IO_ERROR;
     }
     surge_pvd_close(o.pvd);
+    surge_pvd_close(o.boulder_pvd);
     surge_snapshot_free(&o.snap);
     return result;
 }

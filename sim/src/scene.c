@@ -1,5 +1,6 @@
 /* Building a scene from its parameters: walls of boundary particles with their mDBC ghost nodes, the
- * initial fluid block in hydrostatic balance, and the speed scale c0 derives from. */
+ * boulders' particles, the initial fluid block in hydrostatic balance (less what the boulders cover), and the
+ * speed scale c0 derives from. */
 #include <math.h>
 #include <stdlib.h>
 
@@ -178,6 +179,8 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n);
     ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
     ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);
+    ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);
+    ALLOC(s->boulders.local_y, s->wall_count);
     ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count);
     ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
 #undef ALLOC
@@ -189,6 +192,8 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     const surge_params *p = &s->params;
     const double dp = p->numerics.dp_m;
     particle_list walls = {0};
+    if (boulders_define(s, err, err_len) != 0)
+        return -1;
     walls.cap = wall_capacity(p);
     walls.x = malloc((size_t)walls.cap * sizeof(double) + 1);
     walls.y = malloc((size_t)walls.cap * sizeof(double) + 1);
@@ -211,13 +216,19 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     fluid_columns(p, rows, cols, err, err_len);
     long fluid_count = 0;
     for (long c = 0; c < cols; c++)
-        fluid_count += rows[c];
-    s->wall_count = walls.n;
-    if (allocate_state(s, walls.n + (int)fluid_count) != 0) {
-        snprintf(err, err_len, "out of memory for %ld particles", (long)walls.n + fluid_count);
+        for (long r = 0; r < rows[c]; r++)
+            fluid_count += !boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, (r + 0.5) * dp);
+    const int boulder_particles = boulders_particle_count(s);
+    s->wall_count = walls.n + boulder_particles;
+    if (allocate_state(s, s->wall_count + (int)fluid_count) != 0) {
+        snprintf(err, err_len, "out of memory for %ld particles", (long)s->wall_count + fluid_count);
         free(rows);
         goto fail;
     }
+    for (int i = 0; i < s->wall_count; i++)
+        s->boulders.of_wall[i] = -1;
+    boulders_create_particles(s, walls.n);
+    boulders_place_particles(s);
     for (int i = 0; i < walls.n; i++) {
         s->x[i] = walls.x[i];
         s->y[i] = walls.y[i];
@@ -233,9 +244,11 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     /* fluid on a square lattice, density in hydrostatic balance with the bed-normal gravity */
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
     const double g_normal = p->body.gravity_mps2 * cos(theta);
-    int32_t i = walls.n;
+    int32_t i = s->wall_count;
     for (long c = 0; c < cols; c++) {
         for (long r = 0; r < rows[c]; r++) {
+            if (boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, (r + 0.5) * dp))
+                continue;
             s->x[i] = p->fluid.x0_m + (c + 0.5) * dp;
             s->y[i] = (r + 0.5) * dp;
             double p_hydro = s->rho0 * g_normal * (rows[c] * dp - s->y[i]);

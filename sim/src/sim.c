@@ -1,5 +1,5 @@
-/* The solver: scene set-up, symplectic position-Verlet stepping with a variable time step, shifting,
- * snapshots, diagnostics and the state hash. */
+/* The solver: scene set-up, symplectic position-Verlet stepping with a variable time step, shifting, the
+ * boulders' coupling, snapshots, diagnostics and the state hash. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +52,7 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     }
     sim->derived.wall_count = sim->wall_count;
     sim->derived.fluid_count = sim->count - sim->wall_count;
+    sim->derived.boulder_count = sim->boulders.count;
     grid_sort_walls(sim);
     grid_sort_fluid(sim);
     boundary_wall_speeds(sim, 0.0);
@@ -70,6 +71,7 @@ void surge_sim_destroy(surge_sim *sim)
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     grid_free(&sim->grid);
+    boulders_free(&sim->boulders);
     free(sim);
 }
 
@@ -153,10 +155,14 @@ int surge_sim_step(surge_sim *sim)
     const double period = sim->grid.period_m;
     const double t_n = sim->time_s;
 
+    const int boulders = sim->boulders.count > 0;
     grid_sort_fluid(sim);
+    if (boulders)
+        grid_sort_walls(sim);
     boundary_wall_speeds(sim, t_n);
     boundary_update(sim);
     interaction_compute(sim, 0);
+    boulders_fluid_forces(sim);
     const double dt = variable_dt(sim);
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
@@ -177,10 +183,24 @@ int surge_sim_step(surge_sim *sim)
         sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
     }
 
+    if (boulders) {
+        boulders_predict(sim, half);
+        grid_sort_walls(sim);
+    }
+
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
     boundary_update(sim);
     interaction_compute(sim, 1);
+    boulders_fluid_forces(sim);
+    if (boulders && boulders_correct(sim, dt) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_NOT_FINITE, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n + dt};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
+        restore_step_start(sim);
+        boulders_restore(sim);
+        return -1;
+    }
     #pragma omp parallel for schedule(static)
     for (int a = first; a < n; a++) {
         const double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
@@ -200,6 +220,7 @@ int surge_sim_step(surge_sim *sim)
 
     if (health_check(sim) != 0) {
         restore_step_start(sim);
+        boulders_restore(sim);
         sim->time_s = t_n;
         sim->step--;
         boundary_wall_speeds(sim, t_n);
@@ -242,18 +263,29 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
     snap->step = sim->step;
     snap->time_s = sim->time_s;
     snap->dt_s = sim->dt_s;
-    const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
+    const real rho0 = (real)sim->rho0, b_pa = (real)sim->b_pa;
     for (int i = 0; i < sim->count; i++) {
         const int k = sim->id[i];
-        const int is_wall = i < sim->wall_count;
         snap->x_m[k] = sim->x[i];
         snap->y_m[k] = sim->y[i];
-        snap->vx_mps[k] = is_wall ? (float)sim->wall_speed[sim->wall_of[i]] : (float)sim->vx[i];
-        snap->vy_mps[k] = is_wall ? 0.0f : (float)sim->vy[i];
+        snap->vx_mps[k] = (float)sim->vx[i];
+        snap->vy_mps[k] = (float)sim->vy[i];
         snap->density_kgpm3[k] = (float)sim->rho[i];
-        snap->pressure_pa[k] = (float)tait_pressure(sim->rho[i], rho0, b);
+        snap->pressure_pa[k] = (float)tait_pressure(sim->rho[i], rho0, b_pa);
         snap->kind[k] = sim->kind[k];
         snap->id[k] = k;
+    }
+    const boulder_set *b = &sim->boulders;
+    if (surge_snapshot_reserve_boulders(snap, b->count) != 0)
+        return -1;
+    for (int i = 0; i < b->count; i++) {
+        snap->boulders.x_m[i] = b->x[i];
+        snap->boulders.y_m[i] = b->y[i];
+        snap->boulders.angle_rad[i] = b->angle[i];
+        snap->boulders.vx_mps[i] = b->vx[i];
+        snap->boulders.vy_mps[i] = b->vy[i];
+        snap->boulders.omega_radps[i] = b->omega[i];
+        snap->boulders.radius_m[i] = b->radius[i];
     }
     return 0;
 }
@@ -307,5 +339,15 @@ uint64_t surge_sim_state_hash(const surge_sim *sim)
     h = fnv1a(h, sim->vy + w, nf * sizeof *sim->vy);
     h = fnv1a(h, sim->rho + w, nf * sizeof *sim->rho);
     h = fnv1a(h, sim->id + w, nf * sizeof *sim->id);
+    const boulder_set *b = &sim->boulders;
+    const size_t nb = (size_t)b->count * sizeof(double);
+    if (b->count > 0) {
+        h = fnv1a(h, b->x, nb);
+        h = fnv1a(h, b->y, nb);
+        h = fnv1a(h, b->angle, nb);
+        h = fnv1a(h, b->vx, nb);
+        h = fnv1a(h, b->vy, nb);
+        h = fnv1a(h, b->omega, nb);
+    }
     return h;
 }

@@ -4,11 +4,12 @@
 
 #include <stdint.h>
 
+#include "boulders.h"
 #include "kernel.h"
 #include "precision.h"
 #include "surge/sim.h"
 
-enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_COUNT = 3 };
+enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_BOULDER = 3, WALL_COUNT = 4 };
 
 /* Uniform cell grid, cells at least 2h wide, periodic in x or not. Wall particles (indices [0, wall_count))
  * and fluid particles ([wall_count, count)) are each sorted by cell and have their own cell ranges. */
@@ -20,6 +21,14 @@ typedef struct cell_grid {
     int *fluid_start;       /* ncx*ncy + 1 */
     int *wall_start;        /* ncx*ncy + 1 */
 } cell_grid;
+
+/* The particle index ranges of the 3x3 cells around a point, row by row, with the x shift that brings the
+ * periodic image of a range next to the point. */
+typedef struct neighbour_ranges {
+    int count;
+    int begin[6], end[6];
+    double shift_x[6]; /* add to the neighbour's x */
+} neighbour_ranges;
 
 /* Up to two contiguous cell ranges per row of the 3x3 block around a cell, with the x shift that brings the
  * periodic image next to the particle. */
@@ -52,11 +61,13 @@ struct surge_sim {
     uint8_t *surface;          /* free-surface flag from the last predictor pass */
     uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */
     /* wall particles only */
-    uint8_t *wall_of;          /* WALL_* */
+    uint8_t *wall_of;          /* WALL_*; the velocity of a wall particle is in vx, vy */
     real *ghost_dx, *ghost_dy; /* offset from wall particle to its mDBC ghost node */
     real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
     double wall_speed[WALL_COUNT];
     uint8_t *kind;             /* surge_particle_kind, by id */
+
+    boulder_set boulders;
 
     cell_grid grid;
     int32_t *sort_key, *sort_scratch_i;
@@ -78,6 +89,9 @@ void grid_free(cell_grid *grid);
 int grid_cell_x(const cell_grid *g, double x);
 int grid_cell_y(const cell_grid *g, double y);
 int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2]);
+/* start: the grid's fluid_start or wall_start; x inside the domain (wrapped when periodic). */
+void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, double y, neighbour_ranges *r);
+/* Walls in cell order, within a cell by id: the same order whatever the order before (restarts). */
 void grid_sort_walls(surge_sim *sim);
 void grid_sort_fluid(surge_sim *sim);
 
@@ -87,6 +101,19 @@ void boundary_wall_speeds(surge_sim *sim, double time_s);
 
 /* interaction.c: rates of change of fluid particles */
 void interaction_compute(surge_sim *sim, int corrector);
+
+/* boulders.c */
+int boulders_define(surge_sim *sim, char *err, size_t err_len);   /* the discs of the case, before the walls */
+int boulders_particle_count(const surge_sim *sim);
+/* Appends disc particles to the wall arrays from index first (ids too); ghost offsets follow the discs. */
+void boulders_create_particles(surge_sim *sim, int first);
+int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc */
+void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
+void boulders_fluid_forces(surge_sim *sim);                   /* eq. 10, after interaction_compute */
+void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step start, moves to the half step */
+int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */
+void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
+void boulders_free(boulder_set *b);
 
 /* health.c */
 int health_check(surge_sim *sim);

@@ -42,6 +42,30 @@ int surge_snapshot_reserve(surge_snapshot *snap, int32_t count)
     return 0;
 }
 
+int surge_snapshot_reserve_boulders(surge_snapshot *snap, int32_t count)
+{
+    if (snap == NULL || count < 0) {
+        return -1;
+    }
+    surge_boulder_state *b = &snap->boulders;
+    if (count > b->capacity) {
+        int ok = 1;
+        SNAPSHOT_GROW(b, x_m, count, ok);
+        SNAPSHOT_GROW(b, y_m, count, ok);
+        SNAPSHOT_GROW(b, angle_rad, count, ok);
+        SNAPSHOT_GROW(b, vx_mps, count, ok);
+        SNAPSHOT_GROW(b, vy_mps, count, ok);
+        SNAPSHOT_GROW(b, omega_radps, count, ok);
+        SNAPSHOT_GROW(b, radius_m, count, ok);
+        if (!ok) {
+            return -1;
+        }
+        b->capacity = count;
+    }
+    b->count = count;
+    return 0;
+}
+
 #undef SNAPSHOT_GROW
 
 void surge_snapshot_free(surge_snapshot *snap)
@@ -67,4 +91,13 @@ void surge_snapshot_free(surge_snapshot *snap)
     snap->id = NULL;
     snap->capacity = 0;
     snap->count = 0;
+    surge_boulder_state *b = &snap->boulders;
+    free(b->x_m);
+    free(b->y_m);
+    free(b->angle_rad);
+    free(b->vx_mps);
+    free(b->vy_mps);
+    free(b->omega_radps);
+    free(b->radius_m);
+    *b = (surge_boulder_state){0};
 }

@@ -311,6 +311,73 @@ int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, siz
     return out_commit(&o, err, err_len);
 }
 
+int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char *err, size_t err_len)
+{
+    const surge_boulder_state *b = snap ? &snap->boulders : NULL;
+    if (path == NULL || b == NULL || b->count < 0) {
+        set_err(err, err_len, "surge_vtp_write_boulders: NULL path or invalid snapshot");
+        return -1;
+    }
+    out_file o;
+    if (out_open(&o, path, err, err_len) != 0) {
+        return -1;
+    }
+    const size_t n = (size_t)b->count;
+    const uint64_t n64 = (uint64_t)n;
+    uint64_t offset = 0;
+    const char *in3 = "      ";
+    const char *in4 = "        ";
+    put_text(&o, "<?xml version=\"1.0\"?>\n"
+                 "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                 "header_type=\"UInt64\">\n"
+                 "  <PolyData>\n"
+                 "    <FieldData>\n");
+    array_tag(&o, in3, "Float64", "time_s", 0, sizeof(double), &offset);
+    array_tag(&o, in3, "Int64", "step", 0, sizeof(int64_t), &offset);
+    put_text(&o, "    </FieldData>\n"
+                 "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
+                 "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
+                 "      <PointData Scalars=\"radius_m\" Vectors=\"velocity_mps\">\n",
+             n, n);
+    array_tag(&o, in4, "Float64", "velocity_mps", 3, 3 * 8 * n64, &offset);
+    array_tag(&o, in4, "Float64", "omega_radps", 1, 8 * n64, &offset);
+    array_tag(&o, in4, "Float64", "angle_rad", 1, 8 * n64, &offset);
+    array_tag(&o, in4, "Float64", "radius_m", 1, 8 * n64, &offset);
+    put_text(&o, "      </PointData>\n"
+                 "      <Points>\n");
+    array_tag(&o, in4, "Float64", "Points", 3, 3 * 8 * n64, &offset);
+    put_text(&o, "      </Points>\n"
+                 "      <Verts>\n");
+    array_tag(&o, in4, "Int64", "connectivity", 1, 8 * n64, &offset);
+    array_tag(&o, in4, "Int64", "offsets", 1, 8 * n64, &offset);
+    put_text(&o, "      </Verts>\n"
+                 "    </Piece>\n"
+                 "  </PolyData>\n"
+                 "  <AppendedData encoding=\"raw\">\n"
+                 "   _");
+    const int64_t step = snap->step;
+    block_header(&o, sizeof(double));
+    put_le(&o, &snap->time_s, sizeof snap->time_s, 1);
+    block_header(&o, sizeof(int64_t));
+    put_le(&o, &step, sizeof step, 1);
+    block_header(&o, 3 * 8 * n64);
+    put_xyz_f64(&o, b->vx_mps, b->vy_mps, n);
+    block_header(&o, 8 * n64);
+    put_le(&o, b->omega_radps, sizeof(double), n);
+    block_header(&o, 8 * n64);
+    put_le(&o, b->angle_rad, sizeof(double), n);
+    block_header(&o, 8 * n64);
+    put_le(&o, b->radius_m, sizeof(double), n);
+    block_header(&o, 3 * 8 * n64);
+    put_xyz_f64(&o, b->x_m, b->y_m, n);
+    block_header(&o, 8 * n64);
+    put_sequence_i64(&o, 0, n);
+    block_header(&o, 8 * n64);
+    put_sequence_i64(&o, 1, n);
+    put_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
+    return out_commit(&o, err, err_len);
+}
+
 /* ------------------------------------------------------------------------------------------------
  * .pvd time collection
  * --------------------------------------------------------------------------------------------- */

@@ -95,13 +95,13 @@ static cJSON *ok_reply(const char *cmd, const surge_sim *sim)
     return r;
 }
 
-/* A parameter's value as JSON: number, true/false, or the enum's name. */
+/* A parameter's value as JSON: number, true/false, or the enum's name or the text. */
 static cJSON *param_value(const surge_params *p, const surge_param_info *info)
 {
     if (info->type == SURGE_PARAM_BOOL)
         return cJSON_CreateBool(surge_param_get_number(p, info) != 0);
-    if (info->type == SURGE_PARAM_ENUM) {
-        char text[64];
+    if (info->type == SURGE_PARAM_ENUM || info->type == SURGE_PARAM_TEXT) {
+        char text[SURGE_TEXT_PARAM_BYTES];
         surge_param_format(p, info, text, sizeof text);
         return cJSON_CreateString(text);
     }
@@ -148,7 +148,7 @@ static cJSON *command_list(const surge_sim *sim)
 {
     cJSON *r = ok_reply("list", sim);
     cJSON *list = cJSON_AddArrayToObject(r, "params");
-    static const char *const type_names[] = {"real", "int", "bool", "enum"};
+    static const char *const type_names[] = {"real", "int", "bool", "enum", "text"};
     for (int i = 0; i < surge_param_count(); i++) {
         const surge_param_info *info = surge_param_at(i);
         char name[128];
@@ -161,7 +161,7 @@ static cJSON *command_list(const surge_sim *sim)
         cJSON_AddBoolToObject(o, "live", info->live);
         if (info->type == SURGE_PARAM_ENUM) {
             cJSON_AddStringToObject(o, "values", info->enum_names);
-        } else if (info->type != SURGE_PARAM_BOOL) {
+        } else if (info->type == SURGE_PARAM_REAL || info->type == SURGE_PARAM_INT) {
             cJSON_AddNumberToObject(o, "min", info->min_value);
             cJSON_AddNumberToObject(o, "max", info->max_value);
         }
@@ -200,10 +200,13 @@ static cJSON *command_set(surge_control *c, const cJSON *request, surge_sim *sim
         snprintf(text, sizeof text, "%.17g", value->valuedouble);
     else if (cJSON_IsBool(value) && info->type == SURGE_PARAM_BOOL)
         snprintf(text, sizeof text, "%s", cJSON_IsTrue(value) ? "true" : "false");
+    else if (!info->live)
+        return error_reply("%s cannot change while the simulation runs", name);
     else if (cJSON_IsString(value) && info->type == SURGE_PARAM_ENUM)
         snprintf(text, sizeof text, "%.100s", value->valuestring);
     else {
-        static const char *const expected[] = {"a number", "a whole number", "true or false", "one of the names "};
+        static const char *const expected[] = {"a number", "a whole number", "true or false", "one of the names ",
+                                               "text"};
         snprintf(message, sizeof message, "\"value\" for %s must be %s%s", name, expected[info->type],
                  info->type == SURGE_PARAM_ENUM ? info->enum_names : "");
         return error_reply("%s", message);

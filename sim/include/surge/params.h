@@ -32,6 +32,15 @@ typedef enum surge_colormap_choice {
     SURGE_COLORMAP_CIVIDIS = 1,
 } surge_colormap_choice;
 
+typedef enum surge_boulder_placement {
+    SURGE_BOULDERS_NONE = 0,   /* no boulders */
+    SURGE_BOULDERS_LIST = 1,   /* the discs of boulders.list_m */
+    SURGE_BOULDERS_RANDOM = 2, /* random non-overlapping discs up to boulders.solid_fraction of the region */
+} surge_boulder_placement;
+
+/* Longest value of a text parameter, terminating NUL included. */
+#define SURGE_TEXT_PARAM_BYTES 1000
+
 typedef enum surge_view_mode {
     SURGE_VIEW_WHOLE = 0,  /* every particle */
     SURGE_VIEW_FOLLOW = 1, /* a window of view_width_m that keeps the surge front at 3/4 of its width */
@@ -78,6 +87,25 @@ typedef struct surge_params {
         double dt_fixed_s;        /* 0: variable time step */
     } numerics;
     struct {
+        int placement;           /* surge_boulder_placement */
+        char list_m[SURGE_TEXT_PARAM_BYTES]; /* "x y r [vx vy omega], ...": m, m/s, rad/s */
+        double solid_fraction;   /* random: disc area / region area */
+        double radius_m;         /* random: disc radius (the smallest when radius_max_m > radius_m) */
+        double radius_max_m;     /* random: radii uniform in [radius_m, radius_max_m]; <= radius_m: monodisperse */
+        double region_x0_m, region_x1_m, region_y0_m, region_y1_m; /* random: where centres may go */
+        double min_gap_m;        /* random: smallest gap between discs and from walls */
+        int seed;
+        double density_ratio;    /* rho_body / rho0 */
+    } boulders;
+    struct {
+        double friction;         /* Coulomb coefficient mu */
+        double restitution;      /* normal restitution coefficient e */
+        double restitution_min_mps; /* approach speeds below this do not bounce */
+        int substeps;            /* contact sub-steps per SPH step */
+        int iterations;          /* projected Gauss-Seidel sweeps per sub-step */
+        double erp;              /* fraction of an overlap removed per sub-step */
+    } contacts;
+    struct {
         int form;                    /* surge_shifting_form */
         double velocity_coefficient; /* A of the velocity-proportional form */
         double lind_coefficient;     /* A_L of Lind's form */
@@ -116,6 +144,7 @@ typedef enum surge_param_type {
     SURGE_PARAM_INT,
     SURGE_PARAM_BOOL,
     SURGE_PARAM_ENUM,
+    SURGE_PARAM_TEXT, /* up to SURGE_TEXT_PARAM_BYTES - 1 characters */
 } surge_param_type;
 
 typedef struct surge_param_info {
@@ -141,7 +170,8 @@ const surge_param_info *surge_param_find(const char *name);
 /* Parses and range-checks value; on error returns -1 and writes a message naming the parameter and its
  * allowed range/values to err. */
 int surge_param_set(surge_params *p, const surge_param_info *info, const char *value, char *err, size_t err_len);
-/* Current value as text, formatted so that surge_param_set reads it back exactly. */
+/* Current value as text, formatted so that surge_param_set reads it back exactly (buf of
+   SURGE_TEXT_PARAM_BYTES holds any value). */
 void surge_param_format(const surge_params *p, const surge_param_info *info, char *buf, size_t len);
 double surge_param_get_number(const surge_params *p, const surge_param_info *info);
 

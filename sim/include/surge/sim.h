@@ -16,7 +16,8 @@ typedef struct surge_derived {
     double expected_speed_mps; /* the scene's largest expected speed c0 was derived from */
     double particle_mass_kg;   /* per metre of width (2D) */
     int32_t fluid_count;
-    int32_t wall_count;
+    int32_t wall_count;        /* boulders' particles included */
+    int32_t boulder_count;
 } surge_derived;
 
 typedef enum surge_health_check {
@@ -74,8 +75,8 @@ typedef struct surge_diagnostics {
 
 surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
 
-/* 64-bit FNV-1a hash of positions, velocities, densities (in id order), step and time: equal hashes mean
- * bit-identical states. */
+/* 64-bit FNV-1a hash of the fluid's positions, velocities and densities, the boulders' state, step and time:
+ * equal hashes mean bit-identical states. */
 uint64_t surge_sim_state_hash(const surge_sim *sim);
 
 /* Checkpoint: everything needed to continue bit-for-bit. */

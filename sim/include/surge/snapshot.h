@@ -10,7 +10,19 @@ typedef enum surge_particle_kind {
     SURGE_KIND_FLUID = 0,
     SURGE_KIND_WALL = 1,        /* fixed wall */
     SURGE_KIND_MOVING_WALL = 2, /* wall with a prescribed velocity (belt, lid) */
+    SURGE_KIND_BOULDER = 3,     /* boundary particle of a boulder (a rigid disc) */
 } surge_particle_kind;
+
+/* The boulders (rigid discs), structure of arrays, in creation order. */
+typedef struct surge_boulder_state {
+    int32_t count;
+    double *x_m, *y_m;    /* centre of mass */
+    double *angle_rad;    /* orientation, counter-clockwise from the initial one */
+    double *vx_mps, *vy_mps;
+    double *omega_radps;  /* counter-clockwise */
+    double *radius_m;
+    int32_t capacity;
+} surge_boulder_state;
 
 typedef struct surge_snapshot {
     int64_t step;
@@ -26,10 +38,13 @@ typedef struct surge_snapshot {
     uint8_t *kind;        /* surge_particle_kind */
     int32_t *id;          /* stable particle id, 0..count-1 at creation */
     int32_t capacity;     /* allocated length of the arrays */
+    surge_boulder_state boulders;
 } surge_snapshot;
 
 /* Resizes the arrays to hold count particles (keeps the allocation when large enough). Returns 0 on success. */
 int surge_snapshot_reserve(surge_snapshot *snap, int32_t count);
+/* The same for count boulders. */
+int surge_snapshot_reserve_boulders(surge_snapshot *snap, int32_t count);
 void surge_snapshot_free(surge_snapshot *snap);
 
 #endif

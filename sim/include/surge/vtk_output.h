@@ -21,6 +21,13 @@
  * not NULL and err_len > 0). */
 int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, size_t err_len);
 
+/* Writes the boulders of snap (snap->boulders) as a VTK XML PolyData file of one vertex per disc centre:
+ *   Points      Float64 x3 (x_m, y_m, 0)
+ *   PointData   "velocity_mps" Float64 x3 (vx, vy, 0), "omega_radps", "angle_rad", "radius_m" Float64
+ *   FieldData   "time_s" Float64, "step" Int64
+ * Same atomic write and error contract as surge_vtp_write. */
+int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char *err, size_t err_len);
+
 /* Reads a file written by surge_vtp_write into snap (resized as needed). -1 with err naming the file and the
  * problem when it is not such a file. */
 int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len);

@@ -1,0 +1,445 @@
+/* Boulders: rigid discs made of boundary particles (GMD Sect. 2.2). Each disc is rings of wall particles at
+ * the fluid spacing, as deep as the kernel support, with mDBC ghost nodes mirrored across its circle. The
+ * fluid acts on a disc through the SPH forces on its particles (eq. 10); the disc moves them rigidly (eq. 11).
+ * Discs follow the symplectic scheme: the half-step force moves them over the full step from its start,
+ * inside the contact solver's sub-steps. */
+#define _DEFAULT_SOURCE /* erand48 */
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+enum { MAX_PLACEMENT_TRIES = 2000000 };
+
+static int allocate_discs(boulder_set *b, int n)
+{
+    b->count = n;
+    int ok = 1;
+#define ALLOC(ptr) ok &= ((ptr) = calloc((size_t)(n > 0 ? n : 1), sizeof *(ptr))) != NULL
+    ALLOC(b->x); ALLOC(b->y); ALLOC(b->angle); ALLOC(b->vx); ALLOC(b->vy); ALLOC(b->omega);
+    ALLOC(b->x_n); ALLOC(b->y_n); ALLOC(b->angle_n); ALLOC(b->vx_n); ALLOC(b->vy_n); ALLOC(b->omega_n);
+    ALLOC(b->radius); ALLOC(b->mass); ALLOC(b->inv_mass); ALLOC(b->inv_inertia);
+    ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
+#undef ALLOC
+    return ok ? 0 : -1;
+}
+
+void boulders_free(boulder_set *b)
+{
+    void *arrays[] = {b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->x_n, b->y_n, b->angle_n, b->vx_n, b->vy_n,
+                      b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
+                      b->ay, b->alpha, b->of_wall, b->local_x, b->local_y};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
+    contact_solver_destroy(b->contacts);
+    memset(b, 0, sizeof *b);
+}
+
+static double wrap_dx(double dx, double period) { return period > 0 ? dx - period * floor(dx / period + 0.5) : dx; }
+
+/* "x y r [vx vy omega], ..." */
+static int parse_list(boulder_set *b, const char *text, char *err, size_t err_len)
+{
+    int n = 0;
+    for (const char *c = text; *c; c++)
+        n += *c == ',';
+    n += 1;
+    if (allocate_discs(b, n) != 0) {
+        snprintf(err, err_len, "out of memory for %d boulders", n);
+        return -1;
+    }
+    const char *cursor = text;
+    for (int i = 0; i < n; i++) {
+        double v[7];
+        int got = 0;
+        const size_t len = strcspn(cursor, ",");
+        char entry[SURGE_TEXT_PARAM_BYTES];
+        memcpy(entry, cursor, len);
+        entry[len] = '\0';
+        char *s = entry;
+        while (got < 7) {
+            while (isspace((unsigned char)*s))
+                s++;
+            if (!*s)
+                break;
+            char *end;
+            v[got] = strtod(s, &end);
+            if (end == s || !isfinite(v[got])) {
+                snprintf(err, err_len, "boulders.list_m: disc %d ('%s'): '%s' is not a number", i + 1, entry, s);
+                return -1;
+            }
+            got++;
+            s = end;
+        }
+        if (got != 3 && got != 6) {
+            snprintf(err, err_len, "boulders.list_m: disc %d ('%s') has %d numbers; expected 'x y r' or "
+                     "'x y r vx vy omega'", i + 1, entry, got);
+            return -1;
+        }
+        if (!(v[2] > 0)) {
+            snprintf(err, err_len, "boulders.list_m: disc %d has radius %g; expected a positive radius in m", i + 1,
+                     v[2]);
+            return -1;
+        }
+        b->x[i] = v[0], b->y[i] = v[1], b->radius[i] = v[2];
+        if (got == 6)
+            b->vx[i] = v[3], b->vy[i] = v[4], b->omega[i] = v[5];
+        cursor += len + (cursor[len] == ',');
+    }
+    return 0;
+}
+
+/* Random sequential placement: the largest discs first, each at uniform random positions until it overlaps
+ * neither another disc nor a wall (with the gap), reproducible from the seed. */
+static int place_random(boulder_set *b, const surge_params *p, double period, char *err, size_t err_len)
+{
+    const surge_params *q = p;
+    double x0 = q->boulders.region_x0_m, x1 = q->boulders.region_x1_m;
+    double y0 = q->boulders.region_y0_m, y1 = q->boulders.region_y1_m;
+    if (x1 <= x0)
+        x0 = q->fluid.x0_m, x1 = q->fluid.x1_m;
+    if (y1 <= y0)
+        y0 = 0, y1 = q->fluid.depth_m;
+    const double gap = q->boulders.min_gap_m > 0 ? q->boulders.min_gap_m : q->numerics.dp_m;
+    const double r_min = q->boulders.radius_m;
+    const double r_max = fmax(q->boulders.radius_max_m, r_min);
+    const double target_area = q->boulders.solid_fraction * (x1 - x0) * (y1 - y0);
+    unsigned short rng[3] = {0x330e, (unsigned short)(q->boulders.seed & 0xffff),
+                             (unsigned short)((unsigned)q->boulders.seed >> 16)};
+    /* radii until the target area is reached (the last disc taken when it brings the area closer) */
+    int n = 0, cap = 16;
+    double *radii = malloc((size_t)cap * sizeof *radii), area = 0;
+    while (radii) {
+        const double r = r_min + (r_max - r_min) * erand48(rng);
+        if (area + SURGE_PI * r * r - target_area > target_area - area)
+            break;
+        if (n == cap) {
+            double *bigger = realloc(radii, (size_t)(cap *= 2) * sizeof *radii);
+            if (!bigger)
+                free(radii);
+            radii = bigger;
+            if (!radii)
+                break;
+        }
+        radii[n++] = r;
+        area += SURGE_PI * r * r;
+    }
+    if (!radii || allocate_discs(b, n) != 0) {
+        free(radii);
+        snprintf(err, err_len, "out of memory placing boulders");
+        return -1;
+    }
+    for (int i = 0; i < n; i++) /* largest first: insertion sort, n is small */
+        for (int j = i; j > 0 && radii[j] > radii[j - 1]; j--) {
+            const double t = radii[j];
+            radii[j] = radii[j - 1];
+            radii[j - 1] = t;
+        }
+    const int spans_period = period > 0 && x1 - x0 >= period - 1e-12;
+    long tries = 0;
+    for (int i = 0; i < n; i++) {
+        const double r = radii[i];
+        const double margin_x = spans_period ? 0 : r + gap;
+        const double lo_x = x0 + margin_x, hi_x = x1 - margin_x, lo_y = y0 + r + gap, hi_y = y1 - r - gap;
+        if (hi_x < lo_x || hi_y < lo_y) {
+            snprintf(err, err_len, "boulders: a disc of radius %g m with gap %g m does not fit in the region "
+                     "[%g, %g] x [%g, %g] m", r, gap, x0, x1, y0, y1);
+            free(radii);
+            return -1;
+        }
+        int placed = 0;
+        while (!placed && tries < MAX_PLACEMENT_TRIES) {
+            tries++;
+            const double x = lo_x + (hi_x - lo_x) * erand48(rng), y = lo_y + (hi_y - lo_y) * erand48(rng);
+            placed = 1;
+            for (int j = 0; j < i && placed; j++) {
+                const double dx = wrap_dx(x - b->x[j], period), dy = y - b->y[j], d = r + b->radius[j] + gap;
+                placed = dx * dx + dy * dy >= d * d;
+            }
+            if (placed) {
+                b->x[i] = period > 0 ? x - period * floor(x / period) : x;
+                b->y[i] = y;
+                b->radius[i] = r;
+            }
+        }
+        if (!placed) {
+            double placed_area = 0;
+            for (int j = 0; j < i; j++)
+                placed_area += SURGE_PI * b->radius[j] * b->radius[j];
+            snprintf(err, err_len, "boulders: placed %d of %d discs (solid fraction %.3f of the %.3f asked) in %d "
+                     "random tries; lower boulders.solid_fraction or boulders.min_gap_m", i, n,
+                     placed_area / ((x1 - x0) * (y1 - y0)), q->boulders.solid_fraction, MAX_PLACEMENT_TRIES);
+            free(radii);
+            return -1;
+        }
+    }
+    free(radii);
+    return 0;
+}
+
+int boulders_define(surge_sim *sim, char *err, size_t err_len)
+{
+    const surge_params *p = &sim->params;
+    boulder_set *b = &sim->boulders;
+    const double period = p->domain.periodic_x ? p->domain.length_m : 0;
+    int rc = 0;
+    if (p->boulders.placement == SURGE_BOULDERS_LIST)
+        rc = parse_list(b, p->boulders.list_m, err, err_len);
+    else if (p->boulders.placement == SURGE_BOULDERS_RANDOM)
+        rc = place_random(b, p, period, err, err_len);
+    if (rc != 0 || b->count == 0)
+        return rc;
+    const double dp = p->numerics.dp_m;
+    for (int i = 0; i < b->count; i++) {
+        if (b->radius[i] < 1.5 * dp) {
+            snprintf(err, err_len, "boulder %d: radius %g m is below 1.5 dp (%g m); a disc needs a few particles "
+                     "across", i + 1, b->radius[i], 1.5 * dp);
+            return -1;
+        }
+        const double r = b->radius[i];
+        const int inside_x = period > 0 || (b->x[i] - r >= -1e-12 && b->x[i] + r <= p->domain.length_m + 1e-12);
+        if (!inside_x || b->y[i] - r < -1e-12 || b->y[i] + r > p->domain.height_m + 1e-12) {
+            snprintf(err, err_len, "boulder %d at (%g, %g) m with radius %g m is not inside the domain [0, %g] x "
+                     "[0, %g] m", i + 1, b->x[i], b->y[i], r, p->domain.length_m, p->domain.height_m);
+            return -1;
+        }
+        if (period > 0)
+            b->x[i] -= period * floor(b->x[i] / period);
+        b->mass[i] = p->boulders.density_ratio * sim->rho0 * SURGE_PI * r * r;
+        b->inv_mass[i] = 1.0 / b->mass[i];
+        b->inv_inertia[i] = 1.0 / (0.5 * b->mass[i] * r * r);
+    }
+    b->contacts = contact_solver_create();
+    if (!b->contacts) {
+        snprintf(err, err_len, "out of memory for the contact solver");
+        return -1;
+    }
+    return 0;
+}
+
+/* Rings k = 0, 1, ... at radius r - (k + 1/2) dp, as deep as the wall layers, n_k = round(2 pi rho / dp). */
+static int ring_count(double r, double dp, int layers, int k_max_out[1])
+{
+    int k = 0;
+    while (k < layers && r - (k + 0.5) * dp > 0.25 * dp)
+        k++;
+    k_max_out[0] = k;
+    int n = 0;
+    for (int q = 0; q < k; q++) {
+        const int per_ring = (int)lround(2 * SURGE_PI * (r - (q + 0.5) * dp) / dp);
+        n += per_ring > 1 ? per_ring : 1;
+    }
+    return n;
+}
+
+int boulders_particle_count(const surge_sim *sim)
+{
+    const int layers = sim->params.walls.layers;
+    int n = 0, rings;
+    for (int i = 0; i < sim->boulders.count; i++)
+        n += ring_count(sim->boulders.radius[i], sim->params.numerics.dp_m, layers, &rings);
+    return n;
+}
+
+void boulders_create_particles(surge_sim *sim, int first)
+{
+    boulder_set *b = &sim->boulders;
+    const double dp = sim->params.numerics.dp_m;
+    const int layers = sim->params.walls.layers;
+    int k = first;
+    for (int i = 0; i < b->count; i++) {
+        int rings;
+        ring_count(b->radius[i], dp, layers, &rings);
+        for (int q = 0; q < rings; q++) {
+            const double rho = b->radius[i] - (q + 0.5) * dp;
+            int per_ring = (int)lround(2 * SURGE_PI * rho / dp);
+            per_ring = per_ring > 1 ? per_ring : 1;
+            for (int j = 0; j < per_ring; j++) {
+                const double phi = 2 * SURGE_PI * (j + 0.5 * (q % 2)) / per_ring;
+                b->of_wall[k] = i;
+                b->local_x[k] = rho * cos(phi);
+                b->local_y[k] = rho * sin(phi);
+                sim->id[k] = k;
+                sim->wall_of[k] = WALL_BOULDER;
+                sim->kind[k] = SURGE_KIND_BOULDER;
+                sim->rho[k] = (real)sim->rho0;
+                k++;
+            }
+        }
+    }
+}
+
+int boulders_cover(const surge_sim *sim, double x, double y)
+{
+    const boulder_set *b = &sim->boulders;
+    const double period = sim->params.domain.periodic_x ? sim->params.domain.length_m : 0;
+    const double clearance = 0.25 * sim->params.numerics.dp_m;
+    for (int i = 0; i < b->count; i++) {
+        const double dx = wrap_dx(x - b->x[i], period), dy = y - b->y[i], d = b->radius[i] + clearance;
+        if (dx * dx + dy * dy < d * d)
+            return 1;
+    }
+    return 0;
+}
+
+/* eq. 11: u_k = V + Omega x (r_k - R0); the ghost node mirrors the particle across the circle. */
+void boulders_place_particles(surge_sim *sim)
+{
+    const boulder_set *b = &sim->boulders;
+    if (b->count == 0)
+        return;
+    const double period = sim->grid.period_m;
+    #pragma omp parallel for schedule(static)
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
+        const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+        double x = b->x[i] + rx;
+        if (period > 0) {
+            x -= period * floor(x / period);
+            if (x >= period)
+                x = 0;
+        }
+        sim->x[k] = x;
+        sim->y[k] = b->y[i] + ry;
+        sim->vx[k] = (real)(b->vx[i] - b->omega[i] * ry);
+        sim->vy[k] = (real)(b->vy[i] + b->omega[i] * rx);
+        const double rho = sqrt(rx * rx + ry * ry), to_ghost = 2 * (b->radius[i] - rho) / rho;
+        sim->ghost_dx[k] = (real)(rx * to_ghost);
+        sim->ghost_dy[k] = (real)(ry * to_ghost);
+    }
+}
+
+/* eq. 10: the force on each disc particle is minus the pair forces it exerts on its fluid neighbours
+ * (the terms of interaction.c's wall loop), so momentum is exchanged exactly. */
+void boulders_fluid_forces(surge_sim *sim)
+{
+    boulder_set *b = &sim->boulders;
+    if (b->count == 0)
+        return;
+    const cell_grid *g = &sim->grid;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
+    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, support2 = sim->kernel.support2;
+    const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
+    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
+    const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    real *restrict fx = sim->ax, *restrict fy = sim->ay; /* wall entries are free scratch */
+    #pragma omp parallel for schedule(static)
+    for (int k = 0; k < sim->wall_count; k++) {
+        fx[k] = fy[k] = 0;
+        if (b->of_wall[sim->id[k]] < 0)
+            continue;
+        neighbour_ranges nr;
+        grid_neighbour_ranges(g, g->fluid_start, x[k], y[k], &nr);
+        real sum_x = 0, sum_y = 0;
+        for (int q = 0; q < nr.count; q++) {
+            for (int a = nr.begin[q]; a < nr.end[q]; a++) {
+                const real dx = (real)(x[a] + nr.shift_x[q] - x[k]), dy = (real)(y[a] - y[k]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2)
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                const real pressure_term = -mass * (pres[a] + pres[k]) * inv_rho[a] * inv_rho[k];
+                const real viscous_term = mass * four_nu * f * r2 / ((rho[a] + rho[k]) * (r2 + eta2));
+                sum_x += pressure_term * f * dx + viscous_term * (vx[a] - sim->wall_vx[k]);
+                sum_y += pressure_term * f * dy + viscous_term * (vy[a] - sim->wall_vy[k]);
+            }
+        }
+        fx[k] = -mass * sum_x;
+        fy[k] = -mass * sum_y;
+    }
+    for (int i = 0; i < b->count; i++)
+        b->fx[i] = b->fy[i] = b->torque[i] = 0;
+    for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
+        const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+        b->fx[i] += fx[k];
+        b->fy[i] += fy[k];
+        b->torque[i] += rx * fy[k] - ry * fx[k];
+    }
+}
+
+void boulders_predict(surge_sim *sim, double half_dt_s)
+{
+    boulder_set *b = &sim->boulders;
+    const double period = sim->grid.period_m;
+    const double gx = sim->gx - sim->params.body.force_x_mps2, gy = sim->gy;
+    const double force_x = sim->params.body.force_x_mps2 / sim->params.boulders.density_ratio;
+    for (int i = 0; i < b->count; i++) {
+        b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
+        b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+        b->x[i] += half_dt_s * b->vx[i];
+        if (period > 0)
+            b->x[i] -= period * floor(b->x[i] / period);
+        b->y[i] += half_dt_s * b->vy[i];
+        b->angle[i] += half_dt_s * b->omega[i];
+        b->vx[i] += half_dt_s * (b->fx[i] * b->inv_mass[i] + gx + force_x);
+        b->vy[i] += half_dt_s * (b->fy[i] * b->inv_mass[i] + gy);
+        b->omega[i] += half_dt_s * b->torque[i] * b->inv_inertia[i];
+    }
+    boulders_place_particles(sim);
+}
+
+void boulders_restore(surge_sim *sim)
+{
+    boulder_set *b = &sim->boulders;
+    for (int i = 0; i < b->count; i++) {
+        b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
+        b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+    }
+    boulders_place_particles(sim);
+}
+
+/* The walls discs can touch: the bed (moving with the belt), the lid, the box sides and the upstream wall. */
+static int contact_walls(const surge_sim *sim, contact_wall walls[5])
+{
+    const surge_params *p = &sim->params;
+    int n = 0;
+    if (p->walls.bottom)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, 1, 0, 0, 0, 0, 0, sim->wall_speed[WALL_BOTTOM], 0};
+    if (p->walls.top)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m, 0, 0, 0, 0, sim->wall_speed[WALL_TOP], 0};
+    if (p->walls.left)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, 0, 0, 0, 0, 0, 0, 0};
+    if (p->walls.right)
+        walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m, 0, 0, 0, 0, 0, 0};
+    if (p->walls.upstream)
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, p->walls.upstream_x_m, 0, p->walls.upstream_x_m,
+                                    p->walls.upstream_height_m, 0, 0};
+    return n;
+}
+
+int boulders_correct(surge_sim *sim, double dt_s)
+{
+    boulder_set *b = &sim->boulders;
+    const surge_params *p = &sim->params;
+    /* gravity on the disc's mass; the driving force of a channel (a pressure gradient) on its volume */
+    const double gx = sim->gx - p->body.force_x_mps2, gy = sim->gy;
+    const double force_x = p->body.force_x_mps2 / p->boulders.density_ratio;
+    for (int i = 0; i < b->count; i++) {
+        b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
+        b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+        b->ax[i] = b->fx[i] * b->inv_mass[i] + gx + force_x;
+        b->ay[i] = b->fy[i] * b->inv_mass[i] + gy;
+        b->alpha[i] = b->torque[i] * b->inv_inertia[i];
+    }
+    contact_wall walls[5];
+    const int wall_count = contact_walls(sim, walls);
+    contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->radius, b->inv_mass,
+                           b->inv_inertia};
+    const contact_settings settings = {p->contacts.friction, p->contacts.restitution, p->contacts.restitution_min_mps,
+                                       p->contacts.substeps, p->contacts.iterations, p->contacts.erp,
+                                       sim->grid.period_m};
+    if (contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay, b->alpha) != 0)
+        return -1;
+    boulders_place_particles(sim);
+    return 0;
+}

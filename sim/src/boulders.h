@@ -1,0 +1,24 @@
+/* Boulders: rigid discs made of boundary particles, moved by the fluid (GMD eq. 10-11) and by contacts
+ * (contact_solver.h). The solver's part of them; see boulders.c. */
+#ifndef SURGE_BOULDERS_H
+#define SURGE_BOULDERS_H
+
+#include <stdint.h>
+
+#include "contact_solver.h"
+
+typedef struct boulder_set {
+    int count;
+    /* state: centre of mass (x wrapped into the period), orientation, velocities */
+    double *x, *y, *angle, *vx, *vy, *omega;
+    double *x_n, *y_n, *angle_n, *vx_n, *vy_n, *omega_n; /* at the start of the step */
+    double *radius, *mass, *inv_mass, *inv_inertia;       /* per metre of width */
+    double *fx, *fy, *torque;                             /* fluid force and torque on each disc (eq. 10) */
+    double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
+    /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
+    int32_t *of_wall;
+    double *local_x, *local_y;
+    contact_solver *contacts;
+} boulder_set;
+
+#endif

@@ -1,0 +1,65 @@
+/* Non-smooth contact dynamics for rigid discs (in the spirit of Chrono's NSC/DVI solver, GMD Sect. 2.2):
+ * every sub-step applies the external accelerations, finds the contacts (grid broad phase), solves the
+ * impulses of all contacts together by projected Gauss-Seidel with warm starting (Signorini non-penetration,
+ * Coulomb friction, restitution), then moves the discs with the new velocities (semi-implicit Euler).
+ * Knows nothing of SPH: the solver hands it accelerations and takes back positions and velocities. */
+#ifndef SURGE_CONTACT_SOLVER_H
+#define SURGE_CONTACT_SOLVER_H
+
+#include <stdint.h>
+
+/* The discs, structure of arrays; per metre of width in 2D. inv_mass or inv_inertia 0: that motion is locked. */
+typedef struct contact_discs {
+    int count;
+    double *x, *y, *angle;
+    double *vx, *vy, *omega;
+    const double *radius, *inv_mass, *inv_inertia;
+} contact_discs;
+
+typedef enum contact_wall_shape {
+    CONTACT_PLANE = 0,   /* the half-plane n . p >= offset: discs stay on the side n points to */
+    CONTACT_SEGMENT = 1, /* a thin segment from (x0, y0) to (x1, y1), touched from either side and its ends */
+} contact_wall_shape;
+
+typedef struct contact_wall {
+    contact_wall_shape shape;
+    double nx, ny, offset;       /* plane */
+    double x0, y0, x1, y1;       /* segment */
+    double vx_mps, vy_mps;       /* surface velocity (a moving belt) */
+} contact_wall;
+
+typedef struct contact_settings {
+    double friction;            /* Coulomb mu */
+    double restitution;         /* e */
+    double restitution_min_mps; /* no bounce below this approach speed */
+    int substeps, iterations;
+    double erp;                 /* fraction of an overlap removed per sub-step */
+    double period_m;            /* > 0: periodic in x with this period, positions kept in [0, period) */
+} contact_settings;
+
+typedef struct contact_stats {
+    int contacts;         /* touching or about to touch in the last sub-step */
+    double max_overlap_m; /* largest overlap at the start of any sub-step of the last advance */
+} contact_stats;
+
+typedef struct contact_solver contact_solver;
+
+contact_solver *contact_solver_create(void);
+void contact_solver_destroy(contact_solver *solver);
+
+/* Advances the discs by dt_s under constant accelerations (ax, ay, alpha per disc; NULL: none) and the
+ * contacts with each other and with the walls. Returns 0, or -1 when out of memory. */
+int contact_solver_advance(contact_solver *solver, contact_discs *discs, const contact_wall *walls, int wall_count,
+                           const contact_settings *settings, double dt_s, const double *ax, const double *ay,
+                           const double *alpha);
+
+contact_stats contact_solver_stats(const contact_solver *solver);
+
+/* The warm-start impulses the next advance starts from (for checkpoints): key, normal and tangent impulse of each
+ * contact of the last sub-step. */
+int contact_solver_cache_count(const contact_solver *solver);
+void contact_solver_cache_get(const contact_solver *solver, int64_t *keys, double *lambda_n, double *lambda_t);
+int contact_solver_cache_set(contact_solver *solver, int count, const int64_t *keys, const double *lambda_n,
+                             const double *lambda_t); /* -1: out of memory */
+
+#endif

@@ -1,0 +1,231 @@
+/* The contact solver alone (sim/src/contact_solver.c), no fluid: a disc at rest on a plane stays at rest; a
+ * stack settles without drift or penetration; a disc on an incline sticks or slides (rotation locked) and rolls
+ * or slips (free) as Coulomb friction says; a bouncing disc keeps e^2 of its height; a head-on elastic
+ * collision swaps velocities across the periodic boundary.
+ * usage: test_contacts rest|stack|incline|bounce|collision */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "contact_solver.h"
+
+enum { MAX_DISCS = 16 };
+
+static int failures = 0;
+
+static void expect_below(const char *what, double value, double bound)
+{
+    const int ok = value <= bound;
+    printf("%-72s %12.4g  (bound %g)  %s\n", what, value, bound, ok ? "ok" : "FAILED");
+    failures += !ok;
+}
+
+typedef struct world {
+    double x[MAX_DISCS], y[MAX_DISCS], angle[MAX_DISCS], vx[MAX_DISCS], vy[MAX_DISCS], omega[MAX_DISCS];
+    double radius[MAX_DISCS], inv_mass[MAX_DISCS], inv_inertia[MAX_DISCS];
+    double ax[MAX_DISCS], ay[MAX_DISCS];
+    contact_discs discs;
+    contact_wall walls[4];
+    int wall_count;
+    contact_settings settings;
+    contact_solver *solver;
+    double max_overlap_m;
+} world;
+
+static void world_init(world *w, double gx, double gy)
+{
+    memset(w, 0, sizeof *w);
+    w->discs = (contact_discs){0, w->x, w->y, w->angle, w->vx, w->vy, w->omega, w->radius, w->inv_mass,
+                               w->inv_inertia};
+    w->settings = (contact_settings){.friction = 0.5, .restitution = 0, .restitution_min_mps = 0.01, .substeps = 4,
+                                     .iterations = 30, .erp = 0.2, .period_m = 0};
+    for (int i = 0; i < MAX_DISCS; i++)
+        w->ax[i] = gx, w->ay[i] = gy;
+    w->solver = contact_solver_create();
+}
+
+/* A disc of density 2000 kg/m3 (per metre of width); rotation locked when lock_rotation. */
+static int add_disc(world *w, double x, double y, double r, int lock_rotation)
+{
+    const int i = w->discs.count++;
+    const double mass = 2000 * 3.14159265358979323846 * r * r;
+    w->x[i] = x, w->y[i] = y, w->radius[i] = r;
+    w->inv_mass[i] = 1 / mass;
+    w->inv_inertia[i] = lock_rotation ? 0 : 1 / (0.5 * mass * r * r);
+    return i;
+}
+
+static void add_plane(world *w, double nx, double ny, double offset)
+{
+    w->walls[w->wall_count++] = (contact_wall){.shape = CONTACT_PLANE, .nx = nx, .ny = ny, .offset = offset};
+}
+
+static void run(world *w, double dt, int steps)
+{
+    for (int s = 0; s < steps; s++) {
+        if (contact_solver_advance(w->solver, &w->discs, w->walls, w->wall_count, &w->settings, dt, w->ax, w->ay,
+                                   NULL) != 0) {
+            fprintf(stderr, "out of memory\n");
+            exit(2);
+        }
+        w->max_overlap_m = fmax(w->max_overlap_m, contact_solver_stats(w->solver).max_overlap_m);
+    }
+}
+
+static int test_rest(void)
+{
+    world w;
+    world_init(&w, 0, -9.81);
+    add_plane(&w, 0, 1, 0);
+    add_disc(&w, 0.3, 0.05, 0.05, 0);
+    run(&w, 1e-3, 2000);
+    expect_below("rest: |y - r| after 2 s on the plane (m)", fabs(w.y[0] - 0.05), 1e-9);
+    expect_below("rest: |v| after 2 s (m/s)", hypot(w.vx[0], w.vy[0]), 1e-9);
+    expect_below("rest: |x - x0| (m)", fabs(w.x[0] - 0.3), 1e-12);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
+/* A pyramid 3-2-1 of equal discs in a box exactly three diameters wide, dropped from small gaps. */
+static int test_stack(void)
+{
+    world w;
+    world_init(&w, 0, -9.81);
+    const double r = 0.05;
+    add_plane(&w, 0, 1, 0);
+    add_plane(&w, 1, 0, 0);
+    add_plane(&w, -1, 0, -6 * r);
+    for (int i = 0; i < 3; i++)
+        add_disc(&w, r + 2 * r * i, r + 0.002, r, 0);
+    for (int i = 0; i < 2; i++)
+        add_disc(&w, 2 * r + 2 * r * i, r + sqrt(3.0) * r + 0.01, r, 0);
+    add_disc(&w, 3 * r, r + 2 * sqrt(3.0) * r + 0.02, r, 0);
+    run(&w, 1e-3, 1000);
+    double settled[MAX_DISCS][2];
+    for (int i = 0; i < w.discs.count; i++)
+        settled[i][0] = w.x[i], settled[i][1] = w.y[i];
+    w.max_overlap_m = 0;
+    run(&w, 1e-3, 3000);
+    double drift = 0, speed = 0;
+    for (int i = 0; i < w.discs.count; i++) {
+        drift = fmax(drift, hypot(w.x[i] - settled[i][0], w.y[i] - settled[i][1]));
+        speed = fmax(speed, hypot(w.vx[i], w.vy[i]));
+    }
+    printf("stack: top disc at y = %.6f m (touching: %.6f m)\n", w.y[5], r + 2 * sqrt(3.0) * r);
+    expect_below("stack: drift of any disc over 3 s once settled, in radii", drift / r, 1e-4);
+    expect_below("stack: largest overlap while resting, in radii", w.max_overlap_m / r, 1e-3);
+    expect_below("stack: largest speed at the end (m/s)", speed, 1e-5);
+    expect_below("stack: top disc height error, in radii", fabs(w.y[5] - (r + 2 * sqrt(3.0) * r)) / r, 2e-3);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
+/* Gravity tilted by theta, the bed along x. Returns the measured acceleration along the bed over 1 s (from rest,
+ * after 0.1 s of settling) and the contact point's slip velocity at the end. */
+static double incline_acceleration(double tan_theta, int lock_rotation, double *slip_mps)
+{
+    const double theta = atan(tan_theta), g = 9.81, r = 0.05;
+    world w;
+    world_init(&w, g * sin(theta), -g * cos(theta));
+    add_plane(&w, 0, 1, 0);
+    add_disc(&w, 1, r, r, lock_rotation);
+    run(&w, 1e-3, 100);
+    const double v0 = w.vx[0];
+    run(&w, 1e-3, 1000);
+    *slip_mps = w.vx[0] + w.omega[0] * r; /* velocity of the contact point along x */
+    contact_solver_destroy(w.solver);
+    return (w.vx[0] - v0) / 1.0;
+}
+
+static int test_incline(void)
+{
+    const double g = 9.81, mu = 0.5;
+    double slip, a;
+    char what[160];
+    /* rotation locked: a block. Sticks for tan theta < mu, slides at g (sin - mu cos) above. */
+    a = incline_acceleration(0.4, 1, &slip);
+    expect_below("incline, rotation locked, tan = 0.4 < mu: |acceleration| (m/s2)", fabs(a), 1e-9);
+    a = incline_acceleration(0.6, 1, &slip);
+    double theta = atan(0.6), expected = g * (sin(theta) - mu * cos(theta));
+    snprintf(what, sizeof what, "incline, rotation locked, tan = 0.6 > mu: |a / %.4f - 1|", expected);
+    expect_below(what, fabs(a / expected - 1), 1e-3);
+    /* free disc: rolls without slip at 2/3 g sin for tan theta < 3 mu, slips at g (sin - mu cos) above */
+    a = incline_acceleration(1.0, 0, &slip);
+    theta = atan(1.0), expected = 2.0 / 3.0 * g * sin(theta);
+    snprintf(what, sizeof what, "incline, free disc, tan = 1 < 3 mu (rolls): |a / %.4f - 1|", expected);
+    expect_below(what, fabs(a / expected - 1), 1e-3);
+    expect_below("incline, free disc, tan = 1: contact-point slip speed (m/s)", fabs(slip), 1e-6);
+    a = incline_acceleration(2.0, 0, &slip);
+    theta = atan(2.0), expected = g * (sin(theta) - mu * cos(theta));
+    snprintf(what, sizeof what, "incline, free disc, tan = 2 > 3 mu (slips): |a / %.4f - 1|", expected);
+    expect_below(what, fabs(a / expected - 1), 1e-3);
+    expect_below("incline, free disc, tan = 2: slips (1 / slip speed, s/m)", 1 / fabs(slip), 10);
+    return failures;
+}
+
+/* Dropped from 0.2 m with e = 0.8: the rebound peaks at e^2 0.2 m. */
+static int test_bounce(void)
+{
+    world w;
+    world_init(&w, 0, -9.81);
+    w.settings.restitution = 0.8;
+    add_plane(&w, 0, 1, 0);
+    const double r = 0.05, drop = 0.2;
+    add_disc(&w, 0.5, r + drop, r, 0);
+    double peak = 0;
+    int bounced = 0;
+    for (int s = 0; s < 2000 && !(bounced && w.vy[0] < 0); s++) {
+        const double vy_before = w.vy[0];
+        run(&w, 2e-4, 1);
+        bounced |= vy_before < 0 && w.vy[0] > 0;
+        if (bounced)
+            peak = fmax(peak, w.y[0] - r);
+    }
+    printf("bounce: rebound peak %.5f m after a %.3f m drop (e^2 h = %.5f m)\n", peak, drop, 0.64 * drop);
+    expect_below("bounce: |rebound height / (e^2 h) - 1|", fabs(peak / (0.64 * drop) - 1), 0.02);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
+/* Two equal discs meet head on across the periodic boundary, e = 1, no friction: they swap velocities;
+ * momentum is kept to round-off. */
+static int test_collision(void)
+{
+    world w;
+    world_init(&w, 0, 0);
+    w.settings.restitution = 1;
+    w.settings.friction = 0;
+    w.settings.period_m = 1.0;
+    const double r = 0.05;
+    add_disc(&w, 0.95, 0.5, r, 0);
+    add_disc(&w, 0.20, 0.5, r, 0);
+    w.vx[0] = 1.0, w.vx[1] = -0.5;
+    const double p0 = (w.vx[0] + w.vx[1]) / w.inv_mass[0];
+    run(&w, 1e-3, 300);
+    expect_below("collision: |vx of disc 1 - (-0.5)| (m/s)", fabs(w.vx[0] + 0.5), 1e-9);
+    expect_below("collision: |vx of disc 2 - 1| (m/s)", fabs(w.vx[1] - 1.0), 1e-9);
+    expect_below("collision: relative momentum change", fabs((w.vx[0] + w.vx[1]) / w.inv_mass[0] - p0) / fabs(p0),
+                 1e-12);
+    expect_below("collision: positions stay in [0, period) (1 = no)", !(w.x[0] >= 0 && w.x[0] < 1 && w.x[1] >= 0 &&
+                 w.x[1] < 1), 0);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
+int main(int argc, char **argv)
+{
+    const char *which = argc > 1 ? argv[1] : "";
+    if (!strcmp(which, "rest"))
+        return test_rest() != 0;
+    if (!strcmp(which, "stack"))
+        return test_stack() != 0;
+    if (!strcmp(which, "incline"))
+        return test_incline() != 0;
+    if (!strcmp(which, "bounce"))
+        return test_bounce() != 0;
+    if (!strcmp(which, "collision"))
+        return test_collision() != 0;
+    fprintf(stderr, "usage: test_contacts rest|stack|incline|bounce|collision\n");
+    return 2;
+}
