@@ -126,6 +126,12 @@ static int place_random(boulder_set *b, const surge_params *p, double period, ch
         radii[n++] = r;
         area += SURGE_PI * r * r;
     }
+    if (radii && n == 0) {
+        free(radii);
+        snprintf(err, err_len, "boulders: solid_fraction %g of the region [%g, %g] x [%g, %g] m holds no disc of "
+                 "radius %g m", q->boulders.solid_fraction, x0, x1, y0, y1, r_min);
+        return -1;
+    }
     if (!radii || allocate_discs(b, n) != 0) {
         free(radii);
         snprintf(err, err_len, "out of memory placing boulders");
@@ -312,6 +318,17 @@ void boulders_place_particles(surge_sim *sim)
         sim->ghost_dx[k] = (real)(rx * to_ghost);
         sim->ghost_dy[k] = (real)(ry * to_ghost);
     }
+}
+
+void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy)
+{
+    const boulder_set *b = &sim->boulders;
+    const int id = sim->id[k], i = b->of_wall[id];
+    const double c = cos(b->angle[i]), s = sin(b->angle[i]);
+    const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+    const double to_surface = b->radius[i] / sqrt(rx * rx + ry * ry);
+    *vx = b->vx[i] - b->omega[i] * ry * to_surface;
+    *vy = b->vy[i] + b->omega[i] * rx * to_surface;
 }
 
 /* eq. 10: the force on each disc particle is minus the pair forces it exerts on its fluid neighbours

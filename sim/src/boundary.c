@@ -71,7 +71,10 @@ void boundary_update(surge_sim *sim)
                 }
             }
         }
-        const double wall_vx = vx[b], wall_vy = vy[b];
+        /* no-slip: mirrored about the wall's velocity where the wall face lies between particle and ghost */
+        double wall_vx = vx[b], wall_vy = vy[b];
+        if (sim->wall_of[b] == WALL_BOULDER)
+            boulders_surface_velocity(sim, b, &wall_vx, &wall_vy);
         double rho_b = rho0, vgx = wall_vx, vgy = wall_vy;
         const double det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) +
                            a02 * (a10 * a21 - a11 * a20);

@@ -110,6 +110,8 @@ void boulders_create_particles(surge_sim *sim, int first);
 int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc */
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 void boulders_fluid_forces(surge_sim *sim);                   /* eq. 10, after interaction_compute */
+/* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target). */
+void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy);
 void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step start, moves to the half step */
 int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */

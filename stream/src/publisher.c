@@ -55,7 +55,7 @@ static const state_field state_fields[] = {
     {"vy_mps", "f32", "m/s", 4},
     {"density_kgpm3", "f32", "kg/m^3", 4},
     {"pressure_pa", "f32", "Pa", 4},
-    {"kind", "u8", "0 fluid, 1 wall, 2 moving wall", 1},
+    {"kind", "u8", "0 fluid, 1 wall, 2 moving wall, 3 boulder", 1},
     {"id", "i32", "-", 4},
 };
 enum { STATE_FIELD_COUNT = sizeof state_fields / sizeof state_fields[0] };
@@ -260,16 +260,19 @@ static void send_state(surge_publisher *p, const char *topic, const surge_frame 
 
 static void send_bodies(surge_publisher *p, const surge_frame *f)
 {
+    const surge_boulder_state *b = &f->snap.boulders;
     cJSON *h = common_header("bodies", f);
-    cJSON_AddNumberToObject(h, "count", 0);
+    cJSON_AddNumberToObject(h, "count", b->count);
     cJSON *fields = cJSON_AddArrayToObject(h, "fields");
-    const void *arrays[BODY_FIELD_COUNT];
+    const void *arrays[BODY_FIELD_COUNT] = {b->x_m, b->y_m, b->angle_rad, b->vx_mps, b->vy_mps, b->omega_radps,
+                                            b->radius_m};
     size_t bytes[BODY_FIELD_COUNT];
     static const double none[1] = {0};
     for (int k = 0; k < BODY_FIELD_COUNT; k++) {
         add_field(fields, &body_fields[k]);
-        arrays[k] = none;
-        bytes[k] = 0;
+        bytes[k] = (size_t)b->count * sizeof(double);
+        if (b->count == 0)
+            arrays[k] = none;
     }
     send_message(p, "bodies", h, arrays, bytes, BODY_FIELD_COUNT);
     cJSON_Delete(h);
