@@ -226,6 +226,60 @@ static void put_sequence_i64(out_file *o, int64_t first, size_t n)
     }
 }
 
+/* The parts every surge .vtp shares: XML prologue with the time_s and step field data, the opening of a
+ * piece of n vertices, and after the point data the Points and one-vertex-per-point Verts tags. */
+static void put_prologue(out_file *o, size_t n, const char *scalars, const char *vectors, uint64_t *offset)
+{
+    put_text(o, "<?xml version=\"1.0\"?>\n"
+                "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+                "header_type=\"UInt64\">\n"
+                "  <PolyData>\n"
+                "    <FieldData>\n");
+    array_tag(o, "      ", "Float64", "time_s", 0, sizeof(double), offset);
+    array_tag(o, "      ", "Int64", "step", 0, sizeof(int64_t), offset);
+    put_text(o, "    </FieldData>\n"
+                "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
+                "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
+                "      <PointData Scalars=\"%s\" Vectors=\"%s\">\n",
+             n, n, scalars, vectors);
+}
+
+static void put_points_and_verts_tags(out_file *o, uint64_t n64, uint64_t *offset)
+{
+    put_text(o, "      </PointData>\n"
+                "      <Points>\n");
+    array_tag(o, "        ", "Float64", "Points", 3, 3 * 8 * n64, offset);
+    put_text(o, "      </Points>\n"
+                "      <Verts>\n");
+    array_tag(o, "        ", "Int64", "connectivity", 1, 8 * n64, offset);
+    array_tag(o, "        ", "Int64", "offsets", 1, 8 * n64, offset);
+    put_text(o, "      </Verts>\n"
+                "    </Piece>\n"
+                "  </PolyData>\n"
+                "  <AppendedData encoding=\"raw\">\n"
+                "   _");
+}
+
+static void put_time_and_step(out_file *o, double time_s, int64_t step)
+{
+    block_header(o, sizeof(double));
+    put_le(o, &time_s, sizeof time_s, 1);
+    block_header(o, sizeof(int64_t));
+    put_le(o, &step, sizeof step, 1);
+}
+
+/* Points (x, y, 0), the Verts blocks and the end of the file. */
+static void put_points_and_verts(out_file *o, const double *x, const double *y, size_t n)
+{
+    block_header(o, 3 * 8 * (uint64_t)n);
+    put_xyz_f64(o, x, y, n);
+    block_header(o, 8 * (uint64_t)n);
+    put_sequence_i64(o, 0, n);
+    block_header(o, 8 * (uint64_t)n);
+    put_sequence_i64(o, 1, n);
+    put_text(o, "\n  </AppendedData>\n</VTKFile>\n");
+}
+
 int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, size_t err_len)
 {
     if (path == NULL || snap == NULL) {
@@ -248,47 +302,18 @@ int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, siz
     const size_t n = (size_t)snap->count;
     const uint64_t n64 = (uint64_t)n;
     uint64_t offset = 0;
-    const char *in3 = "      ";
     const char *in4 = "        ";
-
-    /* XML header; the tags are printed in the same order as the binary blocks below. */
-    put_text(&o, "<?xml version=\"1.0\"?>\n"
-                 "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-                 "header_type=\"UInt64\">\n"
-                 "  <PolyData>\n"
-                 "    <FieldData>\n");
-    array_tag(&o, in3, "Float64", "time_s", 0, sizeof(double), &offset);
-    array_tag(&o, in3, "Int64", "step", 0, sizeof(int64_t), &offset);
-    put_text(&o, "    </FieldData>\n"
-                 "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
-                 "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
-                 "      <PointData Scalars=\"density_kgpm3\" Vectors=\"velocity_mps\">\n",
-             n, n);
+    /* the tags in the order of the binary blocks below */
+    put_prologue(&o, n, "density_kgpm3", "velocity_mps", &offset);
     array_tag(&o, in4, "Float32", "velocity_mps", 3, 3 * 4 * n64, &offset);
     array_tag(&o, in4, "Float32", "density_kgpm3", 1, 4 * n64, &offset);
     array_tag(&o, in4, "Float32", "pressure_pa", 1, 4 * n64, &offset);
     array_tag(&o, in4, "UInt8", "kind", 1, n64, &offset);
     array_tag(&o, in4, "Int32", "id", 1, 4 * n64, &offset);
-    put_text(&o, "      </PointData>\n"
-                 "      <Points>\n");
-    array_tag(&o, in4, "Float64", "Points", 3, 3 * 8 * n64, &offset);
-    put_text(&o, "      </Points>\n"
-                 "      <Verts>\n");
-    array_tag(&o, in4, "Int64", "connectivity", 1, 8 * n64, &offset);
-    array_tag(&o, in4, "Int64", "offsets", 1, 8 * n64, &offset);
-    put_text(&o, "      </Verts>\n"
-                 "    </Piece>\n"
-                 "  </PolyData>\n"
-                 "  <AppendedData encoding=\"raw\">\n"
-                 "   _");
+    put_points_and_verts_tags(&o, n64, &offset);
 
     /* Binary blocks: each is a UInt64 byte count followed by the little-endian data. */
-    const int64_t step = snap->step;
-    block_header(&o, sizeof(double));
-    put_le(&o, &snap->time_s, sizeof snap->time_s, 1);
-    block_header(&o, sizeof(int64_t));
-    put_le(&o, &step, sizeof step, 1);
-
+    put_time_and_step(&o, snap->time_s, snap->step);
     block_header(&o, 3 * 4 * n64);
     put_xyz_f32(&o, snap->vx_mps, snap->vy_mps, n);
     block_header(&o, 4 * n64);
@@ -299,15 +324,7 @@ int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, siz
     put_bytes(&o, snap->kind, n);
     block_header(&o, 4 * n64);
     put_le(&o, snap->id, sizeof(int32_t), n);
-
-    block_header(&o, 3 * 8 * n64);
-    put_xyz_f64(&o, snap->x_m, snap->y_m, n);
-    block_header(&o, 8 * n64);
-    put_sequence_i64(&o, 0, n);
-    block_header(&o, 8 * n64);
-    put_sequence_i64(&o, 1, n);
-
-    put_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
+    put_points_and_verts(&o, snap->x_m, snap->y_m, n);
     return out_commit(&o, err, err_len);
 }
 
@@ -325,41 +342,14 @@ int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char 
     const size_t n = (size_t)b->count;
     const uint64_t n64 = (uint64_t)n;
     uint64_t offset = 0;
-    const char *in3 = "      ";
     const char *in4 = "        ";
-    put_text(&o, "<?xml version=\"1.0\"?>\n"
-                 "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
-                 "header_type=\"UInt64\">\n"
-                 "  <PolyData>\n"
-                 "    <FieldData>\n");
-    array_tag(&o, in3, "Float64", "time_s", 0, sizeof(double), &offset);
-    array_tag(&o, in3, "Int64", "step", 0, sizeof(int64_t), &offset);
-    put_text(&o, "    </FieldData>\n"
-                 "    <Piece NumberOfPoints=\"%zu\" NumberOfVerts=\"%zu\" NumberOfLines=\"0\" "
-                 "NumberOfStrips=\"0\" NumberOfPolys=\"0\">\n"
-                 "      <PointData Scalars=\"radius_m\" Vectors=\"velocity_mps\">\n",
-             n, n);
+    put_prologue(&o, n, "radius_m", "velocity_mps", &offset);
     array_tag(&o, in4, "Float64", "velocity_mps", 3, 3 * 8 * n64, &offset);
     array_tag(&o, in4, "Float64", "omega_radps", 1, 8 * n64, &offset);
     array_tag(&o, in4, "Float64", "angle_rad", 1, 8 * n64, &offset);
     array_tag(&o, in4, "Float64", "radius_m", 1, 8 * n64, &offset);
-    put_text(&o, "      </PointData>\n"
-                 "      <Points>\n");
-    array_tag(&o, in4, "Float64", "Points", 3, 3 * 8 * n64, &offset);
-    put_text(&o, "      </Points>\n"
-                 "      <Verts>\n");
-    array_tag(&o, in4, "Int64", "connectivity", 1, 8 * n64, &offset);
-    array_tag(&o, in4, "Int64", "offsets", 1, 8 * n64, &offset);
-    put_text(&o, "      </Verts>\n"
-                 "    </Piece>\n"
-                 "  </PolyData>\n"
-                 "  <AppendedData encoding=\"raw\">\n"
-                 "   _");
-    const int64_t step = snap->step;
-    block_header(&o, sizeof(double));
-    put_le(&o, &snap->time_s, sizeof snap->time_s, 1);
-    block_header(&o, sizeof(int64_t));
-    put_le(&o, &step, sizeof step, 1);
+    put_points_and_verts_tags(&o, n64, &offset);
+    put_time_and_step(&o, snap->time_s, snap->step);
     block_header(&o, 3 * 8 * n64);
     put_xyz_f64(&o, b->vx_mps, b->vy_mps, n);
     block_header(&o, 8 * n64);
@@ -368,13 +358,7 @@ int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char 
     put_le(&o, b->angle_rad, sizeof(double), n);
     block_header(&o, 8 * n64);
     put_le(&o, b->radius_m, sizeof(double), n);
-    block_header(&o, 3 * 8 * n64);
-    put_xyz_f64(&o, b->x_m, b->y_m, n);
-    block_header(&o, 8 * n64);
-    put_sequence_i64(&o, 0, n);
-    block_header(&o, 8 * n64);
-    put_sequence_i64(&o, 1, n);
-    put_text(&o, "\n  </AppendedData>\n</VTKFile>\n");
+    put_points_and_verts(&o, b->x_m, b->y_m, n);
     return out_commit(&o, err, err_len);
 }
 
