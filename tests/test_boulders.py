@@ -5,6 +5,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP settling  a disc of density ratio 2 settles between two walls (cases/boulder_settling.ini) at the
                   terminal speed of Faxen's drag on a cylinder midway between plane walls, within the bound
                   below (measured at this resolution, a/dp = 5: +11 %; +7 % at a/dp = 10), straight down.
+  GROUP couette   a neutrally buoyant disc centred in a Couette channel (cases/boulder_couette.ini) turns at half
+                  the vorticity, -shear/2 (Jeffery 1922), within 3 %, and stays put.
   GROUP momentum  discs thrown through a weightless fluid slab in a periodic domain without walls, colliding
                   with each other: the total momentum of fluid and discs stays what it was.
   GROUP restart   a boulder run stopped half way and restarted from its checkpoint ends in the same state
@@ -75,6 +77,24 @@ def group_settling():
     check("settling: terminal speed within 15 % of Faxen's", abs(u / u_ref - 1) < 0.15, "ratio %.4f" % (u / u_ref))
     check("settling: falls straight (|vx| < 1e-3 |vy|)", np.max(np.abs(vx)) < 1e-3 * u, str(np.max(np.abs(vx))))
     check("settling: steady (speeds over the window within 5 %)", np.ptp(vy[window]) < 0.05 * u, str(vy[window]))
+
+
+def group_couette():
+    out, p, cmd = surge("couette", ["run", "boulder_couette.ini", "-s", "time.end_s=1.6"])
+    check("couette: run finishes", p.returncode == 0, cmd + "\n" + p.stderr[-2000:])
+    if p.returncode != 0:
+        return
+    series = boulder_series(out)
+    t = np.array([s[0] for s in series])
+    omega = np.array([s[1]["omega_radps"][0] for s in series])
+    drift = max(np.hypot(*(s[1]["points"][0, :2] - series[0][1]["points"][0, :2])) for s in series)
+    shear = (0.005 - -0.005) / 0.1
+    measured = omega[t >= 1.2].mean()
+    print("couette: omega %.5f rad/s over 1.2-1.6 s, -shear/2 = %.5f rad/s (ratio %.4f)"
+          % (measured, -shear / 2, measured / (-shear / 2)))
+    check("couette: the disc turns at -shear/2 within 3 %", abs(measured / (-shear / 2) - 1) < 0.03,
+          "ratio %.4f" % (measured / (-shear / 2)))
+    check("couette: the disc stays at the centre (drift < 1 % of its radius)", drift < 0.01 * 0.0125, str(drift))
 
 
 def momentum(out, snapshot_file, boulders):
@@ -160,6 +180,6 @@ def group_inputs():
 
 
 os.makedirs(WORK, exist_ok=True)
-{"settling": group_settling, "momentum": group_momentum, "restart": group_restart, "inputs": group_inputs}[GROUP]()
+{"settling": group_settling, "couette": group_couette, "momentum": group_momentum, "restart": group_restart, "inputs": group_inputs}[GROUP]()
 print("%d check(s) failed" % len(failures) if failures else "all checks passed")
 sys.exit(1 if failures else 0)

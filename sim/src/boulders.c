@@ -332,7 +332,12 @@ void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *
 }
 
 /* eq. 10: the force on each disc particle is minus the pair forces it exerts on its fluid neighbours
- * (the terms of interaction.c's wall loop), so momentum is exchanged exactly. */
+ * (the terms of interaction.c's wall loop), so momentum is exchanged exactly.
+ * The viscous pair force (Lo & Shao) is the Laplacian form: it carries the traction mu (grad v) n, not
+ * mu (grad v + grad v^T) n. On a no-slip rigid surface the missing part is -mu omega x n: no net force on a
+ * closed surface, but a torque -mu omega (r . n) per unit area of wetted surface, -2 mu A omega on a wholly
+ * wetted disc of area A (half the torque on a spinning disc). It is added here over the outer ring, each
+ * particle weighted by how wetted its ghost node is. */
 void boulders_fluid_forces(surge_sim *sim)
 {
     boulder_set *b = &sim->boulders;
@@ -372,6 +377,7 @@ void boulders_fluid_forces(surge_sim *sim)
     }
     for (int i = 0; i < b->count; i++)
         b->fx[i] = b->fy[i] = b->torque[i] = 0;
+    const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
     for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
         const int id = sim->id[k], i = b->of_wall[id];
         if (i < 0)
@@ -381,6 +387,11 @@ void boulders_fluid_forces(surge_sim *sim)
         b->fx[i] += fx[k];
         b->fy[i] += fy[k];
         b->torque[i] += rx * fy[k] - ry * fx[k];
+        if (rx * rx + ry * ry > (b->radius[i] - dp) * (b->radius[i] - dp)) { /* outer ring; r . n = radius */
+            const double a = b->radius[i], arc = 2 * SURGE_PI * a / fmax(1.0, lround(2 * SURGE_PI * (a - 0.5 * dp) / dp));
+            const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
+            b->torque[i] -= mu * b->omega[i] * a * arc * wetted;
+        }
     }
 }
 

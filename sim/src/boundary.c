@@ -101,6 +101,7 @@ void boundary_update(surge_sim *sim)
         }
         /* walls never pull fluid: no density below rho0 (no tensile wall pressure) */
         sim->rho[b] = (real)fmax(rho_b, rho0);
+        sim->ghost_fluid_sum[b] = (real)a00;
         sim->wall_vx[b] = (real)(2.0 * wall_vx - vgx);
         sim->wall_vy[b] = (real)(2.0 * wall_vy - vgy);
     }

@@ -63,6 +63,7 @@ struct surge_sim {
     /* wall particles only */
     uint8_t *wall_of;          /* WALL_*; the velocity of a wall particle is in vx, vy */
     real *ghost_dx, *ghost_dy; /* offset from wall particle to its mDBC ghost node */
+    real *ghost_fluid_sum;     /* sum of W V_j of the fluid at the ghost node: ~1 wetted, 0 dry (boundary_update) */
     real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
     double wall_speed[WALL_COUNT];
     uint8_t *kind;             /* surge_particle_kind, by id */
