@@ -268,10 +268,56 @@ static void group_errors(const char *work)
     check("errors: a movie in a missing folder is named", !r && strstr(err, "movie.mp4"), err);
 }
 
+/* A boulder of 24 particles on a ring of radius 4 cm around (0.1, 0.1) m turned by 90 degrees, in a 1 cm bed of
+ * fluid: the particles above the centre carry the orientation mark, those below the boulder colour. */
+static void group_boulders(const char *work)
+{
+    surge_snapshot s = {0};
+    const int ring = 24, fluid = 20;
+    surge_snapshot_reserve(&s, ring + fluid);
+    surge_snapshot_reserve_boulders(&s, 1);
+    for (int k = 0; k < ring + fluid; k++) {
+        const double phi = 2 * 3.14159265358979323846 * k / ring;
+        s.x_m[k] = k < ring ? 0.1 + 0.04 * cos(phi) : 0.01 * (k - ring) + 0.005;
+        s.y_m[k] = k < ring ? 0.1 + 0.04 * sin(phi) : 0.005;
+        s.vx_mps[k] = s.vy_mps[k] = 0;
+        s.density_kgpm3[k] = 1000;
+        s.pressure_pa[k] = 0;
+        s.kind[k] = k < ring ? SURGE_KIND_BOULDER : SURGE_KIND_FLUID;
+        s.id[k] = k;
+    }
+    s.boulders.x_m[0] = 0.1, s.boulders.y_m[0] = 0.1, s.boulders.radius_m[0] = 0.045;
+    s.boulders.angle_rad[0] = 0.5 * 3.14159265358979323846;
+    s.boulders.vx_mps[0] = s.boulders.vy_mps[0] = s.boulders.omega_radps[0] = 0;
+    surge_params p = synthetic_params();
+    p.domain.periodic_x = false;
+    char err[512], path[4096];
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
+    image im;
+    snprintf(path, sizeof path, "%s/boulder.png", work);
+    if (!canvas || !surge_canvas_draw(canvas, &s, &p) || png_round_trip(canvas, path, &im) != 0) {
+        check("boulders: draw and PNG round trip", 0, err);
+        return;
+    }
+    const surge_canvas_layout *l = surge_canvas_last_layout(canvas);
+    const uint8_t mark[3] = {235, 235, 235}, body[3] = {95, 80, 70};
+    const double x = l->plot_x0 + (0.1 - l->world_x0_m) * l->scale_px_per_m;
+    const double top = l->plot_y1 - (0.14 - l->world_y0_m) * l->scale_px_per_m;
+    const double bottom = l->plot_y1 - (0.06 - l->world_y0_m) * l->scale_px_per_m;
+    const double side = l->plot_x0 + (0.14 - l->world_x0_m) * l->scale_px_per_m;
+    const double mid = l->plot_y1 - (0.1 - l->world_y0_m) * l->scale_px_per_m;
+    check("boulders: the particle in the direction of the disc's angle carries the mark",
+          near_rgb(pixel(&im, x, top), mark, 1), "");
+    check("boulders: the particles opposite and beside it have the boulder colour",
+          near_rgb(pixel(&im, x, bottom), body, 1) && near_rgb(pixel(&im, side, mid), body, 1), "");
+    surge_canvas_destroy(canvas);
+    surge_snapshot_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3) {
-        fprintf(stderr, "usage: test_render colours|slope|errors WORK_DIR\n");
+        fprintf(stderr, "usage: test_render colours|slope|errors|boulders WORK_DIR\n");
         return 2;
     }
     if (!strcmp(argv[1], "colours"))
@@ -280,6 +326,8 @@ int main(int argc, char **argv)
         group_slope(argv[2]);
     else if (!strcmp(argv[1], "errors"))
         group_errors(argv[2]);
+    else if (!strcmp(argv[1], "boulders"))
+        group_boulders(argv[2]);
     else {
         fprintf(stderr, "unknown group '%s'\n", argv[1]);
         return 2;

@@ -14,9 +14,7 @@ its wall time adds up across the pieces (progress.json in its folder).
 """
 import argparse
 import csv
-import json
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -44,19 +42,6 @@ def continuity_of(row):
     return row.get("continuity") or "plain"
 
 
-def read_progress(folder):
-    try:
-        with open(os.path.join(folder, "progress.json")) as f:
-            return json.load(f)
-    except (OSError, ValueError):
-        return {"wall_s": 0.0, "status": "new"}
-
-
-def write_progress(folder, progress):
-    with open(os.path.join(folder, "progress.json"), "w") as f:
-        json.dump(progress, f, indent=1)
-
-
 def finished_rows(csv_path):
     if not os.path.isfile(csv_path):
         return set()
@@ -65,57 +50,20 @@ def finished_rows(csv_path):
                  continuity_of(r)) for r in csv.DictReader(f)}
 
 
-def particle_steps(folder):
-    """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
-    fluid = None
-    with open(os.path.join(folder, "params.ini")) as f:
-        for line in f:
-            if "fluid particles =" in line:
-                fluid = int(line.split("fluid particles =")[1].split(",")[0])
-    with open(os.path.join(folder, "diagnostics.csv")) as f:
-        rows = list(csv.reader(f))
-    last = rows[-1]
-    return fluid * int(last[1]), float(last[0])
-
-
 def run_one(args, case, dp, ch, deadline):
     name = run_name(case, dp, ch, args.shifting, args.shape, args.continuity)
     folder = os.path.join(args.runs_dir, name)
-    os.makedirs(folder, exist_ok=True)
-    progress = read_progress(folder)
-    checkpoint = os.path.join(folder, "checkpoint.bin")
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.progress_interval_s=60", "--threads",
               str(args.threads)]
-    if os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running"):
-        argv = [args.surge, "run", "--restart", checkpoint] + common
-    else:
-        argv = [args.surge, "run", os.path.join(ROOT, "cases", "freydier_%s.ini" % case),
-                "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
-                "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
-                "-s", "numerics.continuity_correction=%s" % ("true" if args.continuity == "renormalised" else "false"),
-                "-o", folder] + common
-    print("freydier_convergence: %s: %s" % (name, " ".join(argv)), flush=True)
-    progress["status"] = "running"
-    write_progress(folder, progress)
-    start = time.time()
-    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, env=study.solver_environment())
-    try:
-        while proc.poll() is None:
-            if deadline and time.time() > deadline:
-                proc.send_signal(signal.SIGINT)
-                proc.wait()
-                break
-            time.sleep(1)
-    except KeyboardInterrupt:
-        proc.send_signal(signal.SIGINT)
-        proc.wait()
-    progress["wall_s"] += time.time() - start
-    rc = proc.returncode
+    fresh = [args.surge, "run", os.path.join(ROOT, "cases", "freydier_%s.ini" % case),
+             "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
+             "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
+             "-s", "numerics.continuity_correction=%s" % ("true" if args.continuity == "renormalised" else "false"),
+             "-o", folder]
+    rc, progress = study.run_resumable("freydier_convergence: " + name, folder, fresh, args.surge, common, deadline)
     if rc == 4:
-        progress["status"] = "interrupted"
-        write_progress(folder, progress)
         return False
-    steps, sim_time = particle_steps(folder)
+    steps, sim_time = study.particle_steps(folder)
     row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
            "continuity": args.continuity,
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
@@ -134,7 +82,7 @@ def run_one(args, case, dp, ch, deadline):
         row.update({m: "nan" for m in METRICS})
         row["status"] = "exit %d (health monitor)" % rc if rc == 1 else "exit %d" % rc
     progress["status"] = row["status"]
-    write_progress(folder, progress)
+    study.write_progress(folder, progress)
     study.append_row(args.csv, COLUMNS, row)
     print("freydier_convergence: %s: %s" % (name, row), flush=True)
     return True

@@ -1,8 +1,12 @@
-"""Helpers shared by the study drivers (freydier_convergence.py, stability_map.py): option parsing, errors and
-the append-only CSV tables they write."""
+"""Helpers shared by the study drivers (freydier_convergence.py, stability_map.py, poiseuille_loaded.py): option
+parsing, errors, resumable runs and the append-only CSV tables they write."""
 import csv
+import json
 import os
+import signal
+import subprocess
 import sys
+import time
 
 
 def fail(program, message):
@@ -39,6 +43,67 @@ def solver_environment():
     env = dict(os.environ)
     env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     return env
+
+
+def read_progress(folder):
+    """progress.json of a run folder: wall seconds summed over its pieces and its status."""
+    try:
+        with open(os.path.join(folder, "progress.json")) as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {"wall_s": 0.0, "status": "new"}
+
+
+def write_progress(folder, progress):
+    with open(os.path.join(folder, "progress.json"), "w") as f:
+        json.dump(progress, f, indent=1)
+
+
+def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
+    """Runs surge for one study point in folder: from its checkpoint when an earlier piece was interrupted, else
+    fresh_argv (which names the case and -o folder); common options go to both. At the deadline (wall clock,
+    None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
+    progress) with the wall time of all pieces in progress["wall_s"]; the caller records the final status."""
+    os.makedirs(folder, exist_ok=True)
+    progress = read_progress(folder)
+    checkpoint = os.path.join(folder, "checkpoint.bin")
+    if os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running"):
+        argv = [surge, "run", "--restart", checkpoint] + common
+    else:
+        argv = fresh_argv + common
+    print("%s: %s" % (tool, " ".join(argv)), flush=True)
+    progress["status"] = "running"
+    write_progress(folder, progress)
+    start = time.time()
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, env=solver_environment())
+    try:
+        while proc.poll() is None:
+            if deadline and time.time() > deadline:
+                proc.send_signal(signal.SIGINT)
+                proc.wait()
+                break
+            time.sleep(1)
+    except KeyboardInterrupt:
+        proc.send_signal(signal.SIGINT)
+        proc.wait()
+    progress["wall_s"] += time.time() - start
+    if proc.returncode == 4:
+        progress["status"] = "interrupted"
+    write_progress(folder, progress)
+    return proc.returncode, progress
+
+
+def particle_steps(folder):
+    """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
+    fluid = None
+    with open(os.path.join(folder, "params.ini")) as f:
+        for line in f:
+            if "fluid particles =" in line:
+                fluid = int(line.split("fluid particles =")[1].split(",")[0])
+    with open(os.path.join(folder, "diagnostics.csv")) as f:
+        rows = list(csv.reader(f))
+    last = rows[-1]
+    return fluid * int(last[1]), float(last[0])
 
 
 def read_rows(tool, csv_path):

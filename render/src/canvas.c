@@ -22,6 +22,28 @@ static const double pi = 3.14159265358979323846;
 static const uint8_t background_rgb[3] = {255, 255, 255};
 static const uint8_t wall_rgb[3] = {150, 150, 150};  /* fixed walls: grey */
 static const uint8_t belt_rgb[3] = {205, 110, 40};   /* the moving belt: orange-brown, outside both colour maps */
+static const uint8_t boulder_rgb[3] = {95, 80, 70};   /* boulders: dark grey-brown */
+static const uint8_t mark_rgb[3] = {235, 235, 235};   /* a boulder's orientation mark: its particles within 25 deg
+                                                         of its angle, seen from its centre */
+enum { MARK_HALF_ANGLE_DEG = 25 };
+
+/* Boulder colour of particle i: the mark when it lies in the sector of its disc's orientation. */
+static const uint8_t *boulder_colour(const surge_snapshot *s, int i, const surge_params *p)
+{
+    const surge_boulder_state *b = &s->boulders;
+    const double period = p->domain.periodic_x ? p->domain.length_m : 0;
+    for (int j = 0; j < b->count; j++) {
+        double dx = s->x_m[i] - b->x_m[j];
+        if (period > 0)
+            dx -= period * floor(dx / period + 0.5);
+        const double dy = s->y_m[i] - b->y_m[j];
+        if (dx * dx + dy * dy > b->radius_m[j] * b->radius_m[j])
+            continue;
+        const double along = dx * cos(b->angle_rad[j]) + dy * sin(b->angle_rad[j]);
+        return along > hypot(dx, dy) * cos(MARK_HALF_ANGLE_DEG * pi / 180.0) ? mark_rgb : boulder_rgb;
+    }
+    return boulder_rgb;
+}
 static const uint8_t ink_rgb[3] = {0, 0, 0};
 
 typedef struct instance {
@@ -334,6 +356,8 @@ static int fill_instances(surge_canvas *c, const surge_snapshot *s, const surge_
             if (fluid)
                 surge_colormap_rgb(p->render.colormap, field_value(s, i, p->render.field, belt_mps), l->color_min,
                                    l->color_max, rgb);
+            else if (s->kind[i] == SURGE_KIND_BOULDER)
+                memcpy(rgb, boulder_colour(s, i, p), 3);
             else
                 memcpy(rgb, s->kind[i] == SURGE_KIND_MOVING_WALL ? belt_rgb : wall_rgb, 3);
             instance *in = &c->instances[n++];

@@ -1,0 +1,216 @@
+#!/usr/bin/python3
+"""The loaded-Poiseuille viscosity test (GMD paper Sect. 3.2, Table 2): a sweep over the solid fraction phi of
+cases/poiseuille_loaded.ini, each run in its own folder and resumable from checkpoints, one CSV row per finished
+run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Einstein-Brady line.
+
+  tools/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8] [--seed 1]
+        [--threads 2] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded]
+        [--csv docs/validation/poiseuille_loaded.csv]
+  tools/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
+  tools/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png] [--dp DP]
+
+Measurement (physics.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
+the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
+body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc area over L B.
+The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
+then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
+"""
+import argparse
+import os
+import re
+import sys
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import study  # noqa: E402
+import vtp  # noqa: E402
+
+TOOL = "poiseuille_loaded"
+COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
+           "u_max_mps", "mu_eq_over_mu0", "status"]
+WINDOW_S = (0.8, 1.0)
+HALF_BAND_M = 0.01
+
+
+def fail(message):
+    study.fail(TOOL, message)
+
+
+def param(text, section, key):
+    block = re.search(r"\[%s\]([^\[]*)" % section, text).group(1)
+    return float(re.search(r"^%s = (\S+)" % key, block, re.M).group(1))
+
+
+def measure(folder):
+    """(u_max, mu_eq/mu0, phi_actual, n_discs) of a finished run."""
+    text = open(os.path.join(folder, "params.ini")).read()
+    rho, nu0 = param(text, "fluid", "density_kgpm3"), param(text, "fluid", "viscosity_m2ps")
+    force, gap = param(text, "body", "force_x_mps2"), param(text, "domain", "height_m")
+    length = param(text, "domain", "length_m")
+    speeds = []
+    for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd")):
+        if WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6:
+            s = vtp.read_vtp(os.path.join(folder, name))
+            band = (s["kind"] == 0) & (np.abs(s["points"][:, 1] - gap / 2) <= HALF_BAND_M)
+            speeds.append(s["velocity_mps"][band, 0].astype(float).mean())
+    if not speeds:
+        raise ValueError("%s: no snapshot between %g and %g s" % (folder, *WINDOW_S))
+    u_max = float(np.mean(speeds))
+    mu_ratio = gap * gap * rho * force / (8 * u_max) / (rho * nu0)
+    radii = np.zeros(0)
+    if os.path.isfile(os.path.join(folder, "boulders.pvd")):
+        first = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]
+        radii = vtp.read_vtp(os.path.join(folder, first))["radius_m"]
+    return u_max, mu_ratio, float(np.sum(np.pi * radii ** 2) / (length * gap)), int(radii.size)
+
+
+def run_one(args, phi, deadline):
+    name = "phi%g_dp%g_ch%g_seed%d" % (phi, args.dp, args.ch, args.seed)
+    folder = os.path.join(args.runs_dir, name)
+    common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
+    fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
+             "-s", "numerics.dp_m=%.17g" % args.dp, "-s", "numerics.ch=%g" % args.ch, "-s", "boulders.seed=%d" % args.seed]
+    fresh += ["-s", "boulders.solid_fraction=%g" % phi] if phi > 0 else ["-s", "boulders.placement=none"]
+    rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
+    if rc == 4:
+        return False
+    row = {"phi": phi, "dp_m": "%.6g" % args.dp, "ch": args.ch, "seed": args.seed, "threads": args.threads,
+           "wall_s": "%.1f" % progress["wall_s"], "u_max_mps": "nan", "mu_eq_over_mu0": "nan",
+           "phi_actual": "nan", "n_discs": 0, "particle_steps": 0, "sim_time_s": 0}
+    if os.path.isfile(os.path.join(folder, "diagnostics.csv")):
+        steps, sim_time = study.particle_steps(folder)
+        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time})
+    if rc == 0:
+        u_max, mu_ratio, phi_actual, n_discs = measure(folder)
+        row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
+                    "phi_actual": "%.4f" % phi_actual, "n_discs": n_discs, "status": "ok"})
+    else:
+        row["status"] = "exit %d (health monitor)" % rc if rc == 1 else "exit %d" % rc
+    progress["status"] = row["status"]
+    study.write_progress(folder, progress)
+    study.append_row(args.csv, COLUMNS, row)
+    print("%s: %s: %s" % (TOOL, name, row), flush=True)
+    return True
+
+
+def command_run(args):
+    deadline = time.time() + args.budget_s if args.budget_s else None
+    phis = [float(v) for v in args.phi.split(",") if v.strip()] if args.phi else []
+    if not phis or any(not 0 <= v < 0.8 for v in phis):
+        fail("--phi: expected comma-separated solid fractions in [0, 0.8), got '%s'" % args.phi)
+    done = set()
+    if os.path.isfile(args.csv):
+        done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]))
+                for r in study.read_rows(TOOL, args.csv)}
+    for phi in phis:
+        if (phi, float("%.6g" % args.dp), args.ch, args.seed) in done:
+            continue
+        if deadline and time.time() > deadline:
+            print("%s: budget spent; run again to continue" % TOOL, flush=True)
+            return 0
+        if not run_one(args, phi, deadline):
+            print("%s: interrupted; run again to continue" % TOOL, flush=True)
+            return 0
+    return 0
+
+
+def krieger_dougherty(phi, phi_m, p):
+    return (1 - phi / phi_m) ** (-p * phi_m)
+
+
+def fit(phi, mu):
+    """(phi_m, p, rmse) minimising sum (mu - KD)^2: a grid, then grids ten times finer around the best point."""
+    lo_m, hi_m, lo_p, hi_p = max(phi) + 1e-3, 1.5, 0.1, 20.0
+    best = None
+    for _ in range(6):
+        grid_m, grid_p = np.linspace(lo_m, hi_m, 121), np.linspace(lo_p, hi_p, 121)
+        m, p = np.meshgrid(grid_m, grid_p, indexing="ij")
+        err = ((krieger_dougherty(phi[None, None, :], m[..., None], p[..., None]) - mu[None, None, :]) ** 2).sum(-1)
+        i, j = np.unravel_index(np.argmin(err), err.shape)
+        best = (grid_m[i], grid_p[j])
+        dm, dpp = (hi_m - lo_m) / 12, (hi_p - lo_p) / 12
+        lo_m, hi_m = max(max(phi) + 1e-4, best[0] - dm), best[0] + dm
+        lo_p, hi_p = max(1e-3, best[1] - dpp), best[1] + dpp
+    rmse = float(np.sqrt(np.mean((mu - krieger_dougherty(phi, *best)) ** 2)))
+    return best[0], best[1], rmse
+
+
+def command_report(args):
+    rows = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
+    if args.dp:
+        rows = [r for r in rows if abs(float(r["dp_m"]) / args.dp - 1) < 1e-3]
+    loaded = [r for r in rows if float(r["phi"]) > 0]
+    if len(loaded) < 3:
+        fail("%s: %d finished runs with discs; the fit needs 3" % (args.csv, len(loaded)))
+    phi = np.array([float(r["phi_actual"]) for r in loaded])
+    mu = np.array([float(r["mu_eq_over_mu0"]) for r in loaded])
+    phi_m, p, rmse = fit(phi, mu)
+    print("Krieger-Dougherty fit over %d runs: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)"
+          % (len(loaded), phi_m, p, rmse, 100 * rmse))
+    for r in rows:
+        print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
+                                                      float(r["mu_eq_over_mu0"]), r["wall_s"]))
+    if args.png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(6.4, 4.6))
+        for dp in sorted({float(r["dp_m"]) for r in rows}):
+            sel = [r for r in rows if float(r["dp_m"]) == dp]
+            ax.plot([float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel],
+                    [float(r["mu_eq_over_mu0"]) for r in sel], "o", label="surge, dp = %.3g m" % dp)
+        grid = np.linspace(0, max(phi) * 1.02, 200)
+        ax.plot(grid, krieger_dougherty(grid, phi_m, p), "-",
+                label="Krieger-Dougherty fit: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)" % (phi_m, p, 100 * rmse))
+        ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", label="Einstein-Brady 2D: 1 + 2$\\phi$")
+        ax.set_xlabel("solid fraction $\\phi$")
+        ax.set_ylabel("$\\mu_{eq} / \\mu_0$")
+        ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(args.png, dpi=120)
+        print("%s: wrote %s" % (TOOL, args.png))
+    return 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run")
+    run.add_argument("--phi", default="0,0.05,0.1,0.2,0.3,0.4,0.5")
+    run.add_argument("--dp", type=float, default=1 / 150)
+    run.add_argument("--ch", type=float, default=1.8)
+    run.add_argument("--seed", type=int, default=1)
+    run.add_argument("--threads", type=int, default=2)
+    run.add_argument("--budget-s", type=float, default=0.0)
+    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
+    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    meas = sub.add_parser("measure")
+    meas.add_argument("run_dir")
+    rep = sub.add_parser("report")
+    rep.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
+    rep.add_argument("--png", default=None)
+    rep.add_argument("--dp", type=float, default=None, help="fit only the runs at this dp")
+    args = parser.parse_args()
+    if args.command == "run":
+        if not args.dp > 0 or not args.ch > 0 or args.threads < 1 or args.budget_s < 0:
+            fail("--dp and --ch must be > 0, --threads >= 1, --budget-s >= 0")
+        return command_run(args)
+    if args.command == "measure":
+        try:
+            u_max, mu_ratio, phi_actual, n = measure(args.run_dir)
+        except (OSError, ValueError, AttributeError) as e:
+            fail(str(e))
+        print("u_max = %.6g m/s, mu_eq/mu0 = %.5g, phi = %.4f (%d discs)" % (u_max, mu_ratio, phi_actual, n))
+        return 0
+    return command_report(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())
