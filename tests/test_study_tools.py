@@ -42,4 +42,26 @@ for tool, option in (("freydier_convergence.py", "--ch"), ("stability_map.py", "
     r = subprocess.run([sys.executable, os.path.join(tools, tool), "chart", "--png", png], capture_output=True,
                        text=True, timeout=120)
     check("%s chart" % tool, r.returncode == 0 and os.path.getsize(png) > 10000, r.stderr.strip())
+
+# the loaded-Poiseuille fit recovers the parameters of exact Krieger-Dougherty data, and says when rows are missing
+import numpy as np  # noqa: E402
+import poiseuille_loaded  # noqa: E402
+phi = np.array([0.05, 0.1, 0.2, 0.3, 0.4, 0.5])
+phi_m, p, rmse = poiseuille_loaded.fit(phi, poiseuille_loaded.krieger_dougherty(phi, 0.62, 2.5))
+check("poiseuille_loaded fit recovers phi_m = 0.62, p = 2.5", abs(phi_m - 0.62) < 2e-3 and abs(p - 2.5) < 2e-2
+      and rmse < 1e-3, "phi_m %.4f p %.3f rmse %.2g" % (phi_m, p, rmse))
+noisy = poiseuille_loaded.krieger_dougherty(phi, 0.62, 2.5) * (1 + 0.05 * np.array([1, -1, 1, -1, 1, -1]))
+check("poiseuille_loaded fit RMSE of 5 % noise is about 5 % of the values",
+      0.02 < poiseuille_loaded.fit(phi, noisy)[2] < 0.3, str(poiseuille_loaded.fit(phi, noisy)))
+short = os.path.join(work, "short.csv")
+if os.path.exists(short):
+    os.remove(short)
+study.append_row(short, poiseuille_loaded.COLUMNS, {"phi": 0.1, "phi_actual": 0.1, "mu_eq_over_mu0": 1.2, "status": "ok",
+                                                    "dp_m": 0.005, "ch": 1.8, "seed": 1})
+r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "report", "--csv", short],
+                   capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded report with one run refused", r.returncode == 2 and "needs 3" in r.stderr, r.stderr.strip())
+r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "run", "--phi", "0.9"],
+                   capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded run --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
 sys.exit(1 if failures else 0)
