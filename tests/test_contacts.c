@@ -1,8 +1,9 @@
 /* The contact solver alone (sim/src/contact_solver.c), no fluid: a disc at rest on a plane stays at rest; a
  * stack settles without drift or penetration; a disc on an incline sticks or slides (rotation locked) and rolls
- * or slips (free) as Coulomb friction says; a bouncing disc keeps e^2 of its height; a head-on elastic
- * collision swaps velocities across the periodic boundary.
- * usage: test_contacts rest|stack|incline|bounce|collision */
+ * or slips (free) as Coulomb friction says; a disc set on a moving belt ends rolling at a third of its speed; a
+ * bouncing disc keeps e^2 of its height; a head-on elastic collision swaps velocities across the periodic
+ * boundary.
+ * usage: test_contacts rest|stack|incline|belt|bounce|collision */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -164,6 +165,25 @@ static int test_incline(void)
     return failures;
 }
 
+/* A disc set down at rest on a belt moving at U: friction speeds it up and spins it until it rolls on the belt,
+ * which the friction impulse J reaches at v = J/m = U/3 and omega r = 2J/m = 2U/3. */
+static int test_belt(void)
+{
+    world w;
+    world_init(&w, 0, -9.81);
+    const double belt = 1.0, r = 0.05;
+    add_plane(&w, 0, 1, 0);
+    w.walls[0].vx_mps = belt;
+    add_disc(&w, 0.5, r, r, 0);
+    run(&w, 1e-3, 1000);
+    expect_below("belt: |v / (U/3) - 1| once rolling", fabs(w.vx[0] / (belt / 3) - 1), 1e-6);
+    expect_below("belt: |omega r / (2U/3) - 1| once rolling", fabs(w.omega[0] * r / (2 * belt / 3) - 1), 1e-6);
+    expect_below("belt: slip speed of the contact point against the belt (m/s)", fabs(w.vx[0] + w.omega[0] * r - belt),
+                 1e-9);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
 /* Dropped from 0.2 m with e = 0.8: the rebound peaks at e^2 0.2 m. */
 static int test_bounce(void)
 {
@@ -222,10 +242,12 @@ int main(int argc, char **argv)
         return test_stack() != 0;
     if (!strcmp(which, "incline"))
         return test_incline() != 0;
+    if (!strcmp(which, "belt"))
+        return test_belt() != 0;
     if (!strcmp(which, "bounce"))
         return test_bounce() != 0;
     if (!strcmp(which, "collision"))
         return test_collision() != 0;
-    fprintf(stderr, "usage: test_contacts rest|stack|incline|bounce|collision\n");
+    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision\n");
     return 2;
 }
