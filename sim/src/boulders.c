@@ -93,9 +93,8 @@ static int parse_list(boulder_set *b, const char *text, char *err, size_t err_le
 
 /* Random sequential placement: the largest discs first, each at uniform random positions until it overlaps
  * neither another disc nor a wall (with the gap), reproducible from the seed. */
-static int place_random(boulder_set *b, const surge_params *p, double period, char *err, size_t err_len)
+static int place_random(boulder_set *b, const surge_params *q, double period, char *err, size_t err_len)
 {
-    const surge_params *q = p;
     double x0 = q->boulders.region_x0_m, x1 = q->boulders.region_x1_m;
     double y0 = q->boulders.region_y0_m, y1 = q->boulders.region_y1_m;
     if (x1 <= x0)
@@ -225,27 +224,29 @@ int boulders_define(surge_sim *sim, char *err, size_t err_len)
     return 0;
 }
 
-/* Rings k = 0, 1, ... at radius r - (k + 1/2) dp, as deep as the wall layers, n_k = round(2 pi rho / dp). */
-static int ring_count(double r, double dp, int layers, int k_max_out[1])
+/* A disc of radius r is rings k = 0, 1, ... at radius r - (k + 1/2) dp, as deep as the wall layers (and
+ * while the radius is above dp/4), each of round(2 pi rho / dp) particles, at least one. */
+static int ring_count(double r, double dp, int layers)
 {
     int k = 0;
     while (k < layers && r - (k + 0.5) * dp > 0.25 * dp)
         k++;
-    k_max_out[0] = k;
-    int n = 0;
-    for (int q = 0; q < k; q++) {
-        const int per_ring = (int)lround(2 * SURGE_PI * (r - (q + 0.5) * dp) / dp);
-        n += per_ring > 1 ? per_ring : 1;
-    }
-    return n;
+    return k;
+}
+
+static int ring_particles(double r, double dp, int ring)
+{
+    const int n = (int)lround(2 * SURGE_PI * (r - (ring + 0.5) * dp) / dp);
+    return n > 1 ? n : 1;
 }
 
 int boulders_particle_count(const surge_sim *sim)
 {
-    const int layers = sim->params.walls.layers;
-    int n = 0, rings;
+    const double dp = sim->params.numerics.dp_m;
+    int n = 0;
     for (int i = 0; i < sim->boulders.count; i++)
-        n += ring_count(sim->boulders.radius[i], sim->params.numerics.dp_m, layers, &rings);
+        for (int q = 0; q < ring_count(sim->boulders.radius[i], dp, sim->params.walls.layers); q++)
+            n += ring_particles(sim->boulders.radius[i], dp, q);
     return n;
 }
 
@@ -256,12 +257,10 @@ void boulders_create_particles(surge_sim *sim, int first)
     const int layers = sim->params.walls.layers;
     int k = first;
     for (int i = 0; i < b->count; i++) {
-        int rings;
-        ring_count(b->radius[i], dp, layers, &rings);
+        const int rings = ring_count(b->radius[i], dp, layers);
         for (int q = 0; q < rings; q++) {
             const double rho = b->radius[i] - (q + 0.5) * dp;
-            int per_ring = (int)lround(2 * SURGE_PI * rho / dp);
-            per_ring = per_ring > 1 ? per_ring : 1;
+            const int per_ring = ring_particles(b->radius[i], dp, q);
             for (int j = 0; j < per_ring; j++) {
                 const double phi = 2 * SURGE_PI * (j + 0.5 * (q % 2)) / per_ring;
                 b->of_wall[k] = i;
@@ -388,7 +387,7 @@ void boulders_fluid_forces(surge_sim *sim)
         b->fy[i] += fy[k];
         b->torque[i] += rx * fy[k] - ry * fx[k];
         if (rx * rx + ry * ry > (b->radius[i] - dp) * (b->radius[i] - dp)) { /* outer ring; r . n = radius */
-            const double a = b->radius[i], arc = 2 * SURGE_PI * a / fmax(1.0, lround(2 * SURGE_PI * (a - 0.5 * dp) / dp));
+            const double a = b->radius[i], arc = 2 * SURGE_PI * a / ring_particles(a, dp, 0);
             const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
             b->torque[i] -= mu * b->omega[i] * a * arc * wetted;
         }
