@@ -11,6 +11,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   periodic boundary: the total momentum of fluid and discs stays what it was.
   GROUP restart   a boulder run stopped half way and restarted from its checkpoint ends in the same state
                   hash as the uninterrupted run; the boulders' .vtp files and boulders.pvd are written.
+  GROUP stream    a pyzmq subscriber's `bodies` messages of a paused-then-resumed run carry the discs, and the
+                  final one equals the run's last boulders .vtp bit for bit.
   GROUP inputs    bad boulder lists and placements get clear errors naming the parameter (exit 2 or 3).
 
 Each check prints "name: ok" or "name: FAILED" with details; the script exits 1 if any failed.
@@ -162,6 +164,47 @@ def group_restart():
           min(gap) > -0.01 * 0.0125 and min(gap) < 0.002, "smallest gap %.3g m" % min(gap))
 
 
+def group_stream():
+    import zmq
+    import surge_client
+    out = os.path.join(WORK, "stream")
+    shutil.rmtree(out, ignore_errors=True)
+    os.makedirs(out)
+    pub, ctl = "ipc://" + os.path.join(out, "pub.sock"), "ipc://" + os.path.join(out, "ctl.sock")
+    args = [SURGE, "run", os.path.join(SOURCE, "cases", "boulder_settling.ini"), "-o", os.path.join(out, "run"),
+            "--threads", "1", "-s", "output.progress_interval_s=0", "-s", "time.end_s=0.05", "--publish", pub,
+            "--control", ctl, "--paused", "--publish-hz", "0", "--publish-hwm", "100000",
+            "-s", "boulders.list_m=0.05 0.17 0.0125, 0.05 0.1 0.0125 0 0 2"]
+    proc = subprocess.Popen(args, stderr=subprocess.PIPE, stdout=subprocess.DEVNULL, env=ENV, text=True)
+    sub = surge_client.subscribe(pub, ["bodies", "stats"], latest_only=False)
+    sub.setsockopt(zmq.RCVHWM, 100000)
+    first = surge_client.receive(sub, 20000)
+    surge_client.Control(ctl, 10).request({"cmd": "resume"})
+    messages = [first] if first else []
+    while True:
+        m = surge_client.receive(sub, 60000)
+        if m is None:
+            break
+        messages.append(m)
+        if m[0] == "stats" and m[1]["status"] == "final":
+            break
+    _, stderr = proc.communicate(timeout=120)
+    bodies = [(h, a) for t, h, a in messages if t == "bodies"]
+    check("stream: run finishes and bodies messages arrive", proc.returncode == 0 and len(bodies) > 2,
+          "%d bodies messages\n%s" % (len(bodies), stderr[-1500:]))
+    if not bodies:
+        return
+    header, arrays = bodies[-1]
+    last = vtp.read_vtp(os.path.join(out, "run", vtp.read_pvd(os.path.join(out, "run", "boulders.pvd"))[-1][1]))
+    same = header["count"] == 2 and header["step"] == last["step"] and all(np.array_equal(arrays[k], v) for k, v in (
+        ("x_m", last["points"][:, 0]), ("y_m", last["points"][:, 1]), ("vx_mps", last["velocity_mps"][:, 0]),
+        ("omega_radps", last["omega_radps"]), ("angle_rad", last["angle_rad"]), ("radius_m", last["radius_m"])))
+    check("stream: the final bodies message equals the last boulders .vtp bit for bit", same,
+          "header %s" % header)
+    check("stream: the spinning disc's omega is on the wire", abs(bodies[0][1]["omega_radps"][1] - 2) < 1e-12,
+          str(bodies[0][1]["omega_radps"]))
+
+
 def group_inputs():
     bad = [
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1"], "has 2 numbers"),
@@ -184,6 +227,6 @@ def group_inputs():
 
 
 os.makedirs(WORK, exist_ok=True)
-{"settling": group_settling, "couette": group_couette, "momentum": group_momentum, "restart": group_restart, "inputs": group_inputs}[GROUP]()
+{"settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
 print("%d check(s) failed" % len(failures) if failures else "all checks passed")
 sys.exit(1 if failures else 0)
