@@ -22,6 +22,7 @@ static int allocate_discs(boulder_set *b, int n)
     ALLOC(b->x_n); ALLOC(b->y_n); ALLOC(b->angle_n); ALLOC(b->vx_n); ALLOC(b->vy_n); ALLOC(b->omega_n);
     ALLOC(b->radius); ALLOC(b->mass); ALLOC(b->inv_mass); ALLOC(b->inv_inertia);
     ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
+    ALLOC(b->spin_damping); ALLOC(b->omega_forces);
 #undef ALLOC
     return ok ? 0 : -1;
 }
@@ -30,7 +31,8 @@ void boulders_free(boulder_set *b)
 {
     void *arrays[] = {b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->x_n, b->y_n, b->angle_n, b->vx_n, b->vy_n,
                       b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
-                      b->ay, b->alpha, b->of_wall, b->local_x, b->local_y};
+                      b->ay, b->alpha, b->spin_damping, b->omega_forces, b->spin_coupling, b->of_wall,
+                      b->local_x, b->local_y};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     contact_solver_destroy(b->contacts);
@@ -357,7 +359,7 @@ void boulders_fluid_forces(surge_sim *sim)
             continue;
         neighbour_ranges nr;
         grid_neighbour_ranges(g, g->fluid_start, x[k], y[k], &nr);
-        real sum_x = 0, sum_y = 0;
+        real sum_x = 0, sum_y = 0, sum_viscous = 0;
         for (int q = 0; q < nr.count; q++) {
             for (int a = nr.begin[q]; a < nr.end[q]; a++) {
                 const real dx = (real)(x[a] + nr.shift_x[q] - x[k]), dy = (real)(y[a] - y[k]);
@@ -369,13 +371,17 @@ void boulders_fluid_forces(surge_sim *sim)
                 const real viscous_term = mass * four_nu * f * r2 / ((rho[a] + rho[k]) * (r2 + eta2));
                 sum_x += pressure_term * f * dx + viscous_term * (vx[a] - sim->wall_vx[k]);
                 sum_y += pressure_term * f * dy + viscous_term * (vy[a] - sim->wall_vy[k]);
+                sum_viscous += viscous_term;
             }
         }
         fx[k] = -mass * sum_x;
         fy[k] = -mass * sum_y;
+        b->spin_coupling[k] = sum_viscous;
     }
-    for (int i = 0; i < b->count; i++)
-        b->fx[i] = b->fy[i] = b->torque[i] = 0;
+    for (int i = 0; i < b->count; i++) {
+        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = 0;
+        b->omega_forces[i] = b->omega[i];
+    }
     const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
     for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
         const int id = sim->id[k], i = b->of_wall[id];
@@ -386,12 +392,18 @@ void boulders_fluid_forces(surge_sim *sim)
         b->fx[i] += fx[k];
         b->fy[i] += fy[k];
         b->torque[i] += rx * fy[k] - ry * fx[k];
-        if (rx * rx + ry * ry > (b->radius[i] - dp) * (b->radius[i] - dp)) { /* outer ring; r . n = radius */
+        /* stiffness: the no-slip velocity 2 v_surface - v_ghost moves by 2 R per unit omega */
+        const double lever = sqrt(rx * rx + ry * ry);
+        b->spin_damping[i] -= 2 * sim->mass * b->radius[i] * lever * b->spin_coupling[k];
+        if (lever > b->radius[i] - dp) { /* outer ring; r . n = radius */
             const double a = b->radius[i], arc = 2 * SURGE_PI * a / ring_particles(a, dp, 0);
             const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
             b->torque[i] -= mu * b->omega[i] * a * arc * wetted;
+            b->spin_damping[i] += mu * a * arc * wetted;
         }
     }
+    for (int i = 0; i < b->count; i++)
+        b->spin_damping[i] *= b->inv_inertia[i];
 }
 
 void boulders_predict(surge_sim *sim, double half_dt_s)
@@ -410,7 +422,10 @@ void boulders_predict(surge_sim *sim, double half_dt_s)
         b->angle[i] += half_dt_s * b->omega[i];
         b->vx[i] += half_dt_s * (b->fx[i] * b->inv_mass[i] + gx + force_x);
         b->vy[i] += half_dt_s * (b->fy[i] * b->inv_mass[i] + gy);
-        b->omega[i] += half_dt_s * b->torque[i] * b->inv_inertia[i];
+        /* the viscous torque's linear part in omega implicitly (spin_damping) */
+        b->omega[i] = (b->omega[i] + half_dt_s * (b->torque[i] * b->inv_inertia[i] +
+                                                   b->spin_damping[i] * b->omega_forces[i])) /
+                      (1 + half_dt_s * b->spin_damping[i]);
     }
     boulders_place_particles(sim);
 }
@@ -456,12 +471,12 @@ int boulders_correct(surge_sim *sim, double dt_s)
         b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
         b->ax[i] = b->fx[i] * b->inv_mass[i] + gx + force_x;
         b->ay[i] = b->fy[i] * b->inv_mass[i] + gy;
-        b->alpha[i] = b->torque[i] * b->inv_inertia[i];
+        b->alpha[i] = b->torque[i] * b->inv_inertia[i] + b->spin_damping[i] * b->omega_forces[i];
     }
     contact_wall walls[5];
     const int wall_count = contact_walls(sim, walls);
     contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->radius, b->inv_mass,
-                           b->inv_inertia};
+                           b->inv_inertia, b->spin_damping};
     const contact_settings settings = {p->contacts.friction, p->contacts.restitution, p->contacts.restitution_min_mps,
                                        p->contacts.substeps, p->contacts.iterations, p->contacts.erp,
                                        sim->grid.period_m};

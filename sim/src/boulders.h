@@ -6,6 +6,7 @@
 #include <stdint.h>
 
 #include "contact_solver.h"
+#include "precision.h"
 
 typedef struct boulder_set {
     int count;
@@ -15,6 +16,9 @@ typedef struct boulder_set {
     double *radius, *mass, *inv_mass, *inv_inertia;       /* per metre of width */
     double *fx, *fy, *torque;                             /* fluid force and torque on each disc (eq. 10) */
     double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
+    double *spin_damping;   /* -d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit */
+    double *omega_forces;   /* the omega the last fluid forces were computed with */
+    real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */
     /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
     int32_t *of_wall;
     double *local_x, *local_y;

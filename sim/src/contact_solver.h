@@ -8,12 +8,15 @@
 
 #include <stdint.h>
 
-/* The discs, structure of arrays; per metre of width in 2D. inv_mass or inv_inertia 0: that motion is locked. */
+/* The discs, structure of arrays; per metre of width in 2D. inv_mass or inv_inertia 0: that motion is locked.
+ * spin_damping (1/s, NULL: none): a part -k omega of the angular acceleration integrated implicitly, for
+ * couplings stiffer than the step (a small disc in a very viscous fluid). */
 typedef struct contact_discs {
     int count;
     double *x, *y, *angle;
     double *vx, *vy, *omega;
     const double *radius, *inv_mass, *inv_inertia;
+    const double *spin_damping;
 } contact_discs;
 
 typedef enum contact_wall_shape {

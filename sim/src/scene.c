@@ -180,7 +180,7 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
     ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);
     ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);
-    ALLOC(s->boulders.local_y, s->wall_count);
+    ALLOC(s->boulders.local_y, s->wall_count); ALLOC(s->boulders.spin_coupling, s->wall_count);
     ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
     ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
 #undef ALLOC
