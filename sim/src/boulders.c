@@ -448,7 +448,8 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[5])
     if (p->walls.bottom)
         walls[n++] = (contact_wall){CONTACT_PLANE, 0, 1, 0, 0, 0, 0, 0, sim->wall_speed[WALL_BOTTOM], 0};
     if (p->walls.top)
-        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m, 0, 0, 0, 0, sim->wall_speed[WALL_TOP], 0};
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m, 0, 0, 0, 0, sim->wall_speed[WALL_TOP],
+                                    0};
     if (p->walls.left)
         walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, 0, 0, 0, 0, 0, 0, 0};
     if (p->walls.right)

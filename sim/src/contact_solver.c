@@ -324,7 +324,8 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         for (int i = 0; i < d->count; i++) {
             d->vx[i] += h * (ax ? ax[i] : 0);
             d->vy[i] += h * (ay ? ay[i] : 0);
-            d->omega[i] = (d->omega[i] + h * (alpha ? alpha[i] : 0)) / (1 + h * (d->spin_damping ? d->spin_damping[i] : 0));
+            const double damping = d->spin_damping ? d->spin_damping[i] : 0;
+            d->omega[i] = (d->omega[i] + h * (alpha ? alpha[i] : 0)) / (1 + h * damping);
             if (d->inv_mass[i] == 0)
                 d->vx[i] = d->vy[i] = 0;
             if (d->inv_inertia[i] == 0)
