@@ -140,7 +140,8 @@ def fit(phi, mu):
 
 
 def command_report(args):
-    rows = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
+    every_run = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
+    rows = every_run
     if args.dp:
         rows = [r for r in rows if abs(float(r["dp_m"]) / args.dp - 1) < 1e-3]
     loaded = [r for r in rows if float(r["phi"]) > 0]
@@ -155,27 +156,51 @@ def command_report(args):
         print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
                                                       float(r["mu_eq_over_mu0"]), r["wall_s"]))
     if args.png:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(figsize=(6.4, 4.6))
-        for dp in sorted({float(r["dp_m"]) for r in rows}):
-            sel = [r for r in rows if float(r["dp_m"]) == dp]
-            ax.plot([float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel],
-                    [float(r["mu_eq_over_mu0"]) for r in sel], "o", label="surge, dp = %.3g m" % dp)
-        grid = np.linspace(0, max(phi) * 1.02, 200)
-        ax.plot(grid, krieger_dougherty(grid, phi_m, p), "-",
-                label="Krieger-Dougherty fit: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)" % (phi_m, p, 100 * rmse))
-        ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", label="Einstein-Brady 2D: 1 + 2$\\phi$")
-        ax.set_xlabel("solid fraction $\\phi$")
-        ax.set_ylabel("$\\mu_{eq} / \\mu_0$")
-        ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
-        ax.legend(fontsize=8)
-        ax.grid(alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(args.png, dpi=120)
-        print("%s: wrote %s" % (TOOL, args.png))
+        plot(args.png, every_run, phi, phi_m, p, rmse)
     return 0
+
+
+def plot(png, rows, phi, phi_m, p, rmse):
+    """Left: mu_eq/mu0 against phi at every resolution, the fit (of the --dp runs) and Einstein-Brady. Right: accuracy against cost, per
+    run: the pure fluid's error |mu_eq/mu0 - 1|, and for each phi the change from the finest run at that phi."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    fig, (ax, cost) = plt.subplots(1, 2, figsize=(12, 4.8))
+    resolutions = sorted({float(r["dp_m"]) for r in rows})
+    finest, finest_dp = {}, {}
+    for r in sorted(rows, key=lambda r: float(r["dp_m"]), reverse=True):
+        finest[float(r["phi"])] = float(r["mu_eq_over_mu0"])
+        finest_dp[float(r["phi"])] = float(r["dp_m"])
+    for dp in resolutions:
+        sel = [r for r in rows if float(r["dp_m"]) == dp]
+        x = [float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel]
+        y = [float(r["mu_eq_over_mu0"]) for r in sel]
+        ax.plot(x, y, "o", label="surge, dp = %.3g m (r/dp = %.1f)" % (dp, 0.02 / dp))
+        # the finest run at a phi is the reference there: only coarser ones get a point
+        compared = [r for r in sel if float(r["phi"]) == 0 or finest_dp[float(r["phi"])] < dp]
+        err = [abs(float(r["mu_eq_over_mu0"]) - 1) if float(r["phi"]) == 0 else
+               abs(float(r["mu_eq_over_mu0"]) / finest[float(r["phi"])] - 1) for r in compared]
+        cost.loglog([float(r["wall_s"]) for r in compared], err, "o", label="dp = %.3g m" % dp)
+        for r, e in zip(compared, err):
+            cost.annotate("$\\phi$ = %g" % float(r["phi"]), (float(r["wall_s"]), e), fontsize=7)
+    grid = np.linspace(0, max(phi) * 1.02, 200)
+    ax.plot(grid, krieger_dougherty(grid, phi_m, p), "-",
+            label="Krieger-Dougherty fit: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)" % (phi_m, p, 100 * rmse))
+    ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", label="Einstein-Brady 2D: 1 + 2$\\phi$")
+    ax.set_xlabel("solid fraction $\\phi$")
+    ax.set_ylabel("$\\mu_{eq} / \\mu_0$")
+    ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    cost.set_xlabel("wall time of the run (s)")
+    cost.set_ylabel("$\\phi$ = 0: |$\\mu_{eq}/\\mu_0$ - 1|;  $\\phi$ > 0: change from the finest run")
+    cost.set_title("Accuracy against cost")
+    cost.legend(fontsize=8)
+    cost.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    print("%s: wrote %s" % (TOOL, png))
 
 
 def main():
