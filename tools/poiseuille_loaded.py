@@ -33,6 +33,7 @@ TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
            "u_max_mps", "mu_eq_over_mu0", "status"]
 WINDOW_S = (0.8, 1.0)
+PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
 
 
@@ -123,8 +124,9 @@ def krieger_dougherty(phi, phi_m, p):
 
 
 def fit(phi, mu):
-    """(phi_m, p, rmse) minimising sum (mu - KD)^2: a grid, then grids ten times finer around the best point."""
-    lo_m, hi_m, lo_p, hi_p = max(phi) + 1e-3, 1.5, 0.1, 20.0
+    """(phi_m, p, rmse) minimising sum (mu - KD)^2 over phi_m in (max phi, 1] and p in [0.1, 20]: a grid, then
+    finer grids around the best point."""
+    lo_m, hi_m, lo_p, hi_p = max(phi) + 1e-3, PHI_M_MAX, 0.1, 20.0
     best = None
     for _ in range(6):
         grid_m, grid_p = np.linspace(lo_m, hi_m, 121), np.linspace(lo_p, hi_p, 121)
@@ -133,7 +135,7 @@ def fit(phi, mu):
         i, j = np.unravel_index(np.argmin(err), err.shape)
         best = (grid_m[i], grid_p[j])
         dm, dpp = (hi_m - lo_m) / 12, (hi_p - lo_p) / 12
-        lo_m, hi_m = max(max(phi) + 1e-4, best[0] - dm), best[0] + dm
+        lo_m, hi_m = max(max(phi) + 1e-4, best[0] - dm), min(PHI_M_MAX, best[0] + dm)
         lo_p, hi_p = max(1e-3, best[1] - dpp), best[1] + dpp
     rmse = float(np.sqrt(np.mean((mu - krieger_dougherty(phi, *best)) ** 2)))
     return best[0], best[1], rmse
@@ -150,8 +152,10 @@ def command_report(args):
     phi = np.array([float(r["phi_actual"]) for r in loaded])
     mu = np.array([float(r["mu_eq_over_mu0"]) for r in loaded])
     phi_m, p, rmse = fit(phi, mu)
-    print("Krieger-Dougherty fit over %d runs: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)"
-          % (len(loaded), phi_m, p, rmse, 100 * rmse))
+    print("Krieger-Dougherty fit over %d runs: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)%s"
+          % (len(loaded), phi_m, p, rmse, 100 * rmse,
+             "  [phi_m at its bound %g: the measured viscosity does not diverge]" % PHI_M_MAX
+             if phi_m > PHI_M_MAX - 1e-3 else ""))
     for r in rows:
         print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
                                                       float(r["mu_eq_over_mu0"]), r["wall_s"]))
