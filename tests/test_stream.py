@@ -219,8 +219,21 @@ def group_control():
     set_step = reply.get("step")
     check("control: set replies with the value applied, the previous one and the step",
           reply.get("ok") and reply["value"] == new and reply["previous"] == old and set_step >= 60, str(reply))
+    # still paused: the change is published at once, before any later step can supersede it in the mailbox
+    before_resume = []
+
+    def changed_state_arrived():
+        m = surge_client.receive(sub, 100)
+        if m:
+            before_resume.append(m)
+        return m and m[0] == "stats" and m[1]["step"] == set_step and m[1]["live"]["fluid.viscosity_m2ps"] == new
+
+    published_at_once = wait_for(changed_state_arrived, 20)
+    check("control: while paused, the change is published at once with the step it applied at",
+          published_at_once, "messages: %s" % [(t, h["step"]) for t, h, a in before_resume][-5:])
     ctl.request({"cmd": "resume"})
     messages, finished = collect_until_final(sub, 120)
+    messages = before_resume + messages
     rc = run.wait()
     check("control: run finishes", rc == 0 and finished, run.describe())
     stats = [h for t, h, a in ([first] if first else []) + messages if t == "stats"]
