@@ -212,6 +212,8 @@ def group_inputs():
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 -0.01"], "positive radius"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 0.001"], "below 1.5 dp"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.09 0.1 0.0125"], "not inside the domain"),
+        (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 0.0125, 0.06 0.1 0.0125"],
+         "boulders 1 and 2 overlap"),
         (["-s", "boulders.placement=random", "-s", "boulders.solid_fraction=0.75", "-s", "boulders.radius_m=0.0125"],
          "placed"),
         (["-s", "boulders.placement=random", "-s", "boulders.radius_m=0.2"], "holds no disc"),

@@ -218,6 +218,16 @@ int boulders_define(surge_sim *sim, char *err, size_t err_len)
         b->inv_mass[i] = 1.0 / b->mass[i];
         b->inv_inertia[i] = 1.0 / (0.5 * b->mass[i] * r * r);
     }
+    for (int i = 0; i < b->count; i++) /* listed discs must not overlap (random ones never do) */
+        for (int j = 0; j < i; j++) {
+            const double dx = wrap_dx(b->x[i] - b->x[j], period), dy = b->y[i] - b->y[j];
+            const double reach = b->radius[i] + b->radius[j];
+            if (dx * dx + dy * dy < reach * reach * (1 - 1e-12)) {
+                snprintf(err, err_len, "boulders %d and %d overlap: centres %.4g m apart, radii add up to %.4g m", j + 1,
+                         i + 1, sqrt(dx * dx + dy * dy), reach);
+                return -1;
+            }
+        }
     b->contacts = contact_solver_create();
     if (!b->contacts) {
         snprintf(err, err_len, "out of memory for the contact solver");
