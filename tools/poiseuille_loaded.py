@@ -168,6 +168,15 @@ def command_report(args):
     for r in rows:
         print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
                                                       float(r["mu_eq_over_mu0"]), r["wall_s"]))
+    clear = [float(r["mu_eq_over_mu0"]) for r in rows if float(r["phi"]) == 0]
+    if len(clear) == 1:
+        relative = mu / clear[0]
+        phi_m_rel, p_rel, rmse_rel = fit(phi, relative)
+        print("Relative to the clear fluid of the same runs (mu_eq/mu0 = %.5f there: the viscous term's lattice "
+              "factor),\n  fit: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)" % (clear[0], phi_m_rel, p_rel, rmse_rel,
+                                                                             100 * rmse_rel))
+        for f, m in zip(phi, relative):
+            print("  phi %.4f  relative rise %.4f  per unit phi %.3f  (Einstein-Brady 2D: 2)" % (f, m - 1, (m - 1) / f))
     if args.png:
         plot(args.png, every_run, phi, phi_m, p, rmse)
     return 0
