@@ -53,6 +53,16 @@ check("poiseuille_loaded fit recovers phi_m = 0.62, p = 2.5", abs(phi_m - 0.62) 
 noisy = poiseuille_loaded.krieger_dougherty(phi, 0.62, 2.5) * (1 + 0.05 * np.array([1, -1, 1, -1, 1, -1]))
 check("poiseuille_loaded fit RMSE of 5 % noise is about 5 % of the values",
       0.02 < poiseuille_loaded.fit(phi, noisy)[2] < 0.3, str(poiseuille_loaded.fit(phi, noisy)))
+# the dilute-theory reference: a clear channel gives the centre band's mean of the parabola, and discs spread
+# evenly over the whole gap (area fraction 0.1 at every height) give Einstein-Brady's 1 + 2 phi
+clear_band = poiseuille_loaded.local_einstein([], 0.0, 1.0, 0.6)
+check("local Einstein-Brady, clear channel: 1 / (1 - d^2 / (3 (B/2)^2)) for the 1 cm band",
+      abs(clear_band - 1 / (1 - 0.01 ** 2 / (3 * 0.3 ** 2))) < 1e-5, "%.7f" % clear_band)
+centres = (np.arange(3000) + 0.5) * 0.6 / 3000
+centres = centres[(centres > 1e-3) & (centres < 0.6 - 1e-3)]
+spread = poiseuille_loaded.local_einstein(centres, 1e-3, centres.size * np.pi * 1e-6 / (0.6 * 0.1), 0.6)
+check("local Einstein-Brady, discs spread evenly at phi = 0.1: 1.2 (less the walls' thin depleted layer)",
+      abs(spread - 1.2) < 0.005, "%.5f" % spread)
 short = os.path.join(work, "short.csv")
 if os.path.exists(short):
     os.remove(short)

@@ -7,6 +7,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
         [--c0 M_PER_S (0: derived)] [--threads 2] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded]
         [--csv docs/validation/poiseuille_loaded.csv]
   tools/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
+  tools/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   tools/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png] [--dp DP] [--c0 C0]
 
 Measurement (physics.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
@@ -14,10 +15,20 @@ the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/d
 body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc area over L B.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
+
+Reference (dilute theory for the discs actually placed): the placement depends only on phi and the seed, not on
+dp, so `reference` places them (a run of one step at dp = r/2) and integrates the steady momentum balance across
+the channel with the local Einstein-Brady viscosity mu(y) = mu0 (1 + 2 phi(y)), phi(y) the discs' area fraction
+at height y (their chords over L), u(y) from the shear stress rho F (y0 - y) with y0 where u(0) = u(B) = 0, u_max
+its mean within 1 cm of the centre line, mu_eq from eq. 19 (clear fluid: 1.00037, from the band's mean). It counts
+the discs' absence within r of the plates (where the shear is largest) and is valid where Einstein-Brady is (phi
+up to about 0.1). One row per phi in docs/validation/poiseuille_loaded_reference.csv.
 """
 import argparse
+import csv
 import os
 import re
+import subprocess
 import sys
 import time
 
@@ -35,6 +46,8 @@ COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wal
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
+DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
+REFERENCE_CSV = os.path.join(ROOT, "docs", "validation", "poiseuille_loaded_reference.csv")
 
 
 def fail(message):
@@ -67,6 +80,53 @@ def measure(folder):
         first = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]
         radii = vtp.read_vtp(os.path.join(folder, first))["radius_m"]
     return u_max, mu_ratio, float(np.sum(np.pi * radii ** 2) / (length * gap)), int(radii.size)
+
+
+def local_einstein(centres_y, radius, length, gap):
+    """mu_eq/mu0 that eq. 19 gives for a steady channel flow whose local viscosity is mu0 (1 + 2 phi(y))
+    (Einstein-Brady, D = 2), phi(y) the area fraction at height y of discs of the given radius centred at centres_y
+    (per period length), with u_max measured as the tool measures it (the mean within HALF_BAND_M of the centre)."""
+    y = np.linspace(0, gap, 6001)
+    phi_y = (2 * np.sqrt(np.clip(radius ** 2 - (y[:, None] - np.asarray(centres_y)[None, :]) ** 2, 0, None))).sum(1)
+    fluidity = 1 / (1 + 2 * phi_y / length)
+    # shear stress rho F (y0 - y) vanishes at y0, where u(0) = u(B) = 0 puts it; units rho F / mu0 = 1
+    y0 = np.trapz(y * fluidity, y) / np.trapz(fluidity, y)
+    slope = (y0 - y) * fluidity
+    u = np.concatenate([[0], np.cumsum((slope[1:] + slope[:-1]) / 2 * np.diff(y))])
+    return gap * gap / 8 / u[np.abs(y - gap / 2) <= HALF_BAND_M].mean()
+
+
+REFERENCE_COLUMNS = ["phi", "seed", "phi_actual", "n_discs", "mu_local_einstein", "mu_uniform_einstein"]
+
+
+def command_reference(args):
+    phis = [float(v) for v in args.phi.split(",") if v.strip()]
+    rows = []
+    for phi in phis:
+        folder = os.path.join(args.runs_dir, "placement_phi%g_seed%d" % (phi, args.seed))
+        argv = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
+                "-s", "numerics.dp_m=0.01", "-s", "boulders.solid_fraction=%g" % phi, "-s", "boulders.seed=%d" % args.seed,
+                "-s", "time.end_s=1e-6", "-s", "output.progress_interval_s=0", "--threads", "1"]
+        if subprocess.run(argv, stdin=subprocess.DEVNULL, env=study.solver_environment()).returncode != 0:
+            fail("placing the discs for phi = %g failed: %s" % (phi, " ".join(argv)))
+        text = open(os.path.join(folder, "params.ini")).read()
+        gap, length = param(text, "domain", "height_m"), param(text, "domain", "length_m")
+        discs = vtp.read_vtp(os.path.join(folder, vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]))
+        radii, centres_y = discs["radius_m"], discs["points"][:, 1]
+        if np.ptp(radii) > 0:
+            fail("the reference assumes one radius; phi = %g placed radii %g-%g m" % (phi, radii.min(), radii.max()))
+        phi_actual = float(np.sum(np.pi * radii ** 2) / (length * gap))
+        row = {"phi": phi, "seed": args.seed, "phi_actual": "%.4f" % phi_actual, "n_discs": radii.size,
+               "mu_local_einstein": "%.5f" % local_einstein(centres_y, radii[0], length, gap),
+               "mu_uniform_einstein": "%.5f" % (1 + 2 * phi_actual)}
+        rows.append(row)
+        print("%s: reference %s" % (TOOL, row), flush=True)
+    with open(args.csv, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=REFERENCE_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    print("%s: wrote %s" % (TOOL, args.csv))
+    return 0
 
 
 def c0_of(folder):
@@ -148,6 +208,27 @@ def fit(phi, mu):
     return best[0], best[1], rmse
 
 
+def clear_fluid_values(rows):
+    """mu_eq/mu0 of the clear fluid (phi = 0) per dp, from the given rows."""
+    return {float(r["dp_m"]): float(r["mu_eq_over_mu0"]) for r in rows if float(r["phi"]) == 0}
+
+
+def clear_value(clear, dp):
+    """The clear fluid's mu_eq/mu0 at dp, or the mean over the other resolutions where dp has none (it is the
+    viscous term's lattice factor, the same at every dp: 0.9845-0.9849 measured)."""
+    return clear[dp] if dp in clear else float(np.mean(list(clear.values())))
+
+
+def read_reference(path):
+    """{phi: dilute-theory mu_eq/mu0 relative to the clear channel} from the reference CSV, or {} without one."""
+    if not os.path.isfile(path):
+        return {}
+    with open(os.path.join(ROOT, "cases", "poiseuille_loaded.ini")) as f:
+        text = f.read()
+    band_clear = local_einstein([], 0.0, param(text, "domain", "length_m"), param(text, "domain", "height_m"))
+    return {float(r["phi"]): float(r["mu_local_einstein"]) / band_clear for r in study.read_rows(TOOL, path)}
+
+
 def command_report(args):
     every_run = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
     rows = every_run
@@ -161,64 +242,79 @@ def command_report(args):
     phi = np.array([float(r["phi_actual"]) for r in loaded])
     mu = np.array([float(r["mu_eq_over_mu0"]) for r in loaded])
     phi_m, p, rmse = fit(phi, mu)
-    print("Krieger-Dougherty fit over %d runs: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)%s"
+    print("Krieger-Dougherty fit of mu_eq/mu0 over %d runs: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)%s"
           % (len(loaded), phi_m, p, rmse, 100 * rmse,
              "  [phi_m at its bound %g: the measured viscosity does not diverge]" % PHI_M_MAX
              if phi_m > PHI_M_MAX - 1e-3 else ""))
     for r in rows:
         print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
                                                       float(r["mu_eq_over_mu0"]), r["wall_s"]))
-    clear = [float(r["mu_eq_over_mu0"]) for r in rows if float(r["phi"]) == 0]
-    if len(clear) == 1:
-        relative = mu / clear[0]
-        phi_m_rel, p_rel, rmse_rel = fit(phi, relative)
-        print("Relative to the clear fluid of the same runs (mu_eq/mu0 = %.5f there: the viscous term's lattice "
-              "factor),\n  fit: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)" % (clear[0], phi_m_rel, p_rel, rmse_rel,
-                                                                             100 * rmse_rel))
-        for f, m in zip(phi, relative):
-            print("  phi %.4f  relative rise %.4f  per unit phi %.3f  (Einstein-Brady 2D: 2)" % (f, m - 1, (m - 1) / f))
+    clear_all, clear_here = clear_fluid_values(every_run), clear_fluid_values(rows)
+    dps = sorted({float(r["dp_m"]) for r in loaded})
+    clear = np.array([clear_value(clear_here or clear_all, float(r["dp_m"])) for r in loaded])
+    relative = mu / clear
+    rel_fit = fit(phi, relative)
+    print("Relative to the clear fluid (mu_eq/mu0 = %s at dp %s%s; the viscous term's lattice factor):\n"
+          "  fit: phi_m = %.4f, p = %.3f, RMSE = %.4f (%.2f %%)"
+          % (", ".join("%.5f" % clear_value(clear_here or clear_all, dp) for dp in dps), ", ".join("%g" % d for d in dps),
+             "" if all(dp in clear_here for dp in dps) else ", from the other resolutions' runs", *rel_fit,
+             100 * rel_fit[2]))
+    reference = read_reference(args.reference)
+    for r, f, m in zip(loaded, phi, relative):
+        ref = reference.get(float(r["phi"]))
+        print("  phi %.4f  rise %.4f  per unit phi %.3f (Einstein-Brady 2D: 2)%s"
+              % (f, m - 1, (m - 1) / f, "  dilute theory for these discs %.4f: share %.2f" % (ref - 1, (m - 1) / (ref - 1))
+                 if ref else ""))
     if args.png:
-        plot(args.png, every_run, phi, phi_m, p, rmse)
+        plot(args.png, every_run, reference, rel_fit)
     return 0
 
 
-def plot(png, rows, phi, phi_m, p, rmse):
-    """Left: mu_eq/mu0 against phi at every resolution, the fit (of the --dp runs) and Einstein-Brady. Right: accuracy against cost, per
-    run: the pure fluid's error |mu_eq/mu0 - 1|, and for each phi the change from the finest run at that phi."""
+def plot(png, rows, reference, rel_fit):
+    """Left: mu_eq/mu0 relative to the clear fluid against phi at every resolution, the Krieger-Dougherty fit of the
+    selected runs, Einstein-Brady and the dilute theory for the placed discs. Right: accuracy against cost, per run:
+    the clear fluid's error |mu_eq/mu0 - 1|, and for dilute loads the share of the dilute theory's rise missed."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (ax, cost) = plt.subplots(1, 2, figsize=(12, 4.8))
-    resolutions = sorted({float(r["dp_m"]) for r in rows})
-    finest, finest_dp = {}, {}
-    for r in sorted(rows, key=lambda r: float(r["dp_m"]), reverse=True):
-        finest[float(r["phi"])] = float(r["mu_eq_over_mu0"])
-        finest_dp[float(r["phi"])] = float(r["dp_m"])
-    for dp in resolutions:
+    clear = clear_fluid_values(rows)
+    for k, dp in enumerate(sorted({float(r["dp_m"]) for r in rows})):
+        colour = "C%d" % k
         sel = [r for r in rows if float(r["dp_m"]) == dp]
         x = [float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel]
-        y = [float(r["mu_eq_over_mu0"]) for r in sel]
-        ax.plot(x, y, "o", label="surge, dp = %.3g m (r/dp = %.1f)" % (dp, 0.02 / dp))
-        # the finest run at a phi is the reference there: only coarser ones get a point
-        compared = [r for r in sel if float(r["phi"]) == 0 or finest_dp[float(r["phi"])] < dp]
-        err = [abs(float(r["mu_eq_over_mu0"]) - 1) if float(r["phi"]) == 0 else
-               abs(float(r["mu_eq_over_mu0"]) / finest[float(r["phi"])] - 1) for r in compared]
-        cost.loglog([float(r["wall_s"]) for r in compared], err, "o", label="dp = %.3g m" % dp)
-        for r, e in zip(compared, err):
-            cost.annotate("$\\phi$ = %g" % float(r["phi"]), (float(r["wall_s"]), e), fontsize=7)
-    grid = np.linspace(0, max(phi) * 1.02, 200)
-    ax.plot(grid, krieger_dougherty(grid, phi_m, p), "-",
-            label="Krieger-Dougherty fit: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)" % (phi_m, p, 100 * rmse))
-    ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", label="Einstein-Brady 2D: 1 + 2$\\phi$")
+        y = [float(r["mu_eq_over_mu0"]) / clear_value(clear, dp) for r in sel]
+        ax.plot(x, y, "o", color=colour, label="surge, dp = %.3g m (r/dp = %.1f)" % (dp, 0.02 / dp))
+        # errors against theory: the clear fluid against 1, dilute loads against the placed discs' dilute theory
+        clear_rows = [r for r in sel if float(r["phi"]) == 0]
+        cost.loglog([float(r["wall_s"]) for r in clear_rows],
+                    [abs(float(r["mu_eq_over_mu0"]) - 1) for r in clear_rows], "s", color=colour, mfc="none",
+                    label="dp = %.3g m, clear fluid: |$\\mu_{eq}/\\mu_0$ - 1|" % dp)
+        dilute = [(r, v) for r, v in zip(sel, y) if 0 < float(r["phi"]) <= DILUTE_PHI and float(r["phi"]) in reference]
+        cost.loglog([float(r["wall_s"]) for r, _ in dilute],
+                    [1 - (v - 1) / (reference[float(r["phi"])] - 1) for r, v in dilute], "o", color=colour,
+                    label="dp = %.3g m, $\\phi \\leq$ %g: 1 - rise / dilute theory's" % (dp, DILUTE_PHI))
+        for r, v in dilute:
+            cost.annotate("$\\phi$ = %g" % float(r["phi"]),
+                          (float(r["wall_s"]), 1 - (v - 1) / (reference[float(r["phi"])] - 1)), fontsize=7)
+    top = max(float(r["phi_actual"]) for r in rows if float(r["phi"]) > 0)
+    grid = np.linspace(0, top * 1.02, 200)
+    ax.plot(grid, krieger_dougherty(grid, rel_fit[0], rel_fit[1]), "-", color="tab:green",
+            label="Krieger-Dougherty fit of the selected runs: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)"
+            % (rel_fit[0], rel_fit[1], 100 * rel_fit[2]))
+    ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", color="tab:red", label="Einstein-Brady 2D: 1 + 2$\\phi$")
+    if reference:
+        ax.plot(sorted(reference), [reference[f] for f in sorted(reference)], "k:x",
+                label="dilute theory for the placed discs (local Einstein-Brady)")
     ax.set_xlabel("solid fraction $\\phi$")
-    ax.set_ylabel("$\\mu_{eq} / \\mu_0$")
+    ax.set_ylabel("$\\mu_{eq}$ / $\\mu_{eq}(\\phi = 0)$, same dp")
     ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     cost.set_xlabel("wall time of the run (s)")
-    cost.set_ylabel("$\\phi$ = 0: |$\\mu_{eq}/\\mu_0$ - 1|;  $\\phi$ > 0: change from the finest run")
+    cost.set_ylabel("error against theory")
     cost.set_title("Accuracy against cost")
-    cost.legend(fontsize=8)
+    cost.legend(fontsize=7)
     cost.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(png, dpi=120)
@@ -241,16 +337,31 @@ def main():
     run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
+    ref = sub.add_parser("reference")
+    ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5")
+    ref.add_argument("--seed", type=int, default=1)
+    ref.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
+    ref.add_argument("--csv", default=REFERENCE_CSV)
+    ref.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
     rep = sub.add_parser("report")
     rep.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
     rep.add_argument("--png", default=None)
     rep.add_argument("--dp", type=float, default=None, help="fit only the runs at this dp")
     rep.add_argument("--c0", type=float, default=None, help="fit only the runs with this c0")
+    rep.add_argument("--reference", default=REFERENCE_CSV)
     args = parser.parse_args()
     if args.command == "run":
         if not args.dp > 0 or not args.ch > 0 or args.threads < 1 or args.budget_s < 0 or not args.c0 >= 0:
             fail("--dp and --ch must be > 0, --c0 >= 0, --threads >= 1, --budget-s >= 0")
         return command_run(args)
+    if args.command == "reference":
+        try:
+            phis = [float(v) for v in args.phi.split(",") if v.strip()]
+        except ValueError:
+            phis = []
+        if not phis or any(not 0 < v < 0.8 for v in phis):
+            fail("--phi: expected comma-separated solid fractions in (0, 0.8), got '%s'" % args.phi)
+        return command_reference(args)
     if args.command == "measure":
         try:
             u_max, mu_ratio, phi_actual, n = measure(args.run_dir)
