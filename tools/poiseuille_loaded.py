@@ -4,11 +4,12 @@ cases/poiseuille_loaded.ini, each run in its own folder and resumable from check
 run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Einstein-Brady line.
 
   tools/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8] [--seed 1]
-        [--c0 M_PER_S (0: derived)] [--threads 2] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded]
+        [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded]
         [--csv docs/validation/poiseuille_loaded.csv]
   tools/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   tools/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   tools/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png] [--dp DP] [--c0 C0]
+        [--diffusion DELTA]
 
 Measurement (physics.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -42,7 +43,7 @@ import vtp  # noqa: E402
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps"]
+           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion"]
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
@@ -135,14 +136,29 @@ def c0_of(folder):
         return float(re.search(r"c0_mps = (\S+)", f.read()).group(1))
 
 
+def case_diffusion():
+    """delta of cases/poiseuille_loaded.ini (the registry's 0.1 where the case does not set it)."""
+    with open(os.path.join(ROOT, "cases", "poiseuille_loaded.ini")) as f:
+        found = re.search(r"^density_diffusion\s*=\s*(\S+)", f.read(), re.M)
+    return float(found.group(1)) if found else 0.1
+
+
+def diffusion_of(folder):
+    """The density-diffusion coefficient delta a run used (params.ini)."""
+    with open(os.path.join(folder, "params.ini")) as f:
+        return param(f.read(), "numerics", "density_diffusion")
+
+
 def run_one(args, phi, deadline):
-    name = "phi%g_dp%g_ch%g_seed%d%s" % (phi, args.dp, args.ch, args.seed, "_c0%g" % args.c0 if args.c0 else "")
+    name = "phi%g_dp%g_ch%g_seed%d%s%s" % (phi, args.dp, args.ch, args.seed, "_c0%g" % args.c0 if args.c0 else "",
+                                          "_dd%g" % args.diffusion if args.diffusion >= 0 else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
     fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
              "-s", "numerics.dp_m=%.17g" % args.dp, "-s", "numerics.ch=%g" % args.ch, "-s", "boulders.seed=%d" % args.seed]
     fresh += ["-s", "boulders.solid_fraction=%g" % phi] if phi > 0 else ["-s", "boulders.placement=none"]
     fresh += ["-s", "numerics.c0_mps=%g" % args.c0] if args.c0 else []
+    fresh += ["-s", "numerics.density_diffusion=%g" % args.diffusion] if args.diffusion >= 0 else []
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
@@ -151,7 +167,8 @@ def run_one(args, phi, deadline):
            "phi_actual": "nan", "n_discs": 0, "particle_steps": 0, "sim_time_s": 0}
     if os.path.isfile(os.path.join(folder, "diagnostics.csv")):
         steps, sim_time = study.particle_steps(folder)
-        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time, "c0_mps": "%.4g" % c0_of(folder)})
+        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time, "c0_mps": "%.4g" % c0_of(folder),
+                    "density_diffusion": "%g" % diffusion_of(folder)})
     if rc == 0:
         u_max, mu_ratio, phi_actual, n_discs = measure(folder)
         row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
@@ -170,12 +187,13 @@ def command_run(args):
     phis = [float(v) for v in args.phi.split(",") if v.strip()] if args.phi else []
     if not phis or any(not 0 <= v < 0.8 for v in phis):
         fail("--phi: expected comma-separated solid fractions in [0, 0.8), got '%s'" % args.phi)
+    diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
     done = set()
     if os.path.isfile(args.csv):
-        done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "")
-                for r in study.read_rows(TOOL, args.csv)}
+        done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
+                 float(r["density_diffusion"])) for r in study.read_rows(TOOL, args.csv)}
     for phi in phis:
-        if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "") in done:
+        if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion) in done:
             continue
         if deadline and time.time() > deadline:
             print("%s: budget spent; run again to continue" % TOOL, flush=True)
@@ -232,6 +250,8 @@ def read_reference(path):
 def command_report(args):
     every_run = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
     rows = every_run
+    if args.diffusion is not None:
+        rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
     if args.dp:
         rows = [r for r in rows if abs(float(r["dp_m"]) / args.dp - 1) < 1e-3]
     if args.c0:
@@ -330,6 +350,8 @@ def main():
     run.add_argument("--ch", type=float, default=1.8)
     run.add_argument("--seed", type=int, default=1)
     run.add_argument("--c0", type=float, default=0.0, help="numerics.c0_mps (0: derived from the scene)")
+    run.add_argument("--diffusion", type=float, default=-1.0,
+                     help="numerics.density_diffusion (delta; default: the case's)")
     run.add_argument("--threads", type=int, default=2)
     run.add_argument("--budget-s", type=float, default=0.0)
     run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
@@ -348,11 +370,13 @@ def main():
     rep.add_argument("--png", default=None)
     rep.add_argument("--dp", type=float, default=None, help="fit only the runs at this dp")
     rep.add_argument("--c0", type=float, default=None, help="fit only the runs with this c0")
+    rep.add_argument("--diffusion", type=float, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
     args = parser.parse_args()
     if args.command == "run":
-        if not args.dp > 0 or not args.ch > 0 or args.threads < 1 or args.budget_s < 0 or not args.c0 >= 0:
-            fail("--dp and --ch must be > 0, --c0 >= 0, --threads >= 1, --budget-s >= 0")
+        if not args.dp > 0 or not args.ch > 0 or args.threads < 1 or args.budget_s < 0 or not args.c0 >= 0 \
+                or not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
+            fail("--dp and --ch must be > 0, --c0 >= 0, --diffusion in [0, 1], --threads >= 1, --budget-s >= 0")
         return command_run(args)
     if args.command == "reference":
         try:
