@@ -226,6 +226,14 @@ def group_inputs():
         out, p, cmd = surge("inputs", ["check", "boulder_settling.ini"] + extra, timeout_s=60)
         check("inputs: %s -> error naming '%s'" % (" ".join(extra[1::2]), words),
               p.returncode in (2, 3) and words in p.stderr, cmd + "\nexit %d\n%s" % (p.returncode, p.stderr[-800:]))
+    # density diffusion in a fluid this viscous around discs this small: warned (poiseuille_loaded.md), not refused
+    for extra, warned in ((["-s", "numerics.density_diffusion=0.1", "-s", "numerics.c0_mps=5"], True), ([], False)):
+        out, p, cmd = surge("inputs", ["check", "poiseuille_loaded.ini", "-s", "numerics.dp_m=0.005"] + extra,
+                            timeout_s=60)
+        check("inputs: poiseuille_loaded %s -> %s" % (" ".join(extra[1::2]) or "as shipped",
+                                                      "warning on density diffusion" if warned else "no warning"),
+              p.returncode == 0 and ("density diffusion lets the fluid compress" in p.stderr) == warned,
+              cmd + "\nexit %d\n%s" % (p.returncode, p.stderr[-800:]))
 
 
 os.makedirs(WORK, exist_ok=True)
