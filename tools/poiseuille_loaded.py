@@ -299,42 +299,48 @@ def plot(png, rows, reference, rel_fit):
     import matplotlib.pyplot as plt
     fig, (ax, cost) = plt.subplots(1, 2, figsize=(12, 4.8))
     clear = clear_fluid_values(rows)
-    for k, dp in enumerate(sorted({float(r["dp_m"]) for r in rows})):
+    settings = sorted({(float(r["dp_m"]), float(r["c0_mps"]), float(r["density_diffusion"])) for r in rows},
+                      key=lambda k: (-k[0], k[1], -k[2]))
+    for k, (dp, c0, delta) in enumerate(settings):
         colour = "C%d" % k
-        sel = [r for r in rows if float(r["dp_m"]) == dp]
+        sel = [r for r in rows if (float(r["dp_m"]), float(r["c0_mps"]), float(r["density_diffusion"])) == (dp, c0, delta)]
+        name = "r/dp %.0f, c0 %.3g, $\\delta$ %g" % (0.02 / dp, c0, delta)
         x = [float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel]
         y = [float(r["mu_eq_over_mu0"]) / clear_value(clear, dp) for r in sel]
-        ax.plot(x, y, "o", color=colour, label="surge, dp = %.3g m (r/dp = %.1f)" % (dp, 0.02 / dp))
+        ax.plot(x, y, "o", color=colour, label="surge, " + name)
         # errors against theory: the clear fluid against 1, dilute loads against the placed discs' dilute theory
         clear_rows = [r for r in sel if float(r["phi"]) == 0]
-        cost.loglog([float(r["wall_s"]) for r in clear_rows],
-                    [abs(float(r["mu_eq_over_mu0"]) - 1) for r in clear_rows], "s", color=colour, mfc="none",
-                    label="dp = %.3g m, clear fluid: |$\\mu_{eq}/\\mu_0$ - 1|" % dp)
+        if clear_rows:
+            cost.loglog([float(r["wall_s"]) for r in clear_rows],
+                        [abs(float(r["mu_eq_over_mu0"]) - 1) for r in clear_rows], "s", color=colour, mfc="none",
+                        label=name + ", clear fluid: |$\\mu_{eq}/\\mu_0$ - 1|")
         dilute = [(r, v) for r, v in zip(sel, y) if 0 < float(r["phi"]) <= DILUTE_PHI and float(r["phi"]) in reference]
-        cost.loglog([float(r["wall_s"]) for r, _ in dilute],
-                    [1 - (v - 1) / (reference[float(r["phi"])] - 1) for r, v in dilute], "o", color=colour,
-                    label="dp = %.3g m, $\\phi \\leq$ %g: 1 - rise / dilute theory's" % (dp, DILUTE_PHI))
+        if dilute:
+            cost.loglog([float(r["wall_s"]) for r, _ in dilute],
+                        [1 - (v - 1) / (reference[float(r["phi"])] - 1) for r, v in dilute], "o", color=colour,
+                        label=name + ", $\\phi \\leq$ %g: 1 - rise / theory's" % DILUTE_PHI)
         for r, v in dilute:
             cost.annotate("$\\phi$ = %g" % float(r["phi"]),
                           (float(r["wall_s"]), 1 - (v - 1) / (reference[float(r["phi"])] - 1)), fontsize=7)
     top = max(float(r["phi_actual"]) for r in rows if float(r["phi"]) > 0)
     grid = np.linspace(0, top * 1.02, 200)
-    ax.plot(grid, krieger_dougherty(grid, rel_fit[0], rel_fit[1]), "-", color="tab:green",
+    ax.plot(grid, krieger_dougherty(grid, rel_fit[0], rel_fit[1]), "-", color="black",
             label="Krieger-Dougherty fit of the selected runs: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)"
             % (rel_fit[0], rel_fit[1], 100 * rel_fit[2]))
     ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", color="tab:red", label="Einstein-Brady 2D: 1 + 2$\\phi$")
     if reference:
-        ax.plot(sorted(reference), [reference[f] for f in sorted(reference)], "k:x",
+        ax.plot(sorted(reference), [reference[f] for f in sorted(reference)], ":x", color="grey",
                 label="dilute theory for the placed discs (local Einstein-Brady)")
     ax.set_xlabel("solid fraction $\\phi$")
     ax.set_ylabel("$\\mu_{eq}$ / $\\mu_{eq}(\\phi = 0)$, same dp")
     ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
-    ax.legend(fontsize=7)
+    ax.set_ylim(top=2.5)
+    ax.legend(fontsize=6, loc="upper left", ncol=2)
     ax.grid(alpha=0.3)
     cost.set_xlabel("wall time of the run (s)")
     cost.set_ylabel("error against theory")
     cost.set_title("Accuracy against cost")
-    cost.legend(fontsize=7)
+    cost.legend(fontsize=6, loc="center right")
     cost.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(png, dpi=120)
