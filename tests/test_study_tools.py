@@ -77,4 +77,7 @@ check("poiseuille_loaded run --phi 0.9 refused", r.returncode == 2 and "--phi" i
 r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "run", "--diffusion", "2"],
                    capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded run --diffusion 2 refused", r.returncode == 2 and "--diffusion" in r.stderr, r.stderr.strip())
+r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "reference", "--phi", "0.9"],
+                   capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded reference --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
 sys.exit(1 if failures else 0)
