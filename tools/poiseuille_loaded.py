@@ -297,7 +297,7 @@ def plot(png, rows, reference, rel_fit):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    fig, (ax, cost) = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, (ax, cost) = plt.subplots(1, 2, figsize=(13, 7.5))
     clear = clear_fluid_values(rows)
     settings = sorted({(float(r["dp_m"]), float(r["c0_mps"]), float(r["density_diffusion"])) for r in rows},
                       key=lambda k: (-k[0], k[1], -k[2]))
@@ -307,7 +307,9 @@ def plot(png, rows, reference, rel_fit):
         name = "r/dp %.0f, c0 %.3g, $\\delta$ %g" % (0.02 / dp, c0, delta)
         x = [float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel]
         y = [float(r["mu_eq_over_mu0"]) / clear_value(clear, dp) for r in sel]
-        ax.plot(x, y, "o", color=colour, label="surge, " + name)
+        order = np.argsort(x)
+        ax.plot(np.array(x)[order], np.array(y)[order], "o-" if len(sel) >= 4 else "o", lw=0.8, color=colour,
+                label="surge, " + name)  # a sweep is joined by a line
         # errors against theory: the clear fluid against 1, dilute loads against the placed discs' dilute theory
         clear_rows = [r for r in sel if float(r["phi"]) == 0]
         if clear_rows:
@@ -334,13 +336,12 @@ def plot(png, rows, reference, rel_fit):
     ax.set_xlabel("solid fraction $\\phi$")
     ax.set_ylabel("$\\mu_{eq}$ / $\\mu_{eq}(\\phi = 0)$, same dp")
     ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
-    ax.set_ylim(top=2.5)
-    ax.legend(fontsize=6, loc="upper left", ncol=2)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     ax.grid(alpha=0.3)
     cost.set_xlabel("wall time of the run (s)")
     cost.set_ylabel("error against theory")
     cost.set_title("Accuracy against cost")
-    cost.legend(fontsize=6, loc="center right")
+    cost.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
     cost.grid(alpha=0.3, which="both")
     fig.tight_layout()
     fig.savefig(png, dpi=120)
