@@ -118,6 +118,7 @@ def command_chart(args):
     targets = {"zeta_f": 0.01, "zeta_h": 0.05, "zeta_fs": 0.10, "zeta_u_076": 0.05, "zeta_u_150": 0.05,
                "zeta_u_970": 0.05}
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), sharex=True)
+    colour_of = {dp: "C%d" % k for k, dp in enumerate(sorted({float(r["dp_m"]) for r in rows}))}
     for ax, metric in zip(axes.flat, METRICS):
         for case, marker in (("id1", "o"), ("id2", "s")):
             for continuity in ("plain", "renormalised"):
@@ -129,8 +130,7 @@ def command_chart(args):
                     xs = [float(r["wall_s"]) for r in sel]
                     ys = [float(r[metric]) for r in sel]
                     ax.scatter(xs, ys, marker=marker, facecolors="none" if continuity == "plain" else None,
-                               edgecolors="C%d" % (int(round(dp * 1e4)) % 10),
-                               color=None if continuity == "plain" else "C%d" % (int(round(dp * 1e4)) % 10),
+                               edgecolors=colour_of[dp], color=None if continuity == "plain" else colour_of[dp],
                                label="%s dp=%g mm, %s continuity" % (case.upper(), dp * 1e3, continuity))
                     for r, x, y in zip(sel, xs, ys):
                         ax.annotate("C_h %s, %s thr" % (r["ch"], r["threads"]), (x, y), fontsize=6, xytext=(3, 3),
