@@ -61,11 +61,17 @@ static void build_walls(const surge_params *p, particle_list *l)
         for (long i = 0; i < nx_ext; i++) {
             double x = xlo + (i + 0.5) * dp;
             double gx = x < 0 ? -x : (x > L ? 2 * L - x : x); /* corners mirror through the corner point */
+            int bed = WALL_BOTTOM;
             const double xw = p->walls.upstream_x_m;
-            if (p->walls.upstream && x < xw && x > xw - depth)
-                gx = 2 * xw - x; /* bed under the upstream wall: the belt-wall corner */
+            if (p->walls.upstream && x < xw && x > xw - depth) {
+                /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point; it is
+                 * part of the fixed wall (the gate sits on the belt), since a moving bed there drags fluid
+                 * under the wall (docs/method.md, boundary conditions) */
+                gx = 2 * xw - x;
+                bed = WALL_FIXED;
+            }
             if (p->walls.bottom)
-                push_wall(l, x, -off, gx, off, WALL_BOTTOM);
+                push_wall(l, x, -off, gx, off, bed);
             if (p->walls.top)
                 push_wall(l, x, H + off, gx, H - off, WALL_TOP);
         }
