@@ -43,11 +43,12 @@ def continuity_of(row):
 
 
 def finished_rows(csv_path):
+    """Grid points with a successful run; a failed one stays in the CSV as a record and is run again (fresh)."""
     if not os.path.isfile(csv_path):
         return set()
     with open(csv_path) as f:
         return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
-                 continuity_of(r)) for r in csv.DictReader(f)}
+                 continuity_of(r)) for r in csv.DictReader(f) if r["status"] == "ok"}
 
 
 def run_one(args, case, dp, ch, deadline):

@@ -61,7 +61,7 @@ def write_progress(folder, progress):
 
 def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     """Runs surge for one study point in folder: from its checkpoint when an earlier piece was interrupted, else
-    fresh_argv (which names the case and -o folder); common options go to both. At the deadline (wall clock,
+    fresh_argv (which names the case and -o folder; the run starts over); common options go to both. At the deadline (wall clock,
     None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
     progress) with the wall time of all pieces in progress["wall_s"]; the caller records the final status."""
     os.makedirs(folder, exist_ok=True)
@@ -71,6 +71,7 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
         argv = [surge, "run", "--restart", checkpoint] + common
     else:
         argv = fresh_argv + common
+        progress["wall_s"] = 0.0  # a fresh start (after a failed run, say) owes nothing to earlier pieces
     print("%s: %s" % (tool, " ".join(argv)), flush=True)
     progress["status"] = "running"
     write_progress(folder, progress)
