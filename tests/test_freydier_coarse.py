@@ -10,7 +10,7 @@ front and run for 8 s with the default (plain) continuity equation; metrics over
 belt, wall, body force or viscosity), not the paper's targets. Measured 2026-11-22: zeta_h 0.174, zeta_f 0.123.
 Before that date this test ran the renormalised divergence (numerics.continuity_correction) and held zeta_h to 5 %
 (measured 0.8 %), but at dp = 2 mm that form slowly packs the bed layer near the front into the belt (the mean
-height of the first layer falls from 0.50 to 0.34 dp by 8 s) and the run crossed the belt at t = 7.74 s once the
+height of the first layer falls from 0.50 to 0.31 dp by 8 s, tools/wall_contact.py) and the run crossed the belt at t = 7.74 s once the
 belt-wall corner changed: it passed by a margin of time (docs/validation/stability.md).
 """
 import os
