@@ -105,4 +105,10 @@ check("wall_contact: bed layer 0.25 dp over 12-112 mm", "12-112:0.25" in r.stdou
 r = subprocess.run([sys.executable, os.path.join(tools, "wall_contact.py"), work], capture_output=True, text=True,
                    timeout=60)
 check("wall_contact without params.ini refused", r.returncode == 2 and "params.ini" in r.stderr, r.stderr.strip())
+with open(os.path.join(contact_dir, "snap_000000002.vtp"), "w") as f:
+    f.write("not a VTK file")
+r = subprocess.run([sys.executable, os.path.join(tools, "wall_contact.py"), contact_dir], capture_output=True,
+                   text=True, timeout=60)
+check("wall_contact: a broken snapshot is named, no traceback",
+      r.returncode == 2 and "snap_000000002.vtp" in r.stderr and "Traceback" not in r.stderr, r.stderr.strip())
 sys.exit(1 if failures else 0)

@@ -45,8 +45,13 @@ def run_parameters(run_dir):
 
 def measure(snapshot, dp, x_wall, rho0):
     """One snapshot's distances (in dp) and the corner's density deviation; see the module's docstring."""
-    d = read_vtp(snapshot)
+    try:
+        d = read_vtp(snapshot)
+    except (OSError, ValueError, KeyError) as e:
+        fail("%s: cannot read the snapshot (%s)" % (snapshot, e))
     fluid = d["kind"] == 0
+    if not np.any(fluid & (d["points"][:, 1] < 2 * dp)):
+        fail("%s: no fluid particle within 2 dp of the belt" % snapshot)
     x, y = d["points"][fluid, 0], d["points"][fluid, 1]
     rho = d["density_kgpm3"][fluid]
     corner = (x < x_wall + 3 * dp) & (y < 3 * dp)
