@@ -3,37 +3,52 @@
 
   tools/drift_map.py RUN_DIR SNAPSHOT.vtp [SNAPSHOT.vtp ...]
 
-For each snapshot (file names inside RUN_DIR), in 2 cm columns from the upstream wall (x = 0.012 m) to the toe:
-the mean of (kernel-summed density) / (particle density) over fluid particles with full kernel support (more than
-2h below the column's top particle), separately in the lower 35 % ("l") and the rest ("h") of that depth.
+For each snapshot (file names inside RUN_DIR), in 2 cm columns from the upstream wall (walls.upstream_x_m) to the
+toe: the mean of (kernel-summed density) / (particle density) over fluid particles with full kernel support (more
+than 2h below the column's top particle), separately in the lower 35 % ("l") and the rest ("h") of that depth.
 1 means the spacing matches the densities (see tools/operator_check.py). Reads params.ini; numpy only.
 """
 import os
-import sys, math, numpy as np
+import sys
+
+import numpy as np
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import vtp  # noqa: E402
-if len(sys.argv) < 3:
-    sys.exit(__doc__)
-run=sys.argv[1]; files=sys.argv[2:]
-txt=open(run+"/params.ini").read()
-dp=float(txt.split("dp_m = ")[1].split()[0]); ch=float(txt.split("\nch = ")[1].split()[0]); m=1383*dp*dp
-L=float(txt.split("length_m = ")[1].split()[0]); h=ch*math.sqrt(2)*dp; aD=7/(4*math.pi*h*h)
-for f in files:
-    s=vtp.read_vtp(run+"/"+f); x=s["points"][:,0]; y=s["points"][:,1]; k=s["kind"]; rho=s["density_kgpm3"]
-    fl=np.where(k==0)[0]
-    toe=x[fl].max()
-    edges=np.arange(0.012, toe+0.02, 0.02)
-    row=[]
-    for a0,a1 in zip(edges[:-1],edges[1:]):
-        col=fl[(x[fl]>=a0)&(x[fl]<a1)]
-        if len(col)==0: continue
-        top=y[col].max()
-        for lo,hi,name in ((0,0.35,"low"),(0.35,1,"high")):
-            sel=col[(y[col]<top-2*h)&(y[col]>=lo*(top-2*h))&(y[col]<hi*(top-2*h))]
-            r=[]
-            for a in sel:
-                dx=x[a]-x; dx-=L*np.round(dx/L); q=np.hypot(dx,y[a]-y)/h; n=q<2
-                r.append(np.sum(m*aD*(1-q[n]/2)**4*(2*q[n]+1))/rho[a])
-            row.append("%s%.3f" % (name[0], np.mean(r)) if r else "%s  -  " % name[0])
-        row[-2]="x%.2f:" % a0 + row[-2]
-    print("t=%.1f toe %.3f:" % (s["time_s"], toe), " ".join(row))
+from operator_check import kernel_sum_ratio, read_run  # noqa: E402
+
+COLUMN_M = 0.02
+LOWER_FRACTION = 0.35
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    run_dir, names = sys.argv[1], sys.argv[2:]
+    params, dp, h, mass, length = read_run(run_dir)
+    x_wall = params.real("walls", "upstream_x_m")
+    for name in names:
+        try:
+            s = vtp.read_vtp(os.path.join(run_dir, name))
+        except (OSError, ValueError, KeyError) as e:
+            sys.exit("drift_map: %s: cannot read the snapshot (%s)" % (name, e))
+        x, y, rho = s["points"][:, 0], s["points"][:, 1], s["density_kgpm3"]
+        fluid = np.where(s["kind"] == 0)[0]
+        toe = x[fluid].max()
+        row = []
+        for x0 in np.arange(x_wall, toe, COLUMN_M):
+            column = fluid[(x[fluid] >= x0) & (x[fluid] < x0 + COLUMN_M)]
+            if column.size == 0:
+                continue
+            supported = y[column].max() - 2 * h
+            cells = []
+            for label, lo, hi in (("l", 0, LOWER_FRACTION), ("h", LOWER_FRACTION, 1)):
+                band = column[(y[column] >= lo * supported) & (y[column] < hi * supported)]
+                ratios = [kernel_sum_ratio(a, x, y, rho, mass, h, length) for a in band]
+                cells.append("%s%.3f" % (label, np.mean(ratios)) if ratios else "%s  -  " % label)
+            row.append("x%.2f:%s" % (x0, " ".join(cells)))
+        print("t=%.1f toe %.3f:" % (s["time_s"], toe), " ".join(row))
+
+
+if __name__ == "__main__":
+    main()

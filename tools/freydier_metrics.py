@@ -18,7 +18,6 @@ h_ref_star(xstar, tan_theta) and u_ref_star(zeta) for the references, read_param
 """
 
 import argparse
-import configparser
 import math
 import os
 import sys
@@ -28,6 +27,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import vtp  # noqa: E402
+from run_params import ParamsError, RunParams  # noqa: E402
 
 PROG = "freydier_metrics"
 TOE_FRACTION = 0.1          # toe: where h drops below this fraction of h_n
@@ -81,36 +81,14 @@ _REQUIRED = (
 def read_params(run_dir):
     """Reads RUN_DIR/params.ini; returns a dict of the values the metrics use and derived ones
     (u_b, h_n, tan_theta, particle_mass). Raises MetricsError on a missing or bad value."""
-    path = os.path.join(run_dir, "params.ini")
-    if not os.path.isfile(path):
-        raise MetricsError("%s: no params.ini (not a surge run folder?)" % run_dir)
-    ini = configparser.ConfigParser(interpolation=None, inline_comment_prefixes=("#", ";"))
     try:
-        with open(path) as f:
-            ini.read_file(f)
-    except (OSError, configparser.Error, UnicodeDecodeError) as e:
-        raise MetricsError("cannot read %s: %s" % (path, str(e).splitlines()[0]))
-
-    def real(section, key):
-        if not ini.has_option(section, key):
-            raise MetricsError("%s: missing [%s] %s" % (path, section, key))
-        text = ini.get(section, key)
-        try:
-            value = float(text)
-        except ValueError:
-            raise MetricsError("%s: [%s] %s = %r is not a number" % (path, section, key, text))
-        if not math.isfinite(value):
-            raise MetricsError("%s: [%s] %s = %r is not finite" % (path, section, key, text))
-        return value
-
-    p = {"%s.%s" % sk: real(*sk) for sk in _REQUIRED}
-    periodic = "false"
-    if ini.has_option("domain", "periodic_x"):
-        periodic = ini.get("domain", "periodic_x").strip().lower()
-        if periodic not in ("true", "false", "1", "0", "yes", "no", "on", "off"):
-            raise MetricsError("%s: [domain] periodic_x = %r is not a boolean" % (path, periodic))
-    p["domain.periodic_x"] = periodic in ("true", "1", "yes", "on")
-    p["walls.layers"] = real("walls", "layers") if ini.has_option("walls", "layers") else 0.0
+        params = RunParams(run_dir)
+        p = {"%s.%s" % sk: params.real(*sk) for sk in _REQUIRED}
+        p["domain.periodic_x"] = params.flag("domain", "periodic_x", default=False)
+        p["walls.layers"] = params.real("walls", "layers", default=0.0)
+    except ParamsError as e:
+        raise MetricsError(str(e))
+    path = params.path
 
     for key in ("fluid.density_kgpm3", "fluid.viscosity_m2ps", "body.gravity_mps2", "numerics.dp_m",
                 "domain.length_m"):

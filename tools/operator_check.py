@@ -25,17 +25,32 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import vtp  # noqa: E402
+from run_params import ParamsError, RunParams  # noqa: E402
 
 
-def parameter(text, section, key):
-    current = None
-    for line in text.splitlines():
-        line = line.split("#")[0].strip()
-        if line.startswith("["):
-            current = line.strip("[]")
-        elif current == section and "=" in line and line.split("=")[0].strip() == key:
-            return line.split("=", 1)[1].strip()
-    raise KeyError("%s.%s" % (section, key))
+def wendland(q, h):
+    """Quintic Wendland kernel W(q) in 2D, q = r / h < 2 (eq. 3)."""
+    return 7 / (4 * math.pi * h * h) * (1 - q / 2) ** 4 * (2 * q + 1)
+
+
+def kernel_sum_ratio(a, x, y, rho, mass, h, length):
+    """sum_b m W_ab (all particles, periodic in x over length) over particle a's own density rho_a."""
+    dx = x[a] - x
+    dx -= length * np.round(dx / length)
+    q = np.hypot(dx, y[a] - y) / h
+    near = q < 2
+    return np.sum(mass * wendland(q[near], h)) / rho[a]
+
+
+def read_run(run_dir):
+    """(params, dp, h, particle mass, period length) of a run folder; exits with the reason if params.ini is bad."""
+    try:
+        params = RunParams(run_dir)
+        dp, rho0 = params.real("numerics", "dp_m"), params.real("fluid", "density_kgpm3")
+        h = params.real("numerics", "ch") * math.sqrt(2) * dp
+        return params, dp, h, rho0 * dp * dp, params.real("domain", "length_m")
+    except ParamsError as e:
+        sys.exit("%s: %s" % (os.path.basename(sys.argv[0]), e))
 
 
 def main():
@@ -46,17 +61,10 @@ def main():
     parser.add_argument("--every", type=int, default=50, help="moment matrix of every N-th snapshot (default 50)")
     parser.add_argument("--last", type=int, default=51, help="snapshots for the profile fit (default 51)")
     args = parser.parse_args()
-    with open(os.path.join(args.run_dir, "params.ini")) as f:
-        text = f.read()
-    dp = float(parameter(text, "numerics", "dp_m"))
-    ch = float(parameter(text, "numerics", "ch"))
-    rho0 = float(parameter(text, "fluid", "density_kgpm3"))
-    nu = float(parameter(text, "fluid", "viscosity_m2ps"))
-    g = float(parameter(text, "body", "gravity_mps2"))
-    theta = math.radians(float(parameter(text, "body", "slope_deg")))
-    belt = float(parameter(text, "walls", "bottom_speed_mps"))
-    length = float(parameter(text, "domain", "length_m"))
-    mass, h = rho0 * dp * dp, ch * math.sqrt(2) * dp
+    params, dp, h, mass, length = read_run(args.run_dir)
+    rho0, nu = params.real("fluid", "density_kgpm3"), params.real("fluid", "viscosity_m2ps")
+    g, theta = params.real("body", "gravity_mps2"), math.radians(params.real("body", "slope_deg"))
+    belt = params.real("walls", "bottom_speed_mps")
     alpha = 7 / (4 * math.pi * h * h)
     files = sorted(glob.glob(os.path.join(args.run_dir, "snap_*.vtp")))
     if not files:
@@ -76,7 +84,7 @@ def main():
             r = np.hypot(dx, dy)
             q = r / h
             near = q < 2
-            ratios.append(np.sum(mass * alpha * (1 - q[near] / 2) ** 4 * (2 * q[near] + 1)) / rho[a])
+            ratios.append(np.sum(mass * wendland(q[near], h)) / rho[a])
             pair = near & (r > 0)
             factor = alpha / h * (-5 * q[pair] * (1 - q[pair] / 2) ** 3) / r[pair]   # grad_a W = factor r_ab
             volume = mass / rho[pair]

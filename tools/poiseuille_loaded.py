@@ -28,7 +28,6 @@ up to about 0.1). One row per phi in docs/validation/poiseuille_loaded_reference
 import argparse
 import csv
 import os
-import re
 import subprocess
 import sys
 import time
@@ -40,6 +39,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import study  # noqa: E402
 import vtp  # noqa: E402
+from run_params import RunParams  # noqa: E402
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
@@ -55,17 +55,12 @@ def fail(message):
     study.fail(TOOL, message)
 
 
-def param(text, section, key):
-    block = re.search(r"\[%s\]([^\[]*)" % section, text).group(1)
-    return float(re.search(r"^%s = (\S+)" % key, block, re.M).group(1))
-
-
 def measure(folder):
     """(u_max, mu_eq/mu0, phi_actual, n_discs) of a finished run."""
-    text = open(os.path.join(folder, "params.ini")).read()
-    rho, nu0 = param(text, "fluid", "density_kgpm3"), param(text, "fluid", "viscosity_m2ps")
-    force, gap = param(text, "body", "force_x_mps2"), param(text, "domain", "height_m")
-    length = param(text, "domain", "length_m")
+    params = RunParams(folder)
+    rho, nu0 = params.real("fluid", "density_kgpm3"), params.real("fluid", "viscosity_m2ps")
+    force, gap = params.real("body", "force_x_mps2"), params.real("domain", "height_m")
+    length = params.real("domain", "length_m")
     speeds = []
     for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd")):
         if WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6:
@@ -110,8 +105,8 @@ def command_reference(args):
                 "-s", "time.end_s=1e-6", "-s", "output.progress_interval_s=0", "--threads", "1"]
         if subprocess.run(argv, stdin=subprocess.DEVNULL, env=study.solver_environment()).returncode != 0:
             fail("placing the discs for phi = %g failed: %s" % (phi, " ".join(argv)))
-        text = open(os.path.join(folder, "params.ini")).read()
-        gap, length = param(text, "domain", "height_m"), param(text, "domain", "length_m")
+        params = RunParams(folder)
+        gap, length = params.real("domain", "height_m"), params.real("domain", "length_m")
         discs = vtp.read_vtp(os.path.join(folder, vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]))
         radii, centres_y = discs["radius_m"], discs["points"][:, 1]
         if np.ptp(radii) > 0:
@@ -130,23 +125,9 @@ def command_reference(args):
     return 0
 
 
-def c0_of(folder):
-    """The speed of sound a run used (params.ini's derived line)."""
-    with open(os.path.join(folder, "params.ini")) as f:
-        return float(re.search(r"c0_mps = (\S+)", f.read()).group(1))
-
-
 def case_diffusion():
     """delta of cases/poiseuille_loaded.ini (the registry's 0.1 where the case does not set it)."""
-    with open(os.path.join(ROOT, "cases", "poiseuille_loaded.ini")) as f:
-        found = re.search(r"^density_diffusion\s*=\s*(\S+)", f.read(), re.M)
-    return float(found.group(1)) if found else 0.1
-
-
-def diffusion_of(folder):
-    """The density-diffusion coefficient delta a run used (params.ini)."""
-    with open(os.path.join(folder, "params.ini")) as f:
-        return param(f.read(), "numerics", "density_diffusion")
+    return RunParams(os.path.join(ROOT, "cases", "poiseuille_loaded.ini")).real("numerics", "density_diffusion", 0.1)
 
 
 def run_one(args, phi, deadline):
@@ -167,8 +148,10 @@ def run_one(args, phi, deadline):
            "phi_actual": "nan", "n_discs": 0, "particle_steps": 0, "sim_time_s": 0}
     if os.path.isfile(os.path.join(folder, "diagnostics.csv")):
         steps, sim_time = study.particle_steps(folder)
-        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time, "c0_mps": "%.4g" % c0_of(folder),
-                    "density_diffusion": "%g" % diffusion_of(folder)})
+        params = RunParams(folder)
+        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time,
+                    "c0_mps": "%.4g" % params.derived("c0_mps"),
+                    "density_diffusion": "%g" % params.real("numerics", "density_diffusion")})
     if rc == 0:
         u_max, mu_ratio, phi_actual, n_discs = measure(folder)
         row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
@@ -241,9 +224,8 @@ def read_reference(path):
     """{phi: dilute-theory mu_eq/mu0 relative to the clear channel} from the reference CSV, or {} without one."""
     if not os.path.isfile(path):
         return {}
-    with open(os.path.join(ROOT, "cases", "poiseuille_loaded.ini")) as f:
-        text = f.read()
-    band_clear = local_einstein([], 0.0, param(text, "domain", "length_m"), param(text, "domain", "height_m"))
+    case = RunParams(os.path.join(ROOT, "cases", "poiseuille_loaded.ini"))
+    band_clear = local_einstein([], 0.0, case.real("domain", "length_m"), case.real("domain", "height_m"))
     return {float(r["phi"]): float(r["mu_local_einstein"]) / band_clear for r in study.read_rows(TOOL, path)}
 
 
@@ -396,7 +378,7 @@ def main():
     if args.command == "measure":
         try:
             u_max, mu_ratio, phi_actual, n = measure(args.run_dir)
-        except (OSError, ValueError, AttributeError) as e:
+        except (OSError, ValueError) as e:
             fail(str(e))
         print("u_max = %.6g m/s, mu_eq/mu0 = %.5g, phi = %.4f (%d discs)" % (u_max, mu_ratio, phi_actual, n))
         return 0

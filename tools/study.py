@@ -8,6 +8,8 @@ import subprocess
 import sys
 import time
 
+from run_params import RunParams
+
 
 def fail(program, message):
     """One-line error on stderr, exit status 2 (bad input)."""
@@ -96,11 +98,7 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
 
 def particle_steps(folder):
     """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
-    fluid = None
-    with open(os.path.join(folder, "params.ini")) as f:
-        for line in f:
-            if "fluid particles =" in line:
-                fluid = int(line.split("fluid particles =")[1].split(",")[0])
+    fluid = int(RunParams(folder).derived("fluid particles"))
     with open(os.path.join(folder, "diagnostics.csv")) as f:
         rows = list(csv.reader(f))
     last = rows[-1]

@@ -14,13 +14,13 @@ For each snapshot (snap_*.vtp of RUN_DIR, every N-th), in units of dp:
 Then the mean and extreme of behind_wall, corner_y and corner_drho over the snapshots after --after-s.
 """
 import argparse
-import configparser
 import glob
 import os
 import sys
 
 import numpy as np
 
+from run_params import ParamsError, RunParams
 from vtp import read_vtp
 
 
@@ -30,17 +30,14 @@ def fail(message):
 
 
 def run_parameters(run_dir):
-    path = os.path.join(run_dir, "params.ini")
-    ini = configparser.ConfigParser(inline_comment_prefixes=(";", "#"))
     try:
-        if not ini.read(path):
-            fail("%s: cannot read the run's params.ini" % path)
-        if not ini.getboolean("walls", "upstream"):
-            fail("%s: the scene has no upstream wall (walls.upstream = false)" % path)
-        return (ini.getfloat("numerics", "dp_m"), ini.getfloat("walls", "upstream_x_m"),
-                ini.getfloat("fluid", "density_kgpm3"))
-    except (configparser.Error, ValueError) as e:
-        fail("%s: %s" % (path, e))
+        params = RunParams(run_dir)
+        if not params.flag("walls", "upstream"):
+            fail("%s: the scene has no upstream wall (walls.upstream = false)" % params.path)
+        return (params.real("numerics", "dp_m"), params.real("walls", "upstream_x_m"),
+                params.real("fluid", "density_kgpm3"))
+    except ParamsError as e:
+        fail(str(e))
 
 
 def measure(snapshot, dp, x_wall, rho0):
