@@ -4,6 +4,7 @@ with the option named, both charts render from the committed tables, and wall_co
 usage: test_study_tools.py SOURCE_DIR WORK_DIR"""
 import csv
 import os
+import shutil
 import subprocess
 import sys
 
@@ -71,6 +72,12 @@ study.append_row(short, poiseuille_loaded.COLUMNS, {"phi": 0.1, "phi_actual": 0.
 r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "report", "--csv", short],
                    capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded report with one run refused", r.returncode == 2 and "needs 3" in r.stderr, r.stderr.strip())
+report_png = os.path.join(work, "poiseuille_loaded.png")
+r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "report", "--dp", "0.005", "--c0", "15",
+                    "--diffusion", "0", "--png", report_png], capture_output=True, text=True, timeout=120)
+check("poiseuille_loaded report fits and charts the committed table (r/dp 4)",
+      r.returncode == 0 and "Krieger-Dougherty fit" in r.stdout and os.path.getsize(report_png) > 10000,
+      (r.stdout + r.stderr).strip()[-300:])
 r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "run", "--phi", "0.9"],
                    capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded run --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
@@ -85,7 +92,8 @@ check("poiseuille_loaded reference --phi 0.9 refused", r.returncode == 2 and "--
 # at 0.25 dp over 12-112 mm
 import vtp  # noqa: E402
 contact_dir = os.path.join(work, "wall_contact")
-os.makedirs(contact_dir, exist_ok=True)
+shutil.rmtree(contact_dir, ignore_errors=True)  # a rerun must not see the broken snapshot written below
+os.makedirs(contact_dir)
 with open(os.path.join(contact_dir, "params.ini"), "w") as f:
     f.write("[walls]\nupstream = true\nupstream_x_m = 0.012\n[numerics]\ndp_m = 0.001\n"
             "[fluid]\ndensity_kgpm3 = 1000\n")

@@ -268,60 +268,82 @@ def command_report(args):
               % (f, m - 1, (m - 1) / f, "  dilute theory for these discs %.4f: share %.2f" % (ref - 1, (m - 1) / (ref - 1))
                  if ref else ""))
     if args.png:
-        plot(args.png, every_run, reference, rel_fit)
+        plot(args.png, every_run, reference, rel_fit, same_setting(args))
     return 0
 
 
-def plot(png, rows, reference, rel_fit):
-    """Left: mu_eq/mu0 relative to the clear fluid against phi at every resolution, the Krieger-Dougherty fit of the
-    selected runs, Einstein-Brady and the dilute theory for the placed discs. Right: accuracy against cost, per run:
-    the clear fluid's error |mu_eq/mu0 - 1|, and for dilute loads the share of the dilute theory's rise missed."""
+def same_setting(args):
+    """Predicate: a row run with the c0 and delta that report selected (every row where neither is given)."""
+    def match(r):
+        return ((args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
+                (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion))
+    return match
+
+
+def plot(png, rows, reference, rel_fit, selected):
+    """Left: mu_eq/mu0 relative to the clear fluid against phi, one line per resolution for the runs with the
+    selected c0 and delta (other settings in grey), the Krieger-Dougherty fit, Einstein-Brady and the dilute theory
+    for the placed discs. Right: accuracy against cost, one point per run of the selected setting: the clear
+    fluid's |mu_eq/mu0 - 1|; for dilute loads the share of the dilute theory's rise missed; for every load at a
+    coarser resolution its relative difference from the run at the finest resolution and the same phi."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     fig, (ax, cost) = plt.subplots(1, 2, figsize=(13, 7.5))
     clear = clear_fluid_values(rows)
-    settings = sorted({(float(r["dp_m"]), float(r["c0_mps"]), float(r["density_diffusion"])) for r in rows},
-                      key=lambda k: (-k[0], k[1], -k[2]))
-    for k, (dp, c0, delta) in enumerate(settings):
+
+    def relative_mu(r):
+        return float(r["mu_eq_over_mu0"]) / clear_value(clear, float(r["dp_m"]))
+
+    def phi_of(r):
+        return float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0
+
+    others = [r for r in rows if not selected(r)]
+    if others:
+        ax.plot([phi_of(r) for r in others], [relative_mu(r) for r in others], ".", color="0.75",
+                label="surge, other c0 and $\delta$ (poiseuille_loaded.md)")
+    mine = [r for r in rows if selected(r)]
+    dps = sorted({float(r["dp_m"]) for r in mine}, reverse=True)
+    finest = {float(r["phi"]): r for r in mine if float(r["dp_m"]) == dps[-1]}
+    for k, dp in enumerate(dps):
         colour = "C%d" % k
-        sel = [r for r in rows if (float(r["dp_m"]), float(r["c0_mps"]), float(r["density_diffusion"])) == (dp, c0, delta)]
-        name = "r/dp %.0f, c0 %.3g, $\\delta$ %g" % (0.02 / dp, c0, delta)
-        x = [float(r["phi_actual"]) if float(r["phi"]) > 0 else 0.0 for r in sel]
-        y = [float(r["mu_eq_over_mu0"]) / clear_value(clear, dp) for r in sel]
-        order = np.argsort(x)
-        ax.plot(np.array(x)[order], np.array(y)[order], "o-" if len(sel) >= 4 else "o", lw=0.8, color=colour,
-                label="surge, " + name)  # a sweep is joined by a line
-        # errors against theory: the clear fluid against 1, dilute loads against the placed discs' dilute theory
+        sel = sorted((r for r in mine if float(r["dp_m"]) == dp), key=phi_of)
+        name = "r/dp %.0f" % (0.02 / dp)
+        setting = "c0 %.3g, $\delta$ %g" % (float(sel[0]["c0_mps"]), float(sel[0]["density_diffusion"]))
+        ax.plot([phi_of(r) for r in sel], [relative_mu(r) for r in sel], "o-", lw=0.8, color=colour,
+                label="surge, %s, %s" % (name, setting))
         clear_rows = [r for r in sel if float(r["phi"]) == 0]
         if clear_rows:
             cost.loglog([float(r["wall_s"]) for r in clear_rows],
                         [abs(float(r["mu_eq_over_mu0"]) - 1) for r in clear_rows], "s", color=colour, mfc="none",
-                        label=name + ", clear fluid: |$\\mu_{eq}/\\mu_0$ - 1|")
-        dilute = [(r, v) for r, v in zip(sel, y) if 0 < float(r["phi"]) <= DILUTE_PHI and float(r["phi"]) in reference]
+                        label=name + ", clear fluid: |$\mu_{eq}/\mu_0$ - 1|")
+        dilute = [r for r in sel if 0 < float(r["phi"]) <= DILUTE_PHI and float(r["phi"]) in reference]
         if dilute:
-            cost.loglog([float(r["wall_s"]) for r, _ in dilute],
-                        [1 - (v - 1) / (reference[float(r["phi"])] - 1) for r, v in dilute], "o", color=colour,
-                        label=name + ", $\\phi \\leq$ %g: 1 - rise / theory's" % DILUTE_PHI)
-        for r, v in dilute:
-            cost.annotate("$\\phi$ = %g" % float(r["phi"]),
-                          (float(r["wall_s"]), 1 - (v - 1) / (reference[float(r["phi"])] - 1)), fontsize=7)
-    top = max(float(r["phi_actual"]) for r in rows if float(r["phi"]) > 0)
+            cost.loglog([float(r["wall_s"]) for r in dilute],
+                        [1 - (relative_mu(r) - 1) / (reference[float(r["phi"])] - 1) for r in dilute], "o",
+                        color=colour, label=name + ", $\phi \leq$ %g: 1 - rise / dilute theory's" % DILUTE_PHI)
+        coarser = [r for r in sel if float(r["phi"]) > 0 and float(r["phi"]) in finest and dp != dps[-1]]
+        if coarser:
+            cost.loglog([float(r["wall_s"]) for r in coarser],
+                        [abs(relative_mu(r) / relative_mu(finest[float(r["phi"])]) - 1) for r in coarser], "^",
+                        color=colour, mfc="none", label=name + ", |1 - $\mu$ / $\mu$ of r/dp %.0f| (same $\phi$)"
+                        % (0.02 / dps[-1]))
+    top = max(phi_of(r) for r in rows)
     grid = np.linspace(0, top * 1.02, 200)
     ax.plot(grid, krieger_dougherty(grid, rel_fit[0], rel_fit[1]), "-", color="black",
-            label="Krieger-Dougherty fit of the selected runs: $\\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)"
+            label="Krieger-Dougherty fit of the selected runs: $\phi_m$ = %.3f, p = %.2f (RMSE %.1f %%)"
             % (rel_fit[0], rel_fit[1], 100 * rel_fit[2]))
-    ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", color="tab:red", label="Einstein-Brady 2D: 1 + 2$\\phi$")
+    ax.plot(grid[grid <= 0.15], 1 + 2 * grid[grid <= 0.15], "--", color="tab:red", label="Einstein-Brady 2D: 1 + 2$\phi$")
     if reference:
         ax.plot(sorted(reference), [reference[f] for f in sorted(reference)], ":x", color="grey",
                 label="dilute theory for the placed discs (local Einstein-Brady)")
-    ax.set_xlabel("solid fraction $\\phi$")
-    ax.set_ylabel("$\\mu_{eq}$ / $\\mu_{eq}(\\phi = 0)$, same dp")
+    ax.set_xlabel("solid fraction $\phi$")
+    ax.set_ylabel("$\mu_{eq}$ / $\mu_{eq}(\phi = 0)$, same dp")
     ax.set_title("Loaded Poiseuille (GMD Sect. 3.2)")
     ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=2)
     ax.grid(alpha=0.3)
     cost.set_xlabel("wall time of the run (s)")
-    cost.set_ylabel("error against theory")
+    cost.set_ylabel("error (fraction)")
     cost.set_title("Accuracy against cost")
     cost.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
     cost.grid(alpha=0.3, which="both")
