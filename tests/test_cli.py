@@ -622,6 +622,45 @@ def group_restart():
     r_cont = surge("run", "--restart", checkpoint, "-s", "time.end_s=0.01", timeout=RUN_TIMEOUT_S)
     report("restart_after_sigint", exited(r_cont, 0) and state_hash(r_cont) is not None, r_cont)
 
+    # A run killed hard leaves only its last periodic checkpoint; the diagnostics rows it wrote after that
+    # checkpoint are dropped on restart, so diagnostics.csv stays in step order without repeated steps
+    dir_k = os.path.join(WORK, "K")
+    shutil.rmtree(dir_k, ignore_errors=True)
+    argv = [SURGE, "run", case, "-s", "time.end_s=100", *quiet, "-s", "output.checkpoint_interval_s=0.004",
+            "-s", "output.diagnostics_interval_s=0", "-o", dir_k, "--threads", "1"]
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            cwd=WORK, env=ENV)
+    checkpoint, csv_path = os.path.join(dir_k, "checkpoint.bin"), os.path.join(dir_k, "diagnostics.csv")
+    deadline = time.time() + RUN_TIMEOUT_S
+    while time.time() < deadline and proc.poll() is None and not os.path.isfile(checkpoint):
+        time.sleep(0.05)
+    time.sleep(0.5)
+    proc.kill()
+    proc.wait()
+    try:
+        with open(checkpoint, "rb") as f:
+            head = f.read(24)
+            f.seek(24 + struct.unpack("<Q", head[16:24])[0])
+            checkpoint_step = struct.unpack("<q", f.read(8))[0]
+        _, killed_rows = read_csv_rows(csv_path)
+        killed_steps = [int(row[1]) for row in killed_rows]
+        err = None
+    except Exception as e:  # noqa: BLE001
+        checkpoint_step, killed_steps, err = -1, [], "%s: %s" % (type(e).__name__, e)
+    report("hard_kill_left_rows_past_its_checkpoint", err is None and max(killed_steps) > checkpoint_step, None,
+           err or "checkpoint step %d, last row step %d" % (checkpoint_step, max(killed_steps or [0])))
+    end_s = float(killed_rows[-1][0]) + 0.002 if killed_rows else 0.01
+    r_k = surge("run", "--restart", checkpoint, "-s", "time.end_s=%.6f" % end_s, timeout=RUN_TIMEOUT_S)
+    try:
+        _, rows = read_csv_rows(csv_path)
+        steps = [int(row[1]) for row in rows]
+    except Exception as e:  # noqa: BLE001
+        steps = []
+    report("restart_after_hard_kill_drops_rows_past_the_checkpoint",
+           exited(r_k, 0) and steps and all(b > a for a, b in zip(steps, steps[1:])) and steps[-1] > max(killed_steps or [0]),
+           r_k, "steps around the checkpoint %d: %s" % (checkpoint_step,
+                                                        [s for s in steps if abs(s - checkpoint_step) < 4]))
+
 
 def main():
     global SURGE, SOURCE, WORK

@@ -140,6 +140,21 @@ def group_inputs():
     check("inputs: bad rendering options exit 2 with a message naming them (%d cases)" % len(cases), not wrong,
           "\n".join(wrong))
 
+    # a snapshot whose array offset points far outside the file is refused, naming the file and the array
+    run_dir = os.path.join(d, "corrupt")
+    code, stderr = run(["run", TANK, "-o", run_dir, "-s", "time.end_s=0.001"], timeout=60)
+    snapshots = sorted(f for f in os.listdir(run_dir) if f.startswith("snap_")) if code == 0 else []
+    if snapshots:
+        path = os.path.join(run_dir, snapshots[-1])
+        with open(path, "rb") as f:
+            data = f.read()
+        with open(path, "wb") as f:
+            f.write(data.replace(b'offset="0"', b'offset="18446744073709551615"', 1))
+    code, stderr = run(["render", run_dir], timeout=60)
+    check("inputs: a snapshot with an array offset beyond the file exits 2 naming it",
+          bool(snapshots) and code == 2 and snapshots[-1] in stderr and "truncated or has the wrong size" in stderr,
+          "exit %d: %s" % (code, stderr.strip()[-300:]))
+
 
 os.makedirs(WORK, exist_ok=True)
 {"live": group_live, "offline": group_offline, "inputs": group_inputs}[GROUP]()

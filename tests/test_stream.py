@@ -264,6 +264,19 @@ def group_control():
     check("control: (the change mattered: an unsteered run ends in another state)",
           plain.rc == 0 and plain.state_hash() != run.state_hash(), plain.describe())
 
+    # an output interval set live takes effect at once, even one that was 0 (final snapshot only)
+    interval = Surge("control_interval", ["-s", "time.end_s=0.1", "-s", "output.snapshot_interval_s=0"],
+                     publish=False, paused=True)
+    ctl = surge_client.Control(interval.ctl, 10)
+    reply = ctl.request({"cmd": "set", "key": "output.snapshot_interval_s", "value": 0.02})
+    ctl.request({"cmd": "resume"})
+    interval.wait()
+    pvd = os.path.join(interval.out, "run.pvd")
+    times = [t for t, _ in vtp.read_pvd(pvd)] if os.path.exists(pvd) else []
+    check("control: output.snapshot_interval_s set from 0 to 0.02 s writes a snapshot every 0.02 s",
+          reply.get("ok") and interval.rc == 0 and len(times) == 6 and abs(times[1] - 0.02) < 1e-3,
+          "reply %s, snapshot times %s\n%s" % (reply, times, interval.describe()))
+
 
 # ---------------------------------------------------------------------------------------------------------------
 BAD_REQUESTS = [  # (request bytes, words the error must contain)

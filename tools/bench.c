@@ -61,8 +61,9 @@ int main(int argc, char **argv)
     double end_s = 0.1;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--end-s") && i + 1 < argc) {
-            end_s = atof(argv[++i]);
-            if (!(end_s > 0)) {
+            char *end = NULL;
+            end_s = strtod(argv[++i], &end);
+            if (end == argv[i] || *end != '\0' || !(end_s > 0) || !isfinite(end_s)) {
                 fprintf(stderr, "surge-bench: --end-s needs a positive time in seconds\n");
                 return 2;
             }

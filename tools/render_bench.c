@@ -34,11 +34,19 @@ static void block(surge_snapshot *s, int fluid_count, double dp)
     s->time_s = 1.0;
 }
 
+/* A whole number from the command line, or -1 for anything else ("12x", "", "1e3"). */
+static int whole_number(const char *text)
+{
+    char *end = NULL;
+    const long value = strtol(text, &end, 10);
+    return end == text || *end != '\0' || value < 0 || value > 1000000 ? -1 : (int)value;
+}
+
 int main(int argc, char **argv)
 {
-    const int width = argc > 2 ? atoi(argv[1]) : 1920, height = argc > 2 ? atoi(argv[2]) : 1080;
-    const int frames = argc > 3 ? atoi(argv[3]) : 20;
-    if (width < 16 || height < 16 || frames < 1) {
+    const int width = argc > 2 ? whole_number(argv[1]) : 1920, height = argc > 2 ? whole_number(argv[2]) : 1080;
+    const int frames = argc > 3 ? whole_number(argv[3]) : 20;
+    if (width < 16 || height < 16 || frames < 1 || width > 16384 || height > 16384) {
         fprintf(stderr, "usage: surge-render-bench [WIDTH HEIGHT [FRAMES]]\n");
         return 2;
     }

@@ -342,7 +342,7 @@ static int at_step_boundary(surge_sim *sim, void *user)
     return requests;
 }
 
-static int open_live_links(const cli *c, const char *outdir, const surge_params *params, live_links *l)
+static int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, live_links *l)
 {
     char err[1024], path[4200];
     memset(l, 0, sizeof *l);
@@ -350,7 +350,8 @@ static int open_live_links(const cli *c, const char *outdir, const surge_params 
         goto fail;
     if (c->control[0] || c->replay_path) {
         snprintf(path, sizeof path, "%s/control.jsonl", outdir);
-        if (!(l->journal = surge_journal_open(path, c->restart_path != NULL, err, sizeof err)))
+        const long long resume_step = c->restart_path ? (long long)surge_sim_step_count(sim) : -1;
+        if (!(l->journal = surge_journal_open(path, resume_step, err, sizeof err)))
             goto fail;
     }
     if (c->publish[0] || c->control[0])
@@ -374,7 +375,7 @@ static int open_live_links(const cli *c, const char *outdir, const surge_params 
             def.on_frame = publish_rendered_frame;
             def.user = l->publisher;
         }
-        if (!(l->renderer = surge_renderer_start(&def, params, err, sizeof err)))
+        if (!(l->renderer = surge_renderer_start(&def, surge_sim_params(sim), err, sizeof err)))
             goto fail;
     }
     return 0;
@@ -461,8 +462,8 @@ static int command_run(int argc, char **argv)
             snprintf(outdir, sizeof outdir, "%s", c.output_dir);
         } else {
             const char *slash = strrchr(c.restart_path, '/');
-            snprintf(outdir, sizeof outdir, "%.*s", slash ? (int)(slash - c.restart_path) : 1,
-                     slash ? c.restart_path : ".");
+            const int folder_len = slash == NULL ? 0 : slash == c.restart_path ? 1 : (int)(slash - c.restart_path);
+            snprintf(outdir, sizeof outdir, "%.*s", slash ? folder_len : 1, slash ? c.restart_path : ".");
         }
     } else {
         surge_params p;
@@ -485,7 +486,7 @@ static int command_run(int argc, char **argv)
             outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads);
     warn_diffusive_compressibility(sim);
     live_links links;
-    if (open_live_links(&c, outdir, surge_sim_params(sim), &links) != 0) {
+    if (open_live_links(&c, outdir, sim, &links) != 0) {
         close_live_links(&links, sim);
         surge_sim_destroy(sim);
         return EXIT_USAGE;

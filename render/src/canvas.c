@@ -221,7 +221,7 @@ const uint8_t *surge_canvas_pixels(const surge_canvas *c) { return c->pixels; }
 void surge_colormap_rgb(int colormap, double value, double min, double max, uint8_t rgb[3])
 {
     double u = max > min ? (value - min) / (max - min) : 0.5;
-    u = u < 0 ? 0 : (u > 1 ? 1 : u);
+    u = !(u > 0) ? 0 : (u > 1 ? 1 : u); /* a NaN value takes the low end */
     const int k = (int)lround(u * 255.0);
     const unsigned char(*table)[3] = surge_colormap_table((surge_colormap)colormap);
     memcpy(rgb, table[k], 3);

@@ -35,8 +35,11 @@ static int write_file(const char *path, const uint8_t *data, size_t len, char *e
     char tmp[4300];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
     FILE *f = fopen(tmp, "wb");
-    if (!f || fwrite(data, 1, len, f) != len || fclose(f) != 0 || rename(tmp, path) != 0) {
+    int ok = f && fwrite(data, 1, len, f) == len;
+    ok = (f == NULL || fclose(f) == 0) && ok && rename(tmp, path) == 0;
+    if (!ok) {
         snprintf(err, err_len, "cannot write the frame '%.900s': %s", path, strerror(errno));
+        remove(tmp);
         return -1;
     }
     return 0;

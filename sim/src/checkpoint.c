@@ -1,5 +1,6 @@
 /* Checkpoints: the resolved parameters and the fluid state in its current (cell-sorted) order, so that a
- * restarted run repeats the uninterrupted one bit for bit. Little-endian, native real size recorded.
+ * restarted run repeats the uninterrupted one bit for bit. Host byte order and native real size (recorded): a
+ * checkpoint restarts a run on the same kind of machine, it is not an exchange format.
  *
  * Layout: "SURGECK1" | u32 version | u32 sizeof(real) | u64 params length | params text |
  *         i64 step | f64 time_s | f64 dt_s | f64 first_dt_s | i32 count | i32 wall_count |

@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
@@ -89,13 +90,18 @@ void surge_run_snapshot_name(int64_t step, char *name, size_t len)
     snprintf(name, len, "snap_%09lld.vtp", (long long)step);
 }
 
-static void write_diagnostics(const surge_sim *sim, run_outputs *o)
+static int write_diagnostics(const surge_sim *sim, run_outputs *o, char *err, size_t err_len)
 {
     surge_diagnostics d = surge_sim_diagnostics(sim);
-    fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g\n", d.time_s, (long long)d.step, d.dt_s,
-            d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
-            d.bottom_wall_speed_mps);
-    fflush(o->csv); /* a run that dies still leaves its time series */
+    /* flushed row by row: a run that dies still leaves its time series */
+    if (fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g\n", d.time_s, (long long)d.step, d.dt_s,
+                d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
+                d.bottom_wall_speed_mps) < 0 ||
+        fflush(o->csv) != 0) {
+        snprintf(err, err_len, "cannot write %s/diagnostics.csv: %s", o->dir, strerror(errno));
+        return -1;
+    }
+    return 0;
 }
 
 static int write_checkpoint(const surge_sim *sim, const run_outputs *o, char *err, size_t err_len)
@@ -109,6 +115,41 @@ static int write_checkpoint(const surge_sim *sim, const run_outputs *o, char *er
 static double next_time(double t, double interval)
 {
     return interval > 0 ? (floor(t / interval + 1e-9) + 1.0) * interval : INFINITY;
+}
+
+/* A diagnostics.csv line to keep on restart: the header, or a row whose step (second column) is at or before the
+ * checkpoint's; the rows after it belong to the interrupted run's lost continuation. */
+static int row_at_or_before_step(const char *line, void *checkpoint_step)
+{
+    const char *comma = strchr(line, ',');
+    char *end = NULL;
+    const long long step = comma ? strtoll(comma + 1, &end, 10) : 0;
+    return !comma || end == comma + 1 || step <= *(const long long *)checkpoint_step;
+}
+
+/* When an output is next due. The interval is a live parameter: a change (from the control socket) re-schedules
+ * it from the current time, so that setting an interval that was 0 takes effect. */
+typedef struct {
+    double interval_s; /* the interval next_s was scheduled with */
+    double next_s;
+} output_schedule;
+
+static output_schedule schedule_from(double t, double interval_s)
+{
+    return (output_schedule){interval_s, next_time(t, interval_s)};
+}
+
+/* Whether the output is due at time t (interval 0: at every step if every_step_when_zero, else never). */
+static int output_due(output_schedule *s, double t, double interval_s, int every_step_when_zero)
+{
+    if (interval_s != s->interval_s)
+        *s = schedule_from(t, interval_s);
+    if (interval_s == 0)
+        return every_step_when_zero;
+    if (t < s->next_s)
+        return 0;
+    s->next_s = next_time(t, interval_s);
+    return 1;
 }
 
 /* held_s: wall time the run was held at a step boundary (paused by a control client), left out of the rates */
@@ -159,23 +200,24 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         }
     }
     join(path, sizeof path, o.dir, "diagnostics.csv");
+    long long checkpoint_step = (long long)surge_sim_step_count(sim);
+    if (opt->restarted && surge_file_keep_lines(path, row_at_or_before_step, &checkpoint_step, err, err_len) != 0)
+        goto done;
     o.csv = fopen(path, opt->restarted ? "a" : "w");
     if (!o.csv) {
         snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
         goto done;
     }
-    if (!opt->restarted)
-        fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
-                       "mean_vx_mps,bottom_wall_speed_mps\n");
     const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
     if (!opt->restarted) {
-        write_diagnostics(sim, &o);
-        if (write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
+        if (fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,"
+                           "fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps\n") < 0 ||
+            write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
             goto done;
     }
-    double next_snapshot = next_time(surge_sim_time(sim), p->output.snapshot_interval_s);
-    double next_diag = next_time(surge_sim_time(sim), p->output.diagnostics_interval_s);
-    double next_checkpoint = next_time(surge_sim_time(sim), p->output.checkpoint_interval_s);
+    output_schedule snapshots = schedule_from(surge_sim_time(sim), p->output.snapshot_interval_s);
+    output_schedule diagnostics = schedule_from(surge_sim_time(sim), p->output.diagnostics_interval_s);
+    output_schedule checkpoints = schedule_from(surge_sim_time(sim), p->output.checkpoint_interval_s);
     const double start_wall = surge_wall_clock_s(), start_time = surge_sim_time(sim);
     const int64_t start_step = surge_sim_step_count(sim);
     double next_progress = start_wall + p->output.progress_interval_s;
@@ -210,20 +252,14 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
             break;
         }
         const double t = surge_sim_time(sim);
-        if (p->output.diagnostics_interval_s == 0 || t >= next_diag) {
-            write_diagnostics(sim, &o);
-            next_diag = next_time(t, p->output.diagnostics_interval_s);
+        if (output_due(&diagnostics, t, p->output.diagnostics_interval_s, 1) && write_diagnostics(sim, &o, err, err_len) != 0) {
+            result = SURGE_RUN_IO_ERROR; /* the final snapshot and checkpoint below are still tried */
+            break;
         }
-        if (t >= next_snapshot) {
-            if (write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
-                goto done;
-            next_snapshot = next_time(t, p->output.snapshot_interval_s);
-        }
-        if (t >= next_checkpoint) {
-            if (write_checkpoint(sim, &o, err, err_len) != 0)
-                goto done;
-            next_checkpoint = next_time(t, p->output.checkpoint_interval_s);
-        }
+        if (output_due(&snapshots, t, p->output.snapshot_interval_s, 0) && write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
+            goto done;
+        if (output_due(&checkpoints, t, p->output.checkpoint_interval_s, 0) && write_checkpoint(sim, &o, err, err_len) != 0)
+            goto done;
         if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= next_progress) {
             print_progress(sim, start_wall, held_s, start_step, start_time);
             next_progress = surge_wall_clock_s() + p->output.progress_interval_s;
@@ -237,14 +273,14 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
     if ((snapshot_due &&
          write_snapshot(sim, &o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0) ||
         write_checkpoint(sim, &o, final_err, sizeof final_err) != 0) {
-        if (result != SURGE_RUN_UNHEALTHY)
+        if (result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) /* the first error is the one to name */
             snprintf(err, err_len, "%s", final_err);
         result = result == SURGE_RUN_UNHEALTHY ? result : SURGE_RUN_IO_ERROR;
     }
     if (p->output.progress_interval_s > 0)
         print_progress(sim, start_wall, held_s, start_step, start_time);
 done:
-    if (o.csv && fclose(o.csv) != 0 && result == SURGE_RUN_FINISHED) {
+    if (o.csv && fclose(o.csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
         snprintf(err, err_len, "cannot write diagnostics.csv: %s", strerror(errno));
         result = SURGE_RUN_IO_ERROR;
     }

@@ -773,8 +773,9 @@ static int vtp_array(const vtp_source *v, const char *name, const char *type, in
     const unsigned long long offset = strtoull(value, NULL, 10);
     const size_t available = v->len - (size_t)(v->appended - v->data);
     uint64_t bytes = 0;
-    if (offset + 8 > available || (memcpy(&bytes, v->appended + offset, 8), bytes != expected_bytes) ||
-        offset + 8 + bytes > available) {
+    /* every comparison is written so that a huge offset read from a corrupt file cannot wrap around */
+    if (offset > available || available - offset < 8 ||
+        (memcpy(&bytes, v->appended + offset, 8), bytes != expected_bytes) || available - offset - 8 < bytes) {
         set_err(err, err_len, "%s: array %s is truncated or has the wrong size", v->path, name);
         return -1;
     }

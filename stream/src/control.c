@@ -370,12 +370,13 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
             break;
         }
         more = zmq_msg_more(&part);
-        if (count < MAX_ENVELOPE_FRAMES)
-            frames[count++] = part;
-        else {
+        if (count < MAX_ENVELOPE_FRAMES) {
+            zmq_msg_init(&frames[count]);
+            zmq_msg_move(&frames[count++], &part);
+        } else {
             overflow = 1;
-            zmq_msg_close(&part);
         }
+        zmq_msg_close(&part);
     }
     if (count == 0)
         return 0;

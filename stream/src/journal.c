@@ -8,16 +8,23 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "surge/platform.h"
 #include "surge/run.h"
 
 struct surge_journal {
     char *path;
     FILE *file; /* opened at the first entry */
-    int append;
     int failed; /* a write failed: reported once */
 };
 
-surge_journal *surge_journal_open(const char *path, int append, char *err, size_t err_len)
+/* A journal line to keep on restart: one whose "step" is at or before the checkpoint's (or that has none). */
+static int entry_at_or_before_step(const char *line, void *resume_step)
+{
+    const char *member = strstr(line, "\"step\":");
+    return !member || strtoll(member + 7, NULL, 10) <= *(const long long *)resume_step;
+}
+
+surge_journal *surge_journal_open(const char *path, long long resume_step, char *err, size_t err_len)
 {
     surge_journal *j = calloc(1, sizeof *j);
     if (!j || !(j->path = strdup(path))) {
@@ -25,9 +32,10 @@ surge_journal *surge_journal_open(const char *path, int append, char *err, size_
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
-    j->append = append;
-    if (!append && remove(path) != 0 && errno != ENOENT && errno != ENOTDIR) {
-        snprintf(err, err_len, "cannot remove the old journal '%s': %s", path, strerror(errno));
+    if (resume_step >= 0 ? surge_file_keep_lines(path, entry_at_or_before_step, &resume_step, err, err_len) != 0
+                         : remove(path) != 0 && errno != ENOENT && errno != ENOTDIR) {
+        if (resume_step < 0)
+            snprintf(err, err_len, "cannot remove the old journal '%s': %s", path, strerror(errno));
         free(j->path);
         free(j);
         return NULL;

@@ -74,7 +74,7 @@ static const void *state_field_data(const surge_snapshot *s, int field)
     }
 }
 
-/* The rigid bodies of the "bodies" topic (issue #6 adds bodies; until then every message has count 0). */
+/* The rigid bodies (boulders) of the "bodies" topic; count 0 in a scene without boulders. */
 static const state_field body_fields[] = {
     {"x_m", "f64", "m", 8},           {"y_m", "f64", "m", 8},         {"angle_rad", "f64", "rad", 8},
     {"vx_mps", "f64", "m/s", 8},      {"vy_mps", "f64", "m/s", 8},    {"omega_radps", "f64", "rad/s", 8},

@@ -11,4 +11,10 @@ double surge_wall_clock_s(void);
  * created or the path that is not a folder; what names the folder in the message ("output", "frames"). */
 int surge_make_folders(const char *path, const char *what, char *err, size_t err_len);
 
+/* Rewrites the text file at path keeping only the lines (without their newline) for which keep(line, context) is
+ * nonzero; a missing file is no error. A restart uses it to drop what the interrupted run wrote after the checkpoint
+ * it resumes from. Returns 0, or -1 with err naming the file. */
+int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *context), void *context, char *err,
+                          size_t err_len);
+
 #endif

@@ -10,9 +10,10 @@
 
 typedef struct surge_journal surge_journal;
 
-/* The file is created at the first entry; append keeps an existing journal (a restarted run), otherwise an
- * old one at path is removed now. NULL with the reason in err. */
-surge_journal *surge_journal_open(const char *path, int append, char *err, size_t err_len);
+/* The file is created at the first entry. A run restarted from a checkpoint of step resume_step keeps the existing
+ * journal's entries up to that step (later ones belong to the interrupted run's lost continuation) and appends;
+ * a fresh run (resume_step < 0) removes an old journal at path now. NULL with the reason in err. */
+surge_journal *surge_journal_open(const char *path, long long resume_step, char *err, size_t err_len);
 void surge_journal_close(surge_journal *journal);
 
 /* Appends {"step", "time_s", "source", "cmd"[, "key", "value", "previous"]} (NULL members are left out) and
