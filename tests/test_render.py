@@ -131,6 +131,8 @@ def group_inputs():
         (["render", os.path.join(d, "nothing_here")], (2,), "params.ini"),
         (["render"], (2,), "render needs a RUN_DIR"),
         (["render", d, "--publish", "5555"], (2,), "render takes only"),
+        (["render", d, "-o", out], (2,), "render takes only"),
+        (["render", d, "-s", "numerics.dp_m=0.01"], (2,), "'-s numerics.dp_m=0.01': only render.key=value"),
     ]
     wrong = []
     for args, codes, words in cases:

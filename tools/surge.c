@@ -579,10 +579,16 @@ static int command_render(int argc, char **argv)
         fprintf(stderr, "surge: render needs a RUN_DIR (a folder written by surge run)\n%s", usage_render);
         return EXIT_USAGE;
     }
-    if (c.publish[0] || c.control[0] || c.restart_path || c.replay_path || c.threads) {
+    if (c.publish[0] || c.control[0] || c.restart_path || c.replay_path || c.threads || c.output_dir) {
         fprintf(stderr, "surge: render takes only --frames, --movie, --font and -s render.key=value\n");
         return EXIT_USAGE;
     }
+    for (int i = 0; i < c.override_count; i++)
+        if (strncmp(c.overrides[i], "render.", 7) != 0) {
+            fprintf(stderr, "surge: render: '-s %s': only render.key=value can be set here (the run's other "
+                            "parameters are what it was run with)\n", c.overrides[i]);
+            return EXIT_USAGE;
+        }
     char path[4200], err[1024], frames_dir[4200];
     cli with_params = c;
     snprintf(path, sizeof path, "%s/params.ini", c.case_path);
