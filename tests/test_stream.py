@@ -370,6 +370,9 @@ def group_inputs():
     with open(bad_journal, "w") as f:
         f.write('{"step": 3, "time_s": 0, "source": "control", "cmd": "set", "key": "fluid.viscosity_m2ps", '
                 '"value": "0.01"}\n{"step": "x", "cmd": "stop"}\n')
+    huge_journal = os.path.join(WORK, "huge_journal.jsonl")
+    with open(huge_journal, "w") as f:
+        f.write('{"step": 1e30, "cmd": "stop"}\n')
     late_journal = os.path.join(WORK, "late_journal.jsonl")
     with open(late_journal, "w") as f:
         f.write('{"step": 2, "cmd": "set", "key": "numerics.dp_m", "value": "0.02"}\n')
@@ -387,6 +390,7 @@ def group_inputs():
         (["--publish", "5599", "--control", "5599"], "different endpoints"),
         (["--replay", os.path.join(WORK, "missing.jsonl")], "cannot read the journal"),
         (["--replay", bad_journal], "bad_journal.jsonl:2: \"step\" must be a whole number"),
+        (["--replay", huge_journal], "huge_journal.jsonl:1: \"step\" must be a whole number in [0, 2^53]"),
     ]
     wrong = []
     for extra, words in cases:

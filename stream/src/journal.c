@@ -4,6 +4,7 @@
 
 #include <cjson/cJSON.h>
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -123,8 +124,9 @@ static int parse_entry(const char *text, replay_entry *e, char *err, size_t err_
     const cJSON *value = cJSON_GetObjectItemCaseSensitive(root, "value");
     if (!cJSON_IsObject(root))
         snprintf(err, err_len, "not a JSON object");
-    else if (!cJSON_IsNumber(step) || step->valuedouble < 0 || step->valuedouble != (double)(long long)step->valuedouble)
-        snprintf(err, err_len, "\"step\" must be a whole number >= 0");
+    else if (!cJSON_IsNumber(step) || !(step->valuedouble >= 0 && step->valuedouble <= 9007199254740992.0) ||
+             step->valuedouble != floor(step->valuedouble))
+        snprintf(err, err_len, "\"step\" must be a whole number in [0, 2^53]");
     else if (!cJSON_IsString(cmd))
         snprintf(err, err_len, "\"cmd\" must be a string");
     else if (!strcmp(cmd->valuestring, "set") && (!cJSON_IsString(key) || !cJSON_IsString(value)))
