@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "sim_internal.h"
 
@@ -78,7 +79,11 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
         return -1;
     }
     surge_params_write(&sim->params, mem);
-    fclose(mem);
+    if (fclose(mem) != 0 || params_text == NULL) {
+        snprintf(err, err_len, "out of memory writing checkpoint");
+        free(params_text);
+        return -1;
+    }
 
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
@@ -101,6 +106,8 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
              write_boulders(f, &sim->boulders) | write_all(f, &hash, 8);
     free(params_text);
+    /* on disk before it replaces the previous checkpoint, so a crash leaves one of the two whole */
+    rc |= fflush(f) != 0 || fsync(fileno(f)) != 0;
     if (fclose(f) != 0 || rc != 0 || rename(tmp, path) != 0) {
         snprintf(err, err_len, "cannot write checkpoint '%s': %s", path, strerror(errno));
         remove(tmp);

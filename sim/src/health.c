@@ -48,6 +48,7 @@ const char *surge_health_check_name(surge_health_check c)
     case SURGE_CHECK_LEFT_DOMAIN: return "particle left the domain";
     case SURGE_CHECK_CROSSED_WALL: return "particle crossed a wall";
     case SURGE_CHECK_DT_COLLAPSE: return "time step collapsed";
+    case SURGE_CHECK_OUT_OF_MEMORY: return "out of memory";
     }
     return "?";
 }

@@ -194,7 +194,7 @@ int surge_sim_step(surge_sim *sim)
     interaction_compute(sim, 1);
     boulders_fluid_forces(sim);
     if (boulders && boulders_correct(sim, dt) != 0) {
-        sim->health = (surge_health){.check = SURGE_CHECK_NOT_FINITE, .particle_id = -1, .step = sim->step + 1,
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n + dt};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
         restore_step_start(sim);

@@ -27,6 +27,7 @@ typedef enum surge_health_check {
     SURGE_CHECK_LEFT_DOMAIN,  /* outside the domain box */
     SURGE_CHECK_CROSSED_WALL, /* inside a wall, past its first layer */
     SURGE_CHECK_DT_COLLAPSE,  /* dt below health.min_dt_ratio of the first dt */
+    SURGE_CHECK_OUT_OF_MEMORY, /* a step could not allocate what it needed (the contact solver's arrays) */
 } surge_health_check;
 
 typedef struct surge_health {
