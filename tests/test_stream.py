@@ -264,18 +264,25 @@ def group_control():
     check("control: (the change mattered: an unsteered run ends in another state)",
           plain.rc == 0 and plain.state_hash() != run.state_hash(), plain.describe())
 
-    # an output interval set live takes effect at once, even one that was 0 (final snapshot only)
+    # an output interval set live takes effect at once, even one that was 0 (final snapshot only); a bed set
+    # moving live is marked as a moving wall in the outputs from then on
     interval = Surge("control_interval", ["-s", "time.end_s=0.1", "-s", "output.snapshot_interval_s=0"],
                      publish=False, paused=True)
     ctl = surge_client.Control(interval.ctl, 10)
     reply = ctl.request({"cmd": "set", "key": "output.snapshot_interval_s", "value": 0.02})
+    belt = ctl.request({"cmd": "set", "key": "walls.bottom_speed_mps", "value": -0.01})
     ctl.request({"cmd": "resume"})
     interval.wait()
     pvd = os.path.join(interval.out, "run.pvd")
-    times = [t for t, _ in vtp.read_pvd(pvd)] if os.path.exists(pvd) else []
+    entries = vtp.read_pvd(pvd) if os.path.exists(pvd) else []
+    times = [t for t, _ in entries]
     check("control: output.snapshot_interval_s set from 0 to 0.02 s writes a snapshot every 0.02 s",
           reply.get("ok") and interval.rc == 0 and len(times) == 6 and abs(times[1] - 0.02) < 1e-3,
           "reply %s, snapshot times %s\n%s" % (reply, times, interval.describe()))
+    kinds = [np.count_nonzero(vtp.read_vtp(os.path.join(interval.out, f))["kind"] == 2) for _, f in entries]
+    check("control: a bed set moving live is a moving wall (kind 2) in the snapshots after the change",
+          belt.get("ok") and len(kinds) == 6 and kinds[0] == 0 and all(k > 0 for k in kinds[1:]),
+          "reply %s, moving-wall particles per snapshot %s" % (belt, kinds))
 
 
 # ---------------------------------------------------------------------------------------------------------------

@@ -449,11 +449,11 @@ static void draw_length_scale(surge_canvas *c)
 
 const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
 {
-    double belt_mps = 0;
+    double belt_mps = 0, belt_y_m = INFINITY; /* the lowest moving wall is the belt (a moving lid is not) */
     for (int i = 0; i < s->count; i++)
-        if (s->kind[i] == SURGE_KIND_MOVING_WALL) {
+        if (s->kind[i] == SURGE_KIND_MOVING_WALL && s->y_m[i] < belt_y_m) {
             belt_mps = s->vx_mps[i];
-            break;
+            belt_y_m = s->y_m[i];
         }
     if (layout_view(c, s, p, belt_mps) != 0)
         return NULL;

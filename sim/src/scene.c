@@ -243,9 +243,7 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         s->ghost_dy[i] = walls.gdy[i];
         s->wall_of[i] = walls.wall[i];
         s->id[i] = i;
-        int moving = (walls.wall[i] == WALL_BOTTOM && p->walls.bottom_speed_mps != 0) ||
-                     (walls.wall[i] == WALL_TOP && p->walls.top_speed_mps != 0);
-        s->kind[i] = moving ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL;
+        s->kind[i] = SURGE_KIND_WALL; /* boundary_wall_speeds marks the moving ones, following live speeds */
     }
     /* fluid on a square lattice, density in hydrostatic balance with the bed-normal gravity */
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
