@@ -18,6 +18,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import zmq
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
@@ -115,6 +116,23 @@ def group_offline():
     code3, stderr3 = run(["render", os.path.join(d, "out")])
     check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
           code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
+
+    # a run with a disc: offline frames draw it in the boulder colour with its orientation mark, which needs the
+    # boulders_*.vtp written next to each snapshot (the mark's colour, 235 grey, is used for nothing else)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.image
+    disc_run = os.path.join(d, "disc")
+    code4, stderr4 = run(["run", os.path.join(SOURCE, "cases", "boulder_couette.ini"), "-o", disc_run, "-s",
+                          "time.end_s=0.001", "-s", "output.progress_interval_s=0"])
+    code5, stderr5 = run(["render", disc_run, "--frames", os.path.join(d, "disc_frames")])
+    frames = sorted(os.listdir(os.path.join(d, "disc_frames"))) if code5 == 0 else []
+    rgb = (matplotlib.image.imread(os.path.join(d, "disc_frames", frames[-1]))[..., :3] * 255).round() if frames else None
+    mark = int(np.count_nonzero((rgb == [235, 235, 235]).all(-1))) if frames else 0
+    disc = int(np.count_nonzero((rgb == [95, 80, 70]).all(-1))) if frames else 0
+    check("offline: a disc is drawn in the boulder colour with its orientation mark",
+          code4 == 0 and code5 == 0 and mark > 100 and disc > 1000,
+          "mark pixels %d, boulder pixels %d\n%s%s" % (mark, disc, stderr4[-300:], stderr5[-300:]))
 
 
 def group_inputs():

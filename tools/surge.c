@@ -624,10 +624,20 @@ static int command_render(int argc, char **argv)
     int rc = EXIT_OK;
     const double start = surge_wall_clock_s();
     const size_t count = surge_pvd_count(pvd);
+    snprintf(path, sizeof path, "%s/boulders.pvd", c.case_path);
+    FILE *boulders_pvd = fopen(path, "r"); /* written by runs with boulders only */
+    const int has_boulders = boulders_pvd != NULL;
+    if (boulders_pvd)
+        fclose(boulders_pvd);
     for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
-        snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, i));
+        const char *file = surge_pvd_file(pvd, i);
+        snprintf(path, sizeof path, "%s/%s", c.case_path, file);
         if (surge_vtp_read(path, &snap, err, sizeof err) != 0) {
             rc = EXIT_USAGE;
+        } else if (has_boulders && strncmp(file, "snap_", 5) == 0 &&
+                   (snprintf(path, sizeof path, "%s/boulders_%s", c.case_path, file + 5),
+                    surge_vtp_read_boulders(path, &snap, err, sizeof err) != 0)) {
+            rc = EXIT_USAGE; /* the boulders written next to the snapshot, for their orientation marks */
         } else if (render_snapshot(canvas, &snap, &p, c.frames_dir, i, movie, err, sizeof err) != 0) {
             rc = EXIT_IO;
         }

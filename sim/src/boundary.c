@@ -17,14 +17,17 @@ void boundary_wall_speeds(surge_sim *sim, double time_s)
     sim->wall_speed[WALL_BOTTOM] = ramp * p->walls.bottom_speed_mps;
     sim->wall_speed[WALL_TOP] = ramp * p->walls.top_speed_mps;
     sim->wall_speed[WALL_BOULDER] = 0.0;
-    /* the kind (an output: snapshots, stream, colours) follows the set speed, which may change live */
-    const int moving[WALL_COUNT] = {[WALL_BOTTOM] = p->walls.bottom_speed_mps != 0,
-                                    [WALL_TOP] = p->walls.top_speed_mps != 0};
+    /* the kind (an output: snapshots, stream, colours; indexed by particle id) follows wall_of and the set speed,
+     * which may change live */
+    const uint8_t kind_of[WALL_COUNT] = {
+        [WALL_FIXED] = SURGE_KIND_WALL, [WALL_BOULDER] = SURGE_KIND_BOULDER,
+        [WALL_BOTTOM] = p->walls.bottom_speed_mps != 0 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL,
+        [WALL_TOP] = p->walls.top_speed_mps != 0 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL};
     for (int b = 0; b < sim->wall_count; b++) {
+        sim->kind[sim->id[b]] = kind_of[sim->wall_of[b]];
         if (sim->wall_of[b] != WALL_BOULDER) {
             sim->vx[b] = (real)sim->wall_speed[sim->wall_of[b]];
             sim->vy[b] = 0;
-            sim->kind[b] = moving[sim->wall_of[b]] ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL;
         }
     }
 }

@@ -783,7 +783,9 @@ static int vtp_array(const vtp_source *v, const char *name, const char *type, in
     return 0;
 }
 
-int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len)
+/* Loads a .vtp written by surge and checks its header: v (its data to free by the caller) and the number of points,
+ * or -1 with err naming the file. */
+static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, size_t err_len)
 {
     if (!host_is_little_endian()) {
         set_err(err, err_len, "reading snapshots needs a little-endian machine");
@@ -807,23 +809,38 @@ int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err
         return -1;
     }
     data[size] = '\0';
-    vtp_source v = {path, data, (size_t)size, NULL};
+    *v = (vtp_source){path, data, (size_t)size, NULL};
     const char *marker = strstr((const char *)data, "<AppendedData encoding=\"raw\">");
     const char *underscore = marker ? strchr(marker, '_') : NULL;
     const char *pieces = strstr((const char *)data, "<Piece ");
     const char *value = NULL;
     size_t len = 0;
-    int rc = -1;
     if (!underscore || !pieces || strncmp((const char *)data, "<?xml", 5) != 0 ||
         !strstr((const char *)data, "header_type=\"UInt64\"")) {
         set_err(err, err_len, "%s: not a surge snapshot (VTK PolyData with raw appended data)", path);
     } else if (find_attr(pieces + 6, tag_end(pieces), "NumberOfPoints", &value, &len) != 0 ||
                strtol(value, NULL, 10) < 0 || strtol(value, NULL, 10) > INT32_MAX) {
         set_err(err, err_len, "%s: bad NumberOfPoints", path);
-    } else if (surge_snapshot_reserve(snap, (int32_t)strtol(value, NULL, 10)) != 0) {
+    } else {
+        v->appended = (const unsigned char *)underscore + 1;
+        *count = (int32_t)strtol(value, NULL, 10);
+        return 0;
+    }
+    free(data);
+    v->data = NULL;
+    return -1;
+}
+
+int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len)
+{
+    vtp_source v;
+    int32_t count = 0;
+    if (vtp_open(path, &v, &count, err, err_len) != 0)
+        return -1;
+    int rc = -1;
+    if (surge_snapshot_reserve(snap, count) != 0) {
         set_err(err, err_len, "%s: out of memory", path);
     } else {
-        v.appended = (const unsigned char *)underscore + 1;
         const size_t n = (size_t)snap->count;
         double *points = malloc(3 * 8 * n + 8);
         float *velocity = malloc(3 * 4 * n + 4);
@@ -845,6 +862,7 @@ int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err
             }
             snap->step = step;
             snap->dt_s = 0;
+            snap->boulders.count = 0; /* surge_vtp_read_boulders adds them */
             rc = 0;
         } else if (!points || !velocity) {
             set_err(err, err_len, "%s: out of memory", path);
@@ -852,6 +870,37 @@ int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err
         free(points);
         free(velocity);
     }
-    free(data);
+    free((void *)v.data);
+    return rc;
+}
+
+int surge_vtp_read_boulders(const char *path, surge_snapshot *snap, char *err, size_t err_len)
+{
+    vtp_source v;
+    int32_t count = 0;
+    if (vtp_open(path, &v, &count, err, err_len) != 0)
+        return -1;
+    int rc = -1;
+    surge_boulder_state *b = &snap->boulders;
+    double *points = NULL, *velocity = NULL;
+    if (surge_snapshot_reserve_boulders(snap, count) != 0 ||
+        !(points = malloc(3 * 8 * (size_t)count + 8)) || !(velocity = malloc(3 * 8 * (size_t)count + 8))) {
+        set_err(err, err_len, "%s: out of memory", path);
+    } else if (vtp_array(&v, "Points", "Float64", 3, points, 3 * 8 * (size_t)count, err, err_len) == 0 &&
+               vtp_array(&v, "velocity_mps", "Float64", 3, velocity, 3 * 8 * (size_t)count, err, err_len) == 0 &&
+               vtp_array(&v, "omega_radps", "Float64", 1, b->omega_radps, 8 * (size_t)count, err, err_len) == 0 &&
+               vtp_array(&v, "angle_rad", "Float64", 1, b->angle_rad, 8 * (size_t)count, err, err_len) == 0 &&
+               vtp_array(&v, "radius_m", "Float64", 1, b->radius_m, 8 * (size_t)count, err, err_len) == 0) {
+        for (int32_t i = 0; i < count; i++) {
+            b->x_m[i] = points[3 * i];
+            b->y_m[i] = points[3 * i + 1];
+            b->vx_mps[i] = velocity[3 * i];
+            b->vy_mps[i] = velocity[3 * i + 1];
+        }
+        rc = 0;
+    }
+    free(points);
+    free(velocity);
+    free((void *)v.data);
     return rc;
 }

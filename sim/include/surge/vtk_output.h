@@ -32,6 +32,10 @@ int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char 
  * problem when it is not such a file. */
 int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err_len);
 
+/* Reads a file written by surge_vtp_write_boulders into snap's boulders (after surge_vtp_read, which empties
+ * them). -1 with err naming the file and the problem. */
+int surge_vtp_read_boulders(const char *path, surge_snapshot *snap, char *err, size_t err_len);
+
 /* A .pvd time collection (VTKFile type="Collection") being built; opaque. */
 typedef struct surge_pvd surge_pvd;
 
