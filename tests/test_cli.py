@@ -363,6 +363,12 @@ def group_inputs():
         path = write_file("corrupt_checkpoint.bin", bytes(corrupt))
         expect_error("cli_restart_corrupt_byte", ["run", "--restart", path, "-o", os.path.join(WORK, "out_corrupt")],
                      [path, "corrupt"])
+        # a NaN time step (outside the state hash) is refused by name
+        corrupt = bytearray(data)
+        corrupt[24 + plen + 16:24 + plen + 24] = struct.pack("<d", float("nan"))
+        path = write_file("nan_dt_checkpoint.bin", bytes(corrupt))
+        expect_error("cli_restart_nan_dt", ["run", "--restart", path, "-o", os.path.join(WORK, "out_nan_dt")],
+                     [path, "corrupt step, time or time step"])
     expect_error("cli_restart_non_live_override",
                  ["run", "--restart", checkpoint, "-s", "numerics.dp_m=0.001", "-o", os.path.join(WORK, "out_nl")],
                  ["numerics.dp_m", "restart"])

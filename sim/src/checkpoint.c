@@ -11,6 +11,7 @@
  * Version 1 (no boulder block) is still read for scenes without boulders. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -61,8 +62,15 @@ static int read_boulders(FILE *f, boulder_set *b)
     double *lambda_t = malloc((size_t)(contacts + 1) * sizeof *lambda_t);
     int rc = -1;
     if (keys && lambda_n && lambda_t && !read_all(f, keys, (size_t)contacts * 8) &&
-        !read_all(f, lambda_n, (size_t)contacts * 8) && !read_all(f, lambda_t, (size_t)contacts * 8))
-        rc = contact_solver_cache_set(b->contacts, contacts, keys, lambda_n, lambda_t);
+        !read_all(f, lambda_n, (size_t)contacts * 8) && !read_all(f, lambda_t, (size_t)contacts * 8)) {
+        /* the warm start is outside the state hash: check it is what the solver wrote (sorted keys, which it
+         * searches by bisection; finite impulses; no pulling normal impulse) */
+        int valid = 1;
+        for (int32_t k = 0; k < contacts && valid; k++)
+            valid = (k == 0 || keys[k] > keys[k - 1]) && isfinite(lambda_n[k]) && isfinite(lambda_t[k]) &&
+                    lambda_n[k] >= 0;
+        rc = valid ? contact_solver_cache_set(b->contacts, contacts, keys, lambda_n, lambda_t) : -1;
+    }
     free(keys);
     free(lambda_n);
     free(lambda_t);
@@ -169,9 +177,24 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     uint64_t hash = 0;
     if (read_all(f, sim->x + w, nf * sizeof(double)) || read_all(f, sim->y + w, nf * sizeof(double)) ||
         read_all(f, sim->vx + w, nf * sizeof(real)) || read_all(f, sim->vy + w, nf * sizeof(real)) ||
-        read_all(f, sim->rho + w, nf * sizeof(real)) || read_all(f, sim->id + w, nf * sizeof(int32_t)) ||
-        (version == 1 && sim->boulders.count > 0) || read_boulders(f, &sim->boulders) || read_all(f, &hash, 8)) {
+        read_all(f, sim->rho + w, nf * sizeof(real)) || read_all(f, sim->id + w, nf * sizeof(int32_t))) {
         snprintf(err, err_len, "%s: truncated checkpoint", path);
+        goto fail;
+    }
+    if (version == 1 && sim->boulders.count > 0) {
+        snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
+        goto fail;
+    }
+    if (read_boulders(f, &sim->boulders)) {
+        snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
+        goto fail;
+    }
+    if (read_all(f, &hash, 8)) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        goto fail;
+    }
+    if (!(isfinite(t) && t >= 0 && isfinite(dt) && dt >= 0 && isfinite(first_dt) && first_dt >= 0 && step >= 0)) {
+        snprintf(err, err_len, "%s: corrupt step, time or time step (outside the state hash)", path);
         goto fail;
     }
     sim->step = step;
