@@ -289,6 +289,11 @@ def group_inputs():
                 ["walls.layers", "2", "kernel support", "6"])
     cross_field("upstream_without_periodic", "still_tank.ini", {"walls.upstream": "true"},
                 ["walls.upstream", "periodic"])
+    cross_field("walls_too_many", "freydier_id1.ini", {"domain.length_m": "10000", "fluid.x1_m": "0.1"},
+                ["walls would need about", "more than 5e7", "domain.length_m"])
+    cross_field("cell_grid_too_large", "freydier_id1.ini", {"domain.length_m": "1000", "domain.height_m": "1000",
+                                                            "numerics.dp_m": "0.002"},
+                ["cell grid would have about", "more than 2e8"])
 
     # --- command line --------------------------------------------------------------------------------
     poiseuille = os.path.join(cases_dir, "poiseuille.ini")

@@ -625,6 +625,22 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
              n_estimate);
         return -1;
     }
+    /* the walls and the cell grid, checked here so that a huge domain is refused before anything is allocated */
+    const double margin_m = layers * dp + support;
+    const double walls_estimate = ((p->walls.bottom + p->walls.top) * (L + 2 * margin_m) +
+                                   (p->walls.left + p->walls.right) * p->domain.height_m +
+                                   p->walls.upstream * p->walls.upstream_height_m) / dp * layers;
+    if (walls_estimate > 5e7) {
+        fail(err, err_len, "the walls would need about %.3g particles (more than 5e7): shorten domain.length_m or "
+             "raise numerics.dp_m", walls_estimate);
+        return -1;
+    }
+    const double cells_estimate = (L + 2 * margin_m) / support * ((p->domain.height_m + 2 * margin_m) / support);
+    if (cells_estimate > 2e8) {
+        fail(err, err_len, "the cell grid would have about %.3g cells (more than 2e8): the domain is too large for "
+             "numerics.dp_m", cells_estimate);
+        return -1;
+    }
     return 0;
 }
 

@@ -29,6 +29,7 @@ double scene_expected_speed(const surge_params *p)
 
 typedef struct particle_list {
     int32_t n, cap;
+    int overflow; /* more particles than wall_capacity() planned: a bug, reported instead of dropping them */
     double *x, *y;
     real *gdx, *gdy;
     uint8_t *wall;
@@ -36,8 +37,10 @@ typedef struct particle_list {
 
 static void push_wall(particle_list *l, double x, double y, double ghost_x, double ghost_y, int wall)
 {
-    if (l->n >= l->cap)
+    if (l->n >= l->cap) {
+        l->overflow = 1;
         return;
+    }
     l->x[l->n] = x;
     l->y[l->n] = y;
     l->gdx[l->n] = (real)(ghost_x - x);
@@ -211,6 +214,10 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         goto fail;
     }
     build_walls(p, &walls);
+    if (walls.overflow) {
+        snprintf(err, err_len, "internal error: the walls need more particles than planned (%d)", walls.cap);
+        goto fail;
+    }
 
     const long cols = fluid_columns(p, NULL, 0, err, err_len);
     int *rows = cols > 0 ? malloc((size_t)cols * sizeof *rows) : NULL;
