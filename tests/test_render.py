@@ -117,6 +117,21 @@ def group_offline():
     check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
           code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
 
+    # a restarted run adds its frames after the first run's instead of overwriting them
+    cont_run, cont_frames = os.path.join(d, "cont"), os.path.join(d, "cont_frames")
+    code6, stderr6 = run(["run", TANK, "-o", cont_run, "--frames", cont_frames] + COMMON[2:] + ["-s", "time.end_s=0.1"])
+    first = sorted(os.listdir(cont_frames)) if code6 == 0 else []
+    first_bytes = [open(os.path.join(cont_frames, f), "rb").read() for f in first]
+    code7, stderr7 = run(["run", "--restart", os.path.join(cont_run, "checkpoint.bin"), "--frames", cont_frames,
+                          "-s", "time.end_s=0.2", "-s", "output.progress_interval_s=0"])
+    after = sorted(os.listdir(cont_frames)) if code7 == 0 else []
+    kept = after[:len(first)] == first and all(open(os.path.join(cont_frames, f), "rb").read() == b
+                                               for f, b in zip(first, first_bytes))
+    check("offline: a restarted run numbers its frames on after the first run's, which stay as they were",
+          code6 == 0 and code7 == 0 and len(first) >= 5 and len(after) >= 2 * len(first) - 1 and kept,
+          "first run %d frames, after the restart %d: %s\n%s%s" % (len(first), len(after), after[-3:], stderr6[-300:],
+                                                                  stderr7[-300:]))
+
     # a run with a disc: offline frames draw it in the boulder colour with its orientation mark, which needs the
     # boulders_*.vtp written next to each snapshot (the mark's colour, 235 grey, is used for nothing else)
     import matplotlib

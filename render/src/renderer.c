@@ -3,6 +3,7 @@
 #include "surge/platform.h"
 #include "surge/render.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -26,6 +27,7 @@ struct surge_renderer {
     double next_frame_s; /* solver thread: simulated time of the next frame due */
     /* renderer thread */
     uint64_t last_sequence, frames_drawn, movie_frames;
+    uint64_t first_frame_number; /* 0, or after the frames already in the folder (continue_frames) */
     double draw_s, encode_s;
     char error[1024]; /* the first failure; later frames are not attempted */
 };
@@ -73,7 +75,8 @@ static int render_frame(surge_renderer *r, const surge_frame *f)
         int rc = 0;
         if (r->frames_dir[0]) {
             char path[4200];
-            snprintf(path, sizeof path, "%s/frame_%06llu.png", r->frames_dir, (unsigned long long)(f->sequence - 1));
+            snprintf(path, sizeof path, "%s/frame_%06llu.png", r->frames_dir,
+                     (unsigned long long)(r->first_frame_number + f->sequence - 1));
             rc = write_file(path, png, len, err, err_len);
         }
         if (rc == 0 && r->def.on_frame)
@@ -105,6 +108,23 @@ static void *renderer_main(void *arg)
         else if (!f && atomic_load(&r->finishing))
             return NULL;
     }
+}
+
+/* One past the highest N of the frame_N.png files already in path (0 in an empty folder). */
+static uint64_t next_frame_number(const char *path)
+{
+    uint64_t next = 0;
+    DIR *dir = opendir(path);
+    if (!dir)
+        return 0;
+    for (struct dirent *e; (e = readdir(dir)) != NULL;) {
+        unsigned long long n = 0;
+        char tail[8] = "";
+        if (sscanf(e->d_name, "frame_%llu%7s", &n, tail) == 2 && strcmp(tail, ".png") == 0 && n + 1 > next)
+            next = n + 1;
+    }
+    closedir(dir);
+    return next;
 }
 
 /* Creates the frames folder and checks that files can be written into it. */
@@ -150,6 +170,8 @@ surge_renderer *surge_renderer_start(const surge_renderer_def *def, const surge_
         free(r);
         return NULL;
     }
+    if (def->frames_dir && def->continue_frames)
+        r->first_frame_number = next_frame_number(def->frames_dir);
     r->mailbox = surge_mailbox_create();
     if (!r->mailbox || pthread_create(&r->thread, NULL, renderer_main, r) != 0) {
         snprintf(err, err_len, "cannot start the renderer thread");

@@ -63,6 +63,7 @@ int surge_movie_close(surge_movie *movie, char *err, size_t err_len);
 
 typedef struct surge_renderer_def {
     const char *frames_dir; /* frame_NNNNNN.png per frame; NULL: no PNG files */
+    int continue_frames;    /* number on after the frames already in frames_dir (a restarted run), not from 0 */
     const char *movie_path; /* NULL: no movie */
     const char *font_path;  /* NULL: SURGE_DEFAULT_FONT */
     /* called in the renderer thread with each frame as PNG (for the stream); NULL: not needed */
