@@ -284,7 +284,7 @@ def plot(png, rows, reference, rel_fit, selected):
     """Left: mu_eq/mu0 relative to the clear fluid against phi, one line per resolution for the runs with the
     selected c0 and delta (other settings in grey), the Krieger-Dougherty fit, Einstein-Brady and the dilute theory
     for the placed discs. Right: accuracy against cost, one point per run of the selected setting: the clear
-    fluid's |mu_eq/mu0 - 1|; for dilute loads the share of the dilute theory's rise missed; for every load at a
+    fluid's |mu_eq/mu0 - 1|; for dilute loads |1 - rise / the dilute theory's|; for every load at a
     coarser resolution its relative difference from the run at the finest resolution and the same phi."""
     import matplotlib
     matplotlib.use("Agg")
@@ -320,8 +320,8 @@ def plot(png, rows, reference, rel_fit, selected):
         dilute = [r for r in sel if 0 < float(r["phi"]) <= DILUTE_PHI and float(r["phi"]) in reference]
         if dilute:
             cost.loglog([float(r["wall_s"]) for r in dilute],
-                        [1 - (relative_mu(r) - 1) / (reference[float(r["phi"])] - 1) for r in dilute], "o",
-                        color=colour, label=name + ", $\phi \leq$ %g: 1 - rise / dilute theory's" % DILUTE_PHI)
+                        [abs(1 - (relative_mu(r) - 1) / (reference[float(r["phi"])] - 1)) for r in dilute], "o",
+                        color=colour, label=name + ", $\phi \leq$ %g: |1 - rise / dilute theory's|" % DILUTE_PHI)
         coarser = [r for r in sel if float(r["phi"]) > 0 and float(r["phi"]) in finest and dp != dps[-1]]
         if coarser:
             cost.loglog([float(r["wall_s"]) for r in coarser],
