@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""The study drivers' shared pieces and charts: append_row writes the header once, bad numeric options exit 2
+"""The study drivers' shared pieces and charts: append_row writes the header once, a table with other columns is
+refused before a study starts, bad numeric options exit 2
 with the option named, both charts render from the committed tables, and wall_contact measures a synthetic run.
 usage: test_study_tools.py SOURCE_DIR WORK_DIR"""
 import csv
@@ -31,6 +32,15 @@ with open(table) as f:
     rows = list(csv.reader(f))
 check("append_row_header_once", rows == [["a", "b"], ["1", "2"], ["3", "4"]], str(rows))
 check("positive_numbers", study.positive_numbers("t", "1,1.3, 2.2", "ch") == [1.0, 1.3, 2.2])
+
+# a study refuses, before it runs anything, a table whose columns are not its own (an older header)
+old_table = os.path.join(work, "old_header.csv")
+with open(old_table, "w") as f:
+    f.write("case,dp_m,ch\nid1,0.001,1.0\n")
+r = subprocess.run([sys.executable, os.path.join(source, "tools", "freydier_convergence.py"), "run", "--csv", old_table,
+                    "--surge", sys.executable], capture_output=True, text=True, timeout=60)
+check("freydier_convergence refuses a table with other columns", r.returncode == 2 and "columns" in r.stderr
+      and old_table in r.stderr, r.stderr.strip())
 
 tools = os.path.join(source, "tools")
 for tool, option in (("freydier_convergence.py", "--ch"), ("stability_map.py", "--cfl")):

@@ -11,6 +11,11 @@ error against wall time (one point per run).
 
 A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
 its wall time adds up across the pieces (progress.json in its folder).
+
+The `corner` column names the solver's belt-upstream-wall corner (docs/method.md): rows written before it existed
+ran with the bed under the wall moving with the belt (`belt`); this tool runs the current code (`split`: moving
+with the belt in continuity, fixed for no-slip), in folders named with that suffix, and a grid point counts as
+done only when it has a row for the current corner.
 """
 import argparse
 import csv
@@ -24,7 +29,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import study  # noqa: E402
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity"]
+           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity", "corner"]
 METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
 
 
@@ -32,14 +37,23 @@ def fail(message):
     study.fail("freydier_convergence", message)
 
 
+CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene.c)
+
+
 def run_name(case, dp, ch, shifting, shape, continuity):
     """Runs with the plain continuity equation keep the names they had before the choice existed."""
-    return "%s_dp%g_ch%g_%s_%s%s" % (case, dp, ch, shifting, shape, "" if continuity == "plain" else "_" + continuity)
+    return "%s_dp%g_ch%g_%s_%s%s_corner-%s" % (case, dp, ch, shifting, shape,
+                                              "" if continuity == "plain" else "_" + continuity, CORNER)
 
 
 def continuity_of(row):
     """Rows written before the continuity column existed used the plain form."""
     return row.get("continuity") or "plain"
+
+
+def corner_of(row):
+    """Rows written before the corner column existed ran with the bed under the upstream wall moving with the belt."""
+    return row.get("corner") or "belt"
 
 
 def finished_rows(csv_path):
@@ -48,7 +62,7 @@ def finished_rows(csv_path):
         return set()
     with open(csv_path) as f:
         return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
-                 continuity_of(r)) for r in csv.DictReader(f) if r["status"] == "ok"}
+                 continuity_of(r)) for r in csv.DictReader(f) if r["status"] == "ok" and corner_of(r) == CORNER}
 
 
 def run_one(args, case, dp, ch, deadline):
@@ -66,7 +80,7 @@ def run_one(args, case, dp, ch, deadline):
         return False
     steps, sim_time = study.particle_steps(folder)
     row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
-           "continuity": args.continuity,
+           "continuity": args.continuity, "corner": CORNER,
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
            "sim_time_s": "%.3f" % sim_time}
     if rc == 0:
@@ -90,6 +104,7 @@ def run_one(args, case, dp, ch, deadline):
 
 
 def command_run(args):
+    study.check_columns("freydier_convergence", args.csv, COLUMNS)
     deadline = time.time() + args.budget_s if args.budget_s else None
     done = finished_rows(args.csv)
     for case in args.cases.split(","):
@@ -121,11 +136,15 @@ def command_chart(args):
     fig, axes = plt.subplots(2, 3, figsize=(13, 7.5), sharex=True)
     colour_of = {dp: "C%d" % k for k, dp in enumerate(sorted({float(r["dp_m"]) for r in rows}))}
     for ax, metric in zip(axes.flat, METRICS):
+        earlier = [r for r in rows if corner_of(r) != CORNER]
+        if earlier:
+            ax.scatter([float(r["wall_s"]) for r in earlier], [float(r[metric]) for r in earlier], marker="x",
+                       color="0.7", label="earlier corner (belt or gate; see the corner column)")
         for case, marker in (("id1", "o"), ("id2", "s")):
             for continuity in ("plain", "renormalised"):
                 for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
                     sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp
-                           and continuity_of(r) == continuity]
+                           and continuity_of(r) == continuity and corner_of(r) == CORNER]
                     if not sel:
                         continue
                     xs = [float(r["wall_s"]) for r in sel]
@@ -144,7 +163,8 @@ def command_chart(args):
         ax.set_xlabel("wall time (s)")
         ax.set_ylabel("error (fraction)")
     axes.flat[0].legend(fontsize=8)
-    fig.suptitle("Freydier surges: accuracy against cost, one point per run (hollow: plain continuity)")
+    fig.suptitle("Freydier surges: accuracy against cost, one point per run (hollow: plain continuity; "
+                 "grey x: runs with an earlier belt-wall corner)")
     fig.tight_layout()
     fig.savefig(args.png, dpi=110)
     print("freydier_convergence: wrote %s from %d runs" % (args.png, len(rows)))

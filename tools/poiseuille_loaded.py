@@ -166,6 +166,7 @@ def run_one(args, phi, deadline):
 
 
 def command_run(args):
+    study.check_columns("poiseuille_loaded", args.csv, COLUMNS)
     deadline = time.time() + args.budget_s if args.budget_s else None
     phis = [float(v) for v in args.phi.split(",") if v.strip()] if args.phi else []
     if not phis or any(not 0 <= v < 0.8 for v in phis):

@@ -108,6 +108,7 @@ def run_cell(args, shifting, ch, cfl, c0f):
 
 
 def command_run(args):
+    study.check_columns("stability_map", args.csv, COLUMNS)
     done = set()
     if os.path.isfile(args.csv):
         with open(args.csv) as f:

@@ -28,6 +28,18 @@ def positive_numbers(program, text, option):
     return values
 
 
+def check_columns(program, csv_path, columns):
+    """An existing table must have this tool's columns, in order (checked before a study starts, so that a long run
+    does not end on a table it cannot extend)."""
+    if not os.path.isfile(csv_path):
+        return
+    with open(csv_path, newline="") as f:
+        header = next(csv.reader(f), [])
+    if header != list(columns):
+        fail(program, "%s: its columns (%s) are not this tool's (%s)" % (csv_path, ",".join(header),
+                                                                         ",".join(columns)))
+
+
 def append_row(csv_path, columns, row):
     """Appends row to the CSV table, writing the header when the file is new."""
     new = not os.path.isfile(csv_path)

@@ -17,11 +17,13 @@ void boundary_wall_speeds(surge_sim *sim, double time_s)
     sim->wall_speed[WALL_BOTTOM] = ramp * p->walls.bottom_speed_mps;
     sim->wall_speed[WALL_TOP] = ramp * p->walls.top_speed_mps;
     sim->wall_speed[WALL_BOULDER] = 0.0;
+    sim->wall_speed[WALL_CORNER] = sim->wall_speed[WALL_BOTTOM];
     /* the kind (an output: snapshots, stream, colours; indexed by particle id) follows wall_of and the set speed,
      * which may change live */
     const uint8_t kind_of[WALL_COUNT] = {
         [WALL_FIXED] = SURGE_KIND_WALL, [WALL_BOULDER] = SURGE_KIND_BOULDER,
         [WALL_BOTTOM] = p->walls.bottom_speed_mps != 0 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL,
+        [WALL_CORNER] = p->walls.bottom_speed_mps != 0 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL,
         [WALL_TOP] = p->walls.top_speed_mps != 0 ? SURGE_KIND_MOVING_WALL : SURGE_KIND_WALL};
     for (int b = 0; b < sim->wall_count; b++) {
         sim->kind[sim->id[b]] = kind_of[sim->wall_of[b]];
@@ -78,8 +80,9 @@ void boundary_update(surge_sim *sim)
                 }
             }
         }
-        /* no-slip: mirrored about the wall's velocity where the wall face lies between particle and ghost */
-        double wall_vx = vx[b], wall_vy = vy[b];
+        /* no-slip: mirrored about the wall's velocity where the wall face lies between particle and ghost; the
+         * belt-wall corner mirrors about the fixed upstream wall */
+        double wall_vx = sim->wall_of[b] == WALL_CORNER ? 0.0 : vx[b], wall_vy = vy[b];
         if (sim->wall_of[b] == WALL_BOULDER)
             boulders_surface_velocity(sim, b, &wall_vx, &wall_vy);
         double rho_b = rho0, vgx = wall_vx, vgy = wall_vy;

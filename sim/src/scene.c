@@ -67,11 +67,11 @@ static void build_walls(const surge_params *p, particle_list *l)
             int bed = WALL_BOTTOM;
             const double xw = p->walls.upstream_x_m;
             if (p->walls.upstream && x < xw && x > xw - depth) {
-                /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point; it is
-                 * part of the fixed wall (the gate sits on the belt), since a moving bed there drags fluid
-                 * under the wall (docs/method.md, boundary conditions) */
+                /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point; it moves
+                 * with the belt but its no-slip velocity is the fixed wall's (docs/method.md, "The belt-upstream-
+                 * wall corner") */
                 gx = 2 * xw - x;
-                bed = WALL_FIXED;
+                bed = WALL_CORNER;
             }
             if (p->walls.bottom)
                 push_wall(l, x, -off, gx, off, bed);

@@ -9,7 +9,10 @@
 #include "precision.h"
 #include "surge/sim.h"
 
-enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_BOULDER = 3, WALL_COUNT = 4 };
+/* Which wall a wall particle belongs to. WALL_CORNER is the bed under the upstream wall: it moves with the belt
+ * (continuity sees no velocity jump along the bed) but mirrors no-slip about a fixed wall (it does not drag
+ * fluid under the upstream wall); docs/method.md, "The belt-upstream-wall corner". */
+enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_BOULDER = 3, WALL_CORNER = 4, WALL_COUNT = 5 };
 
 /* Uniform cell grid, cells at least 2h wide, periodic in x or not. Wall particles (indices [0, wall_count))
  * and fluid particles ([wall_count, count)) are each sorted by cell and have their own cell ranges. */
