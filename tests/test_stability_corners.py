@@ -8,8 +8,8 @@ On cases/freydier_id1.ini:
 - paper default (dp = 2 mm, 1.5 s; C_h 1.8, Lind shifting, C_CFL 0.2, derived c0): healthy;
 - stiff belt corner, both continuity forms: a short domain (fluid 12-45 mm) at dp = 1 mm with c0 = 2.8 m/s, so
   that the corner's viscous pressure, nu u_b / (c0^2 dp) = 0.039, is twice that of the dp = 0.5 mm ID1 runs: it
-  must stay healthy for 1 s (before the bed under the upstream wall was made part of that wall, the belt dragged
-  a particle under the wall at t = 0.39 s: "particle crossed a wall");
+  must stay healthy for 1 s (while the bed under the upstream wall mirrored its no-slip velocity about the belt's,
+  it dragged a particle under the wall at t = 0.39 s: "particle crossed a wall");
 - c0 = 2 x the expected speed (1.13 m/s): too soft to carry its own weight; the density check stops it;
 - C_CFL = 2 (ten times the paper's): the explicit scheme blows up (caught as non-finite, density or wall check).
 """
