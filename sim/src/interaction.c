@@ -116,7 +116,8 @@ void interaction_compute(surge_sim *sim, int corrector)
         sim->div_r[a] = div_r;
         sim->grad_c_x[a] = grad_c_x;
         sim->grad_c_y[a] = grad_c_y;
-        sim->near_surface[a] = (uint8_t)near_surface;
+        if (corrector) /* surface[] is set at the end of the predictor pass, after this step's sort */
+            sim->near_surface[a] = (uint8_t)near_surface;
     }
     if (!corrector) {
         const real threshold = (real)sim->params.shifting.surface_threshold;
