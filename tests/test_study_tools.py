@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """The study drivers' shared pieces and charts: append_row writes the header once, a table with other columns is
 refused before a study starts, bad numeric options exit 2
-with the option named, both charts render from the committed tables, and wall_contact measures a synthetic run.
+with the option named, both charts render from the committed tables, wall_contact measures a synthetic run, and
+park / unpark carry an interrupted run through a fresh checkout.
 usage: test_study_tools.py SOURCE_DIR WORK_DIR"""
 import csv
 import os
@@ -129,4 +130,60 @@ r = subprocess.run([sys.executable, os.path.join(tools, "wall_contact.py"), cont
                    text=True, timeout=60)
 check("wall_contact: a broken snapshot is named, no traceback",
       r.returncode == 2 and "snap_000000002.vtp" in r.stderr and "Traceback" not in r.stderr, r.stderr.strip())
+# park / unpark: an interrupted run's checkpoint, small files and first snapshot go into the parked folder and come
+# back byte for byte; later snapshots, finished runs and a folder that already holds a run are left alone
+runs_dir, parked_dir, restored_dir = (os.path.join(work, d) for d in ("park_runs", "parked", "restored_runs"))
+for d in (runs_dir, parked_dir, restored_dir):
+    shutil.rmtree(d, ignore_errors=True)
+import struct  # noqa: E402
+import time  # noqa: E402
+header_params = b"[numerics]\ndp_m = 0.001\n"
+checkpoint = (b"SURGECK1" + struct.pack("<IIQ", 2, 4, len(header_params)) + header_params
+              + struct.pack("<qd", 120, 0.5) + bytes(range(256)) * 40)
+files = {"checkpoint.bin": checkpoint, "params.ini": b"# derived: fluid particles = 10, wall particles = 2\n",
+         "diagnostics.csv": b"time_s,step\n0,0\n0.5,120\n", "snap_000000000.vtp": b"first snapshot",
+         "snap_000000120.vtp": b"later snapshot",
+         "run.pvd": b'<?xml version="1.0"?><VTKFile type="Collection"><Collection>'
+                    b'<DataSet timestep="0" file="snap_000000000.vtp"/>'
+                    b'<DataSet timestep="0.5" file="snap_000000120.vtp"/></Collection></VTKFile>'}
+for name, status in (("interrupted_run", "interrupted"), ("finished_run", "ok")):
+    os.makedirs(os.path.join(runs_dir, name))
+    for f, data in files.items():
+        with open(os.path.join(runs_dir, name, f), "wb") as out:
+            out.write(data)
+    study.write_progress(os.path.join(runs_dir, name), {"wall_s": 12.5, "status": status})
+check("checkpoint_time reads step and time from the header",
+      study.checkpoint_time(os.path.join(runs_dir, "interrupted_run", "checkpoint.bin")) == (120, 0.5))
+check("park takes the interrupted run only", study.park("t", runs_dir, parked_dir) == ["interrupted_run"])
+check("park compresses the checkpoint and the first snapshot, not later ones",
+      sorted(os.listdir(os.path.join(parked_dir, "interrupted_run"))) ==
+      ["checkpoint.bin.gz", "diagnostics.csv", "params.ini", "progress.json", "run.pvd", "snap_000000000.vtp.gz"],
+      str(os.listdir(os.path.join(parked_dir, "interrupted_run"))))
+check("unpark restores the parked run", study.unpark("t", parked_dir, restored_dir) == ["interrupted_run"])
+restored = os.path.join(restored_dir, "interrupted_run")
+same = all(open(os.path.join(restored, f), "rb").read() == data for f, data in files.items()
+           if f != "snap_000000120.vtp")
+check("unpark gives back the files byte for byte", same and not os.path.exists(os.path.join(restored,
+                                                                                            "snap_000000120.vtp")))
+check("unpark keeps the run's status and wall time", study.read_progress(restored) == {"wall_s": 12.5,
+                                                                                      "status": "interrupted"})
+with open(os.path.join(restored, "checkpoint.bin"), "wb") as out:
+    out.write(b"newer")
+check("unpark leaves a folder that already holds a run", study.unpark("t", parked_dir, restored_dir) == []
+      and open(os.path.join(restored, "checkpoint.bin"), "rb").read() == b"newer")
+# a run still going is parked at its last checkpoint, its current piece counted up to that checkpoint, but not
+# before this piece has written one
+running = os.path.join(runs_dir, "interrupted_run")
+mtime = os.path.getmtime(os.path.join(running, "checkpoint.bin"))
+study.write_progress(running, {"wall_s": 12.5, "status": "running", "piece_started_unix": mtime + 5})
+check("park skips a running run with no checkpoint of its current piece",
+      study.park("t", runs_dir, os.path.join(work, "parked_none")) == [])
+study.write_progress(running, {"wall_s": 12.5, "status": "running", "piece_started_unix": mtime - 30})
+parked_running = os.path.join(work, "parked_running")
+shutil.rmtree(parked_running, ignore_errors=True)
+check("park takes a running run at its checkpoint", study.park("t", runs_dir, parked_running) == ["interrupted_run"])
+progress = study.read_progress(os.path.join(parked_running, "interrupted_run"))
+check("a running run is parked as interrupted with its piece's time up to the checkpoint",
+      progress["status"] == "interrupted" and abs(progress["wall_s"] - 42.5) < 1e-6
+      and "piece_started_unix" not in progress, str(progress))
 sys.exit(1 if failures else 0)

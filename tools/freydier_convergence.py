@@ -8,9 +8,13 @@ error against wall time (one point per run).
         [--budget-s SECONDS]
         [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
   tools/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
+  tools/freydier_convergence.py park|unpark [--runs-dir runs/convergence] [--parked-dir docs/validation/parked]
 
 A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
-its wall time adds up across the pieces (progress.json in its folder).
+its wall time adds up across the pieces (progress.json in its folder). runs/ is not committed, so a run that must
+outlive the checkout is parked: `park` copies each interrupted run's checkpoint, small files and initial snapshot
+(compressed) into docs/validation/parked/, which is committed; `unpark` in a fresh checkout puts them back, and
+`run` with the same options continues. A finished run's parked copy is deleted by `run`.
 
 The `corner` column names the solver's belt-upstream-wall corner (docs/method.md): rows written before it existed
 ran with the bed under the wall moving with the belt (`belt`); this tool runs the current code (`split`: moving
@@ -20,6 +24,7 @@ done only when it has a row for the current corner.
 import argparse
 import csv
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -37,6 +42,7 @@ def fail(message):
     study.fail("freydier_convergence", message)
 
 
+PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked")
 CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene.c)
 
 
@@ -99,6 +105,7 @@ def run_one(args, case, dp, ch, deadline):
     progress["status"] = row["status"]
     study.write_progress(folder, progress)
     study.append_row(args.csv, COLUMNS, row)
+    shutil.rmtree(os.path.join(args.parked_dir, name), ignore_errors=True)
     print("freydier_convergence: %s: %s" % (name, row), flush=True)
     return True
 
@@ -188,6 +195,11 @@ def main():
     run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "convergence"))
     run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
     run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    run.add_argument("--parked-dir", default=PARKED_DIR)
+    for command in ("park", "unpark"):
+        parking = sub.add_parser(command)
+        parking.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "convergence"))
+        parking.add_argument("--parked-dir", default=PARKED_DIR)
     chart = sub.add_parser("chart")
     chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
     chart.add_argument("--png", default=os.path.join(ROOT, "docs", "validation", "freydier_accuracy_vs_cost.png"))
@@ -198,6 +210,12 @@ def main():
         if not os.access(args.surge, os.X_OK):
             fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
         return command_run(args)
+    if args.command == "park":
+        study.park("freydier_convergence", args.runs_dir, args.parked_dir)
+        return 0
+    if args.command == "unpark":
+        study.unpark("freydier_convergence", args.parked_dir, args.runs_dir)
+        return 0
     return command_chart(args)
 
 

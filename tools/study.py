@@ -1,13 +1,17 @@
 """Helpers shared by the study drivers (freydier_convergence.py, stability_map.py, poiseuille_loaded.py): option
 parsing, errors, resumable runs and the append-only CSV tables they write."""
 import csv
+import gzip
 import json
 import os
+import shutil
 import signal
+import struct
 import subprocess
 import sys
 import time
 
+import vtp
 from run_params import RunParams
 
 
@@ -87,9 +91,10 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
         argv = fresh_argv + common
         progress["wall_s"] = 0.0  # a fresh start (after a failed run, say) owes nothing to earlier pieces
     print("%s: %s" % (tool, " ".join(argv)), flush=True)
-    progress["status"] = "running"
-    write_progress(folder, progress)
     start = time.time()
+    progress["status"] = "running"
+    progress["piece_started_unix"] = start  # lets park() count a running piece's time up to its last checkpoint
+    write_progress(folder, progress)
     proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, env=solver_environment())
     try:
         while proc.poll() is None:
@@ -102,10 +107,101 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
         proc.send_signal(signal.SIGINT)
         proc.wait()
     progress["wall_s"] += time.time() - start
+    del progress["piece_started_unix"]
     if proc.returncode == 4:
         progress["status"] = "interrupted"
     write_progress(folder, progress)
     return proc.returncode, progress
+
+
+PARKED_FILES = ("checkpoint.bin", "progress.json", "params.ini", "diagnostics.csv", "run.pvd", "boulders.pvd",
+                "control.jsonl")
+
+
+def checkpoint_time(path):
+    """(step, simulated time in s) recorded in a checkpoint's header (layout in sim/src/checkpoint.c)."""
+    with open(path, "rb") as f:
+        head = f.read(24)
+        if len(head) < 24 or head[:8] != b"SURGECK1":
+            raise ValueError("%s: not a surge checkpoint" % path)
+        f.seek(24 + struct.unpack("<Q", head[16:24])[0])
+        step, time_s = struct.unpack("<qd", f.read(16))
+    return step, time_s
+
+
+def _first_snapshot(folder):
+    """The first snapshot listed in the folder's run.pvd (the initial state, which the metrics read), or None."""
+    try:
+        entries = vtp.read_pvd(os.path.join(folder, "run.pvd"))
+    except (OSError, ValueError, vtp.ET.ParseError):
+        return None
+    return entries[0][1] if entries else None
+
+
+def park(tool, runs_dir, parked_dir):
+    """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files and its first
+    snapshot, the large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
+    run is carried in it and resumed by unpark in a fresh checkout. A run still going is parked at its last periodic
+    checkpoint (written atomically), with the wall time of its current piece counted up to that checkpoint. Returns
+    the names parked."""
+    parked = []
+    for name in sorted(os.listdir(runs_dir)) if os.path.isdir(runs_dir) else []:
+        folder = os.path.join(runs_dir, name)
+        checkpoint = os.path.join(folder, "checkpoint.bin")
+        progress = read_progress(folder)
+        if progress["status"] not in ("interrupted", "running") or not os.path.isfile(checkpoint):
+            continue
+        if progress["status"] == "running":
+            started = progress.pop("piece_started_unix", None)
+            if started is None or os.path.getmtime(checkpoint) < started:
+                continue  # no checkpoint of this piece yet (or a piece of unknown start): nothing safe to park
+            progress["wall_s"] += os.path.getmtime(checkpoint) - started
+            progress["status"] = "interrupted"
+        target = os.path.join(parked_dir, name)
+        shutil.rmtree(target, ignore_errors=True)
+        os.makedirs(target)
+        first = _first_snapshot(folder)
+        for f in PARKED_FILES + ((first,) if first else ()):
+            source = os.path.join(folder, f)
+            if not os.path.isfile(source):
+                continue
+            if f == "progress.json":
+                with open(os.path.join(target, f), "w") as out:
+                    json.dump(progress, out, indent=1)
+            elif f.endswith((".bin", ".vtp")):
+                with open(source, "rb") as src, gzip.GzipFile(os.path.join(target, f + ".gz"), "wb", mtime=0) as dst:
+                    shutil.copyfileobj(src, dst)
+            else:
+                shutil.copyfile(source, os.path.join(target, f))
+        parked.append(name)
+        print("%s: parked %s at its checkpoint of t = %.3f s (step %d) in %s"
+              % (tool, name, checkpoint_time(checkpoint)[1], checkpoint_time(checkpoint)[0], target), flush=True)
+    return parked
+
+
+def unpark(tool, parked_dir, runs_dir):
+    """Restores each parked run into runs_dir/NAME unless that folder already holds a run (which is newer or
+    finished); the next `run` then continues it from its checkpoint. Returns the names restored."""
+    restored = []
+    for name in sorted(os.listdir(parked_dir)) if os.path.isdir(parked_dir) else []:
+        source = os.path.join(parked_dir, name)
+        folder = os.path.join(runs_dir, name)
+        if not os.path.isdir(source):
+            continue
+        if os.path.isfile(os.path.join(folder, "progress.json")):
+            print("%s: %s already holds a run; left as it is" % (tool, folder), flush=True)
+            continue
+        os.makedirs(folder, exist_ok=True)
+        for f in os.listdir(source):
+            if f.endswith(".gz"):
+                with gzip.open(os.path.join(source, f), "rb") as src, open(os.path.join(folder, f[:-3]), "wb") as dst:
+                    shutil.copyfileobj(src, dst)
+            else:
+                shutil.copyfile(os.path.join(source, f), os.path.join(folder, f))
+        restored.append(name)
+        step, time_s = checkpoint_time(os.path.join(folder, "checkpoint.bin"))
+        print("%s: restored %s at its checkpoint of t = %.3f s (step %d)" % (tool, folder, time_s, step), flush=True)
+    return restored
 
 
 def particle_steps(folder):
