@@ -159,7 +159,11 @@ check("park compresses the checkpoint and the first snapshot, not later ones",
       sorted(os.listdir(os.path.join(parked_dir, "interrupted_run"))) ==
       ["checkpoint.bin.gz", "diagnostics.csv", "params.ini", "progress.json", "run.pvd", "snap_000000000.vtp.gz"],
       str(os.listdir(os.path.join(parked_dir, "interrupted_run"))))
-check("unpark restores the parked run", study.unpark("t", parked_dir, restored_dir) == ["interrupted_run"])
+os.makedirs(os.path.join(parked_dir, "another_study"))  # another study's parked runs: not a run folder
+with open(os.path.join(parked_dir, "README.md"), "w") as out:
+    out.write("parked runs\n")
+check("unpark restores the parked run, and only it", study.unpark("t", parked_dir, restored_dir) == ["interrupted_run"]
+      and sorted(os.listdir(restored_dir)) == ["interrupted_run"])
 restored = os.path.join(restored_dir, "interrupted_run")
 same = all(open(os.path.join(restored, f), "rb").read() == data for f, data in files.items()
            if f != "snap_000000120.vtp")

@@ -186,8 +186,8 @@ def unpark(tool, parked_dir, runs_dir):
     for name in sorted(os.listdir(parked_dir)) if os.path.isdir(parked_dir) else []:
         source = os.path.join(parked_dir, name)
         folder = os.path.join(runs_dir, name)
-        if not os.path.isdir(source):
-            continue
+        if not os.path.isfile(os.path.join(source, "progress.json")):
+            continue  # not a parked run (a README, or another study's parked folder)
         if os.path.isfile(os.path.join(folder, "progress.json")):
             print("%s: %s already holds a run; left as it is" % (tool, folder), flush=True)
             continue
