@@ -211,10 +211,12 @@ def main():
             fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
         return command_run(args)
     if args.command == "park":
-        study.park("freydier_convergence", args.runs_dir, args.parked_dir)
+        if not study.park("freydier_convergence", args.runs_dir, args.parked_dir):
+            print("freydier_convergence: no unfinished run with a checkpoint in %s; nothing parked" % args.runs_dir)
         return 0
     if args.command == "unpark":
-        study.unpark("freydier_convergence", args.parked_dir, args.runs_dir)
+        if not study.unpark("freydier_convergence", args.parked_dir, args.runs_dir):
+            print("freydier_convergence: no parked run to restore from %s" % args.parked_dir)
         return 0
     return command_chart(args)
 
