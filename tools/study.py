@@ -199,7 +199,10 @@ def unpark(tool, parked_dir, runs_dir):
             else:
                 shutil.copyfile(os.path.join(source, f), os.path.join(folder, f))
         restored.append(name)
-        step, time_s = checkpoint_time(os.path.join(folder, "checkpoint.bin"))
+        try:
+            step, time_s = checkpoint_time(os.path.join(folder, "checkpoint.bin"))
+        except (OSError, ValueError, struct.error) as e:
+            fail(tool, "parked run %s: %s" % (source, e))
         print("%s: restored %s at its checkpoint of t = %.3f s (step %d)" % (tool, folder, time_s, step), flush=True)
     return restored
 
