@@ -191,11 +191,13 @@ def cross_field(name, base, overrides, wanted):
         sec, k = key.split(".")
         out += ["[%s]" % sec, "%s = %s" % (k, value)]
     path = write_file("cross_%s.ini" % name, "\n".join(out) + "\n")
-    expect_error("cross_%s_file" % name, ["check", path], wanted)
+    expect_error("cross_%s_file" % name, ["check", path], wanted + [path + ": "])
     sets = []
     for key, value in overrides.items():
         sets += ["-s", "%s=%s" % (key, value)]
-    expect_error("cross_%s_override" % name, ["check", os.path.join(SOURCE, "cases", base)] + sets, wanted)
+    base_path = os.path.join(SOURCE, "cases", base)
+    expect_error("cross_%s_override" % name, ["check", base_path] + sets,
+                 wanted + [base_path + " with the -s overrides: "])
 
 
 def group_inputs():

@@ -288,10 +288,13 @@ static int load_case(const cli *c, surge_params *p)
                                                    sizeof err);
     for (int i = 0; rc == 0 && i < c->override_count; i++)
         rc = surge_params_override(p, c->overrides[i], false, err, sizeof err);
-    if (rc == 0)
-        rc = surge_params_validate(p, err, sizeof err);
     if (rc != 0) {
         fprintf(stderr, "surge: %s\n", err);
+        return -1;
+    }
+    if (surge_params_validate(p, err, sizeof err) != 0) { /* a rule across parameters: name the set they came from */
+        fprintf(stderr, "surge: %s%s: %s\n", c->case_path ? c->case_path : "cases/demo.ini (built in)",
+                c->override_count ? " with the -s overrides" : "", err);
         return -1;
     }
     return 0;
