@@ -2,8 +2,9 @@
  * stack settles without drift or penetration; a disc on an incline sticks or slides (rotation locked) and rolls
  * or slips (free) as Coulomb friction says; a disc set on a moving belt ends rolling at a third of its speed; a
  * bouncing disc keeps e^2 of its height; a head-on elastic collision swaps velocities across the periodic
- * boundary.
- * usage: test_contacts rest|stack|incline|belt|bounce|collision */
+ * boundary; discs blown up to non-finite or huge positions neither crash the broad phase nor disturb a resting
+ * disc.
+ * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -233,6 +234,32 @@ static int test_collision(void)
     return failures;
 }
 
+/* A blow-up elsewhere (the health monitor reports it after the step) must not crash the contact solver. */
+static int test_blown_up(void)
+{
+    const double far[] = {NAN, INFINITY, -INFINITY, 1e300, -1e300};
+    for (int periodic = 0; periodic <= 1; periodic++) {
+        for (size_t k = 0; k < sizeof far / sizeof far[0]; k++) {
+            world w;
+            world_init(&w, 0, -9.81);
+            w.settings.period_m = periodic ? 1.0 : 0;
+            add_plane(&w, 0, 1, 0);
+            const int resting = add_disc(&w, 0.5, 0.05, 0.05, 0);
+            add_disc(&w, 0.3, fabs(far[k]), 0.05, 0); /* above the plane: one below it would shoot up */
+            add_disc(&w, far[k], 0.4, 0.05, 0);
+            add_disc(&w, far[k], fabs(far[k]), 0.05, 0);
+            run(&w, 1e-3, 20);
+            char what[96];
+            snprintf(what, sizeof what, "blown_up (%s, far = %g): resting disc's drift (m)",
+                     periodic ? "periodic" : "open", far[k]);
+            const double drift = hypot(w.x[resting] - 0.5, w.y[resting] - 0.05);
+            expect_below(what, isfinite(drift) ? drift : INFINITY, 1e-6);
+            contact_solver_destroy(w.solver);
+        }
+    }
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     const char *which = argc > 1 ? argv[1] : "";
@@ -248,6 +275,8 @@ int main(int argc, char **argv)
         return test_bounce() != 0;
     if (!strcmp(which, "collision"))
         return test_collision() != 0;
-    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision\n");
+    if (!strcmp(which, "blown_up"))
+        return test_blown_up() != 0;
+    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up\n");
     return 2;
 }

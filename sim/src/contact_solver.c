@@ -127,11 +127,27 @@ static int add_disc_pair(contact_solver *s, const contact_discs *d, int i, int j
     const double dx = wrap_dx(d->x[j] - d->x[i], period), dy = d->y[j] - d->y[i];
     const double dist = sqrt(dx * dx + dy * dy);
     const double gap = dist - d->radius[i] - d->radius[j];
-    if (gap >= margin || dist == 0)
+    if (!(gap < margin) || dist == 0) /* a non-finite gap (a blown-up disc) is no contact */
         return 0;
     contact c = {.key = contact_key(i, j), .a = i, .b = j, .nx = dx / dist, .ny = dy / dist, .gap_m = gap,
                  .ra = d->radius[i], .rb = d->radius[j]};
     return push_contact(s, c);
+}
+
+enum { MAX_CELLS_PER_SIDE = 4096 };
+
+/* A cell count clamped to [1, MAX_CELLS_PER_SIDE] before the cast, so that a disc flung far away or a
+ * non-finite position (a blow-up the health monitor reports after this step) is safe. */
+static int clamp_cells(double n)
+{
+    return n >= 1 ? (n < MAX_CELLS_PER_SIDE ? (int)n : MAX_CELLS_PER_SIDE) : 1;
+}
+
+/* The cell of a coordinate `offset` from the grid's origin, clamped to [0, n) (non-finite: cell 0). */
+static int cell_of_offset(double offset, double cell_size, int n)
+{
+    const double c = floor(offset / cell_size);
+    return c >= 0 ? (c < n ? (int)c : n - 1) : 0;
 }
 
 /* Candidate pairs from a uniform grid of cells at least one interaction range wide. */
@@ -148,12 +164,10 @@ static int find_disc_contacts(contact_solver *s, const contact_discs *d, double 
         x_min = 0;
         x_max = period;
     }
-    /* cells at least one interaction range wide, at most 4096 a side (wider cells then) */
-    int ncx = period > 0 ? (int)floor(period / width) : (int)floor((x_max - x_min) / width) + 1;
-    ncx = ncx < 1 ? 1 : (ncx > 4096 ? 4096 : ncx);
+    /* cells at least one interaction range wide, at most MAX_CELLS_PER_SIDE a side (wider cells then) */
+    const int ncx = clamp_cells(period > 0 ? floor(period / width) : floor((x_max - x_min) / width) + 1);
     const double cell_w = period > 0 ? period / ncx : fmax(width, (x_max - x_min) / ncx * (1 + 1e-12));
-    int ncy = (int)floor((y_max - y_min) / width) + 1;
-    ncy = ncy > 4096 ? 4096 : ncy;
+    const int ncy = clamp_cells(floor((y_max - y_min) / width) + 1);
     const double cell_h = fmax(width, (y_max - y_min) / ncy * (1 + 1e-12));
     const int ncells = ncx * ncy;
     if (ncells + 1 > s->cell_capacity) {
@@ -173,9 +187,7 @@ static int find_disc_contacts(contact_solver *s, const contact_discs *d, double 
     int *start = s->cell_start, *order = s->cell_order, *cell_of = s->cell_order + d->count;
     memset(start, 0, (size_t)(ncells + 1) * sizeof *start);
     for (int i = 0; i < d->count; i++) {
-        int cx = (int)floor((d->x[i] - x_min) / cell_w), cy = (int)floor((d->y[i] - y_min) / cell_h);
-        cx = cx < 0 ? 0 : (cx >= ncx ? ncx - 1 : cx);
-        cy = cy < 0 ? 0 : (cy >= ncy ? ncy - 1 : cy);
+        const int cx = cell_of_offset(d->x[i] - x_min, cell_w, ncx), cy = cell_of_offset(d->y[i] - y_min, cell_h, ncy);
         cell_of[i] = cy * ncx + cx;
         start[cell_of[i] + 1]++;
     }
@@ -338,7 +350,7 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
             for (int w = 0; w < wall_count; w++) {
                 double nx, ny;
                 const double gap = wall_gap(&walls[w], d->x[i], d->y[i], d->radius[i], period, &nx, &ny);
-                if (gap >= margin)
+                if (!(gap < margin)) /* non-finite: no contact */
                     continue;
                 contact c = {.key = contact_key(-1 - w, i), .a = -1 - w, .b = i, .nx = nx, .ny = ny, .gap_m = gap,
                              .rb = d->radius[i], .wall_vx = walls[w].vx_mps, .wall_vy = walls[w].vy_mps};
