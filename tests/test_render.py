@@ -5,6 +5,9 @@ Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP live     --frames and --movie during a run: one PNG per frame drawn, a movie with one frame per frame
                  due (ffprobe: count, size, duration), a rendered frame on the stream's "frame" topic, and the
                  solver's final state hash equal to the same run without rendering.
+  GROUP ctrl_c   Ctrl-C in a terminal (SIGINT to the whole process group) during a run with --movie: surge stops,
+                 and the movie holds every frame drawn (ffmpeg is in its own process group, so it is not
+                 stopped halfway).
   GROUP offline  `surge render RUN_DIR` turns the run's snapshots into as many PNG frames and movie frames.
   GROUP inputs   bad rendering options get exit status 2 or 3 and a message naming the problem.
 
@@ -14,6 +17,7 @@ import json
 import os
 import re
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -101,6 +105,50 @@ def group_live():
           "%s vs %s" % (state_hash(stderr), state_hash(plain)))
 
 
+def children(pid):
+    found = []
+    for task in os.listdir("/proc/%d/task" % pid):
+        with open("/proc/%d/task/%s/children" % (pid, task)) as f:
+            found += [int(c) for c in f.read().split()]
+    return found
+
+
+def command_name(pid):
+    try:
+        with open("/proc/%d/comm" % pid) as f:
+            return f.read().strip()
+    except OSError:
+        return ""
+
+
+def group_ctrl_c():
+    d = fresh("ctrl_c")
+    frames = os.path.join(d, "frames")
+    args = ["run", TANK, "-o", os.path.join(d, "out"), "--frames", frames, "--movie", os.path.join(d, "movie.mp4")]
+    args += COMMON + ["-s", "time.end_s=100"]
+    proc = subprocess.Popen([SURGE] + args, stderr=subprocess.PIPE, text=True, env=ENV, start_new_session=True)
+    deadline = time.time() + 120
+    while time.time() < deadline and proc.poll() is None and \
+            len([f for f in os.listdir(frames) if f.endswith(".png")] if os.path.isdir(frames) else []) < 4:
+        time.sleep(0.1)
+    ffmpeg_groups = [os.getpgid(pid) for pid in children(proc.pid) if command_name(pid) == "ffmpeg"]
+    check("ctrl_c: ffmpeg runs in a process group of its own", len(ffmpeg_groups) == 1 and
+          ffmpeg_groups[0] != os.getpgid(proc.pid), "ffmpeg groups %s, surge's %d" % (ffmpeg_groups, proc.pid))
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        _, stderr = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, stderr = proc.communicate()
+    check("ctrl_c: SIGINT to the process group stops the run (exit status 4)", proc.returncode == 4,
+          "exit %s: %s" % (proc.returncode, stderr[-500:]))
+    m = re.search(r"rendered (\d+) of (\d+) frames due", stderr)
+    drawn = int(m.group(1)) if m else 0
+    info = probe(os.path.join(d, "movie.mp4"))
+    check("ctrl_c: the movie holds every frame drawn", drawn >= 4 and info is not None and info[0] == drawn,
+          "ffprobe: %s, %d drawn; %s" % (info, drawn, stderr[-300:]))
+
+
 def group_offline():
     d = fresh("offline")
     code, stderr = run(["run", TANK, "-o", os.path.join(d, "out")] + COMMON)
@@ -175,6 +223,18 @@ def group_inputs():
     check("inputs: bad rendering options exit 2 with a message naming them (%d cases)" % len(cases), not wrong,
           "\n".join(wrong))
 
+    # no ffmpeg on PATH: a clear error, and a movie already there is left as it was
+    movie = os.path.join(d, "kept.mp4")
+    with open(movie, "wb") as f:
+        f.write(b"an earlier movie")
+    p = subprocess.run([SURGE, "run", TANK, "-o", out, "-s", "time.end_s=0.001", "--movie", movie],
+                       capture_output=True, text=True, timeout=60, env=dict(ENV, PATH="/nonexistent"))
+    with open(movie, "rb") as f:
+        kept = f.read()
+    check("inputs: without ffmpeg, --movie exits 2 naming ffmpeg and leaves the existing movie untouched",
+          p.returncode == 2 and "ffmpeg" in p.stderr and kept == b"an earlier movie",
+          "exit %d, file %r: %s" % (p.returncode, kept[:40], p.stderr.strip()[-300:]))
+
     # a snapshot whose array offset points far outside the file is refused, naming the file and the array
     run_dir = os.path.join(d, "corrupt")
     code, stderr = run(["run", TANK, "-o", run_dir, "-s", "time.end_s=0.001"], timeout=60)
@@ -192,6 +252,6 @@ def group_inputs():
 
 
 os.makedirs(WORK, exist_ok=True)
-{"live": group_live, "offline": group_offline, "inputs": group_inputs}[GROUP]()
+{"live": group_live, "ctrl_c": group_ctrl_c, "offline": group_offline, "inputs": group_inputs}[GROUP]()
 print("%d check(s) failed" % len(failures) if failures else "all checks passed")
 sys.exit(1 if failures else 0)

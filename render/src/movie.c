@@ -23,9 +23,15 @@ struct surge_movie {
     char path[4096];
 };
 
-/* Runs argv with stdin from in_fd (or /dev/null) and stdout/stderr to out_fd (or inherited); returns the pid. */
+/* Runs argv with stdin from in_fd (or /dev/null) and stdout/stderr to out_fd (or inherited); returns the pid.
+ * The child gets its own process group, so that Ctrl-C in the terminal stops surge (which then finishes the
+ * movie) and not ffmpeg halfway. */
 static pid_t spawn(char *const argv[], int in_fd, int out_fd)
 {
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     if (in_fd >= 0)
@@ -35,8 +41,9 @@ static pid_t spawn(char *const argv[], int in_fd, int out_fd)
     if (out_fd >= 0)
         posix_spawn_file_actions_adddup2(&actions, out_fd, STDOUT_FILENO);
     pid_t pid;
-    const int rc = posix_spawnp(&pid, argv[0], &actions, NULL, argv, environ);
+    const int rc = posix_spawnp(&pid, argv[0], &actions, &attributes, argv, environ);
     posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attributes);
     return rc == 0 ? pid : -1;
 }
 
@@ -63,15 +70,22 @@ static int ffmpeg_has_x264(void)
 
 surge_movie *surge_movie_open(const char *path, int width_px, int height_px, double fps, char *err, size_t err_len)
 {
-    FILE *probe = fopen(path, "wb");
-    if (!probe) {
+    /* can we write it? (without truncating a movie that is there, in case ffmpeg cannot start) */
+    int created = 1, probe = open(path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (probe < 0 && errno == EEXIST) {
+        created = 0;
+        probe = open(path, O_WRONLY | O_CLOEXEC);
+    }
+    if (probe < 0) {
         snprintf(err, err_len, "cannot write the movie '%s': %s", path, strerror(errno));
         return NULL;
     }
-    fclose(probe);
+    close(probe);
     const int x264 = ffmpeg_has_x264();
     int fds[2];
     if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, fds) != 0) {
+        if (created)
+            unlink(path);
         snprintf(err, err_len, "cannot start ffmpeg: %s", strerror(errno));
         return NULL;
     }
@@ -87,6 +101,8 @@ surge_movie *surge_movie_open(const char *path, int width_px, int height_px, dou
     close(fds[1]);
     if (pid < 0) {
         close(fds[0]);
+        if (created)
+            unlink(path);
         snprintf(err, err_len, "cannot run ffmpeg to write '%s' (apt-get install ffmpeg; or use --frames and "
                                "assemble the movie later)", path);
         return NULL;

@@ -102,10 +102,11 @@ static void *renderer_main(void *arg)
         return NULL;
     }
     for (;;) {
+        const int finishing = atomic_load(&r->finishing); /* before the take: see publisher_main */
         const surge_frame *f = surge_mailbox_take(r->mailbox, 0.1);
         if (f && !r->error[0])
             render_frame(r, f);
-        else if (!f && atomic_load(&r->finishing))
+        else if (!f && finishing)
             return NULL;
     }
 }

@@ -398,13 +398,16 @@ static void *publisher_main(void *arg)
     surge_publisher *p = arg;
     for (;;) {
         read_subscriptions(p);
+        /* read before the take: the final state is posted before `finishing` is set, so a take that comes back
+         * empty after `finishing` was seen has nothing left to miss */
+        const int finishing = atomic_load(&p->finishing);
         const surge_frame *f = surge_mailbox_take(p->mailbox, 0.02);
         if (f) {
             read_subscriptions(p);
             publish_frame(p, f);
         }
         publish_png(p);
-        if (!f && atomic_load(&p->finishing))
+        if (!f && finishing)
             return NULL; /* closed and drained */
     }
 }
