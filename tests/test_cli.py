@@ -635,6 +635,24 @@ def group_restart():
     r_cont = surge("run", "--restart", checkpoint, "-s", "time.end_s=0.01", timeout=RUN_TIMEOUT_S)
     report("restart_after_sigint", exited(r_cont, 0) and state_hash(r_cont) is not None, r_cont)
 
+    # a restart into a new folder starts its diagnostics.csv with the header
+    dir_n = os.path.join(WORK, "N")
+    shutil.rmtree(dir_n, ignore_errors=True)
+    with open(checkpoint, "rb") as f:
+        head = f.read(24)
+        f.seek(24 + struct.unpack("<Q", head[16:24])[0] + 8)
+        checkpoint_time_s = struct.unpack("<d", f.read(8))[0]
+    r_new = surge("run", "--restart", checkpoint, "-s", "time.end_s=%.9g" % (checkpoint_time_s + 0.003),
+                  "-s", "output.diagnostics_interval_s=0.001", "-o", dir_n,
+                  timeout=RUN_TIMEOUT_S)
+    try:
+        header_n, rows_n = read_csv_rows(os.path.join(dir_n, "diagnostics.csv"))
+        err = None
+    except Exception as e:  # noqa: BLE001
+        header_n, rows_n, err = [], [], "%s: %s" % (type(e).__name__, e)
+    report("restart_into_new_folder_csv_header", exited(r_new, 0) and header_n[:2] == ["time_s", "step"] and
+           len(rows_n) > 0, r_new, err or "header %s, %d rows" % (header_n, len(rows_n)))
+
     # A run killed hard leaves only its last periodic checkpoint; the diagnostics rows it wrote after that
     # checkpoint are dropped on restart, so diagnostics.csv stays in step order without repeated steps
     dir_k = os.path.join(WORK, "K")

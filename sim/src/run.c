@@ -209,12 +209,15 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         goto done;
     }
     const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
-    if (!opt->restarted) {
-        if (fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,"
-                           "fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps\n") < 0 ||
-            write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
-            goto done;
+    const int csv_empty = fseek(o.csv, 0, SEEK_END) == 0 && ftell(o.csv) == 0; /* a restart into a new folder */
+    if (csv_empty && fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,"
+                                    "fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps\n") < 0) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        goto done;
     }
+    if (!opt->restarted &&
+        (write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0))
+        goto done;
     output_schedule snapshots = schedule_from(surge_sim_time(sim), p->output.snapshot_interval_s);
     output_schedule diagnostics = schedule_from(surge_sim_time(sim), p->output.diagnostics_interval_s);
     output_schedule checkpoints = schedule_from(surge_sim_time(sim), p->output.checkpoint_interval_s);
