@@ -11,7 +11,7 @@
 
 #include "sim_internal.h"
 
-enum { MAX_PLACEMENT_TRIES = 2000000 };
+enum { MAX_PLACEMENT_TRIES = 2000000, MAX_RANDOM_DISCS = 20000 };
 
 static int allocate_discs(boulder_set *b, int n)
 {
@@ -107,6 +107,19 @@ static int place_random(boulder_set *b, const surge_params *q, double period, ch
     const double r_min = q->boulders.radius_m;
     const double r_max = fmax(q->boulders.radius_max_m, r_min);
     const double target_area = q->boulders.solid_fraction * (x1 - x0) * (y1 - y0);
+    /* checked before drawing: the placement below is quadratic in the number of discs */
+    if (r_min < 1.5 * q->numerics.dp_m) {
+        snprintf(err, err_len, "boulders.radius_m = %g m is below 1.5 dp (%g m); a disc needs a few particles across",
+                 r_min, 1.5 * q->numerics.dp_m);
+        return -1;
+    }
+    if (target_area / (SURGE_PI * r_min * r_min) > MAX_RANDOM_DISCS) {
+        snprintf(err, err_len, "boulders: solid_fraction %g of the region [%g, %g] x [%g, %g] m would take about "
+                 "%.3g discs of radius %g m, more than %d (raise boulders.radius_m or lower the fraction)",
+                 q->boulders.solid_fraction, x0, x1, y0, y1, target_area / (SURGE_PI * r_min * r_min), r_min,
+                 MAX_RANDOM_DISCS);
+        return -1;
+    }
     unsigned short rng[3] = {0x330e, (unsigned short)(q->boulders.seed & 0xffff),
                              (unsigned short)((unsigned)q->boulders.seed >> 16)};
     /* radii until the target area is reached (the last disc taken when it brings the area closer) */
