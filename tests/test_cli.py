@@ -376,6 +376,21 @@ def group_inputs():
         path = write_file("nan_dt_checkpoint.bin", bytes(corrupt))
         expect_error("cli_restart_nan_dt", ["run", "--restart", path, "-o", os.path.join(WORK, "out_nan_dt")],
                      [path, "corrupt step, time or time step"])
+        # a repeated fluid id under a state hash made to match is still refused (the ids must be a permutation)
+        real_size = struct.unpack_from("<I", data, 12)[0]
+        count, wall_count = struct.unpack_from("<ii", data, 24 + plen + 32)
+        fluid = count - wall_count
+        first_id = first_x + fluid * (2 * 8 + 3 * real_size)
+        corrupt = bytearray(data)
+        corrupt[first_id + 4:first_id + 8] = corrupt[first_id:first_id + 4]
+        hashed = bytes(corrupt[24 + plen:24 + plen + 16]) + bytes(corrupt[first_x:first_id + 4 * fluid])
+        h = 14695981039346656037
+        for byte in hashed:
+            h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+        corrupt[-8:] = struct.pack("<Q", h)
+        path = write_file("repeated_id_checkpoint.bin", bytes(corrupt))
+        expect_error("cli_restart_repeated_id", ["run", "--restart", path, "-o", os.path.join(WORK, "out_rep_id")],
+                     [path, "corrupt particle ids", "repeated"])
     expect_error("cli_restart_non_live_override",
                  ["run", "--restart", checkpoint, "-s", "numerics.dp_m=0.001", "-o", os.path.join(WORK, "out_nl")],
                  ["numerics.dp_m", "restart"])

@@ -201,12 +201,20 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     sim->time_s = t;
     sim->dt_s = dt;
     sim->first_dt_s = first_dt;
+    uint8_t *seen = calloc((size_t)(count - wall_count) + 1, 1); /* the fluid ids must be a permutation */
+    if (!seen) {
+        snprintf(err, err_len, "%s: out of memory", path);
+        goto fail;
+    }
     for (size_t i = w; i < (size_t)count; i++) {
-        if (sim->id[i] < wall_count || sim->id[i] >= count) {
-            snprintf(err, err_len, "%s: corrupt particle ids", path);
+        const int32_t id = sim->id[i];
+        if (id < wall_count || id >= count || seen[id - wall_count]++) {
+            snprintf(err, err_len, "%s: corrupt particle ids (id %d out of range or repeated)", path, (int)id);
+            free(seen);
             goto fail;
         }
     }
+    free(seen);
     if (surge_sim_state_hash(sim) != hash) {
         snprintf(err, err_len, "%s: state hash mismatch (corrupt checkpoint)", path);
         goto fail;
