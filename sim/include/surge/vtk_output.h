@@ -55,7 +55,6 @@ int surge_pvd_add(surge_pvd *pvd, double time_s, const char *relative_file, char
 /* Reads an existing collection without writing it (for rendering a finished run). NULL with err. */
 surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len);
 size_t surge_pvd_count(const surge_pvd *pvd);
-double surge_pvd_time(const surge_pvd *pvd, size_t index);
 const char *surge_pvd_file(const surge_pvd *pvd, size_t index); /* relative to the .pvd's folder */
 
 /* Frees the collection (the file on disk stays as last written). NULL is allowed. */
