@@ -37,7 +37,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     for (int a = sim->wall_count; a < sim->count; a++) {
         const double xa = x[a], ya = y[a];
         const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a], inv_rhoa = inv_rho[a];
-        real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_rate = 0;
+        real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_speed_mps = 0;
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
         int near_surface = surface[a];
@@ -69,8 +69,8 @@ void interaction_compute(surge_sim *sim, int corrector)
                     m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
                     g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
                     diffusion -= (rho[b] - rhoa - rho_h_per_m * dy) * f * vol;                    /* Fourtakas */
-                    const real rate = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
-                    visc_rate = rate > visc_rate ? rate : visc_rate;
+                    const real speed = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
+                    visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
                     grad_c_x += vol * f * dx;
                     grad_c_y += vol * f * dy;
                     div_r -= vol * f * r2;
@@ -95,8 +95,8 @@ void interaction_compute(surge_sim *sim, int corrector)
                     const real vf = vol * f, wdx = vxa - vx[b], wdy = vya - vy[b];
                     m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
                     g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
-                    const real rate = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
-                    visc_rate = rate > visc_rate ? rate : visc_rate;
+                    const real speed = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
+                    visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
                     grad_c_x += vol * f * dx;
                     grad_c_y += vol * f * dy;
                     div_r -= vol * f * r2;
@@ -112,7 +112,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             div_v = -inv * (g_xx * m_yy - g_xy * m_xy - g_yx * m_xy + g_yy * m_xx);
         }
         sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
-        sim->visc_rate[a] = visc_rate;
+        sim->visc_speed_mps[a] = visc_speed_mps;
         sim->div_r[a] = div_r;
         sim->grad_c_x[a] = grad_c_x;
         sim->grad_c_y[a] = grad_c_y;

@@ -33,8 +33,8 @@ static const surge_param_info registry[] = {
     {"fluid", "depth_m", SURGE_PARAM_REAL, "m", 0.018, 1e-6, 1e4, false, NULL,
      "Depth of the initial fluid block above the bed (y = 0).", OFF(fluid.depth_m)},
     {"fluid", "shape", SURGE_PARAM_ENUM, "-", SURGE_SHAPE_BLOCK, 0, 1, false, "block|lubrication",
-     "Initial fluid: the block, or the steady lubrication front (GMD 2025 Sect. 3.1; physics.md 3) holding the block's volume, "
-     "starting at x0_m (needs a belt speed and a slope).", OFF(fluid.shape)},
+     "Initial fluid: the block, or the steady lubrication front (GMD 2025 Sect. 3.1; physics.md 3) holding the "
+     "block's volume, starting at x0_m (needs a belt speed and a slope).", OFF(fluid.shape)},
 
     {"walls", "layers", SURGE_PARAM_INT, "-", 0, 0, 16, false, NULL,
      "Layers of boundary particles in every wall; 0: ceil(2h/dp), just enough for the kernel support.",
@@ -156,7 +156,8 @@ static const surge_param_info registry[] = {
      OFF(time.end_s)},
 
     {"output", "snapshot_interval_s", SURGE_PARAM_REAL, "s", 0.1, 0, 1e7, true, NULL,
-     "Simulated time between VTK snapshots (0: the initial and final snapshots only).", OFF(output.snapshot_interval_s)},
+     "Simulated time between VTK snapshots (0: the initial and final snapshots only).",
+     OFF(output.snapshot_interval_s)},
     {"output", "diagnostics_interval_s", SURGE_PARAM_REAL, "s", 0.01, 0, 1e7, true, NULL,
      "Simulated time between rows of diagnostics.csv (0: every step).", OFF(output.diagnostics_interval_s)},
     {"output", "checkpoint_interval_s", SURGE_PARAM_REAL, "s", 0, 0, 1e7, true, NULL,

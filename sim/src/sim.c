@@ -64,7 +64,7 @@ void surge_sim_destroy(surge_sim *sim)
     if (!sim)
         return;
     void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
-                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->visc_rate,
+                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->visc_speed_mps,
                       sim->grad_c_x, sim->grad_c_y, sim->div_r, sim->surface, sim->near_surface, sim->kind,
                       sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy,
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
@@ -82,14 +82,14 @@ static double variable_dt(const surge_sim *sim)
     if (p->numerics.dt_fixed_s > 0)
         return p->numerics.dt_fixed_s;
     const double h = sim->derived.h_m, c0 = sim->derived.c0_mps;
-    double max_acc2 = 0, max_rate = 0;
-    #pragma omp parallel for schedule(static) reduction(max : max_acc2, max_rate)
+    double max_acc2 = 0, max_visc_mps = 0;
+    #pragma omp parallel for schedule(static) reduction(max : max_acc2, max_visc_mps)
     for (int a = sim->wall_count; a < sim->count; a++) {
         double acc2 = (double)sim->ax[a] * sim->ax[a] + (double)sim->ay[a] * sim->ay[a];
         max_acc2 = acc2 > max_acc2 ? acc2 : max_acc2;
-        max_rate = sim->visc_rate[a] > max_rate ? sim->visc_rate[a] : max_rate;
+        max_visc_mps = sim->visc_speed_mps[a] > max_visc_mps ? sim->visc_speed_mps[a] : max_visc_mps;
     }
-    double dt = h / (c0 + max_rate);                 /* dt_cv */
+    double dt = h / (c0 + max_visc_mps);             /* dt_cv */
     if (max_acc2 > 0)
         dt = fmin(dt, sqrt(h / sqrt(max_acc2)));     /* dt_f */
     if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)

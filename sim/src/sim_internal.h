@@ -58,7 +58,7 @@ struct surge_sim {
     real *vx_n, *vy_n, *rho_n;
     /* per-particle rates and scratch */
     real *ax, *ay, *drho, *pressure, *inv_rho;
-    real *visc_rate;           /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle (dt_cv) */
+    real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
     real *div_r;
     uint8_t *surface;          /* free-surface flag from the last predictor pass */
