@@ -284,6 +284,18 @@ def group_control():
           belt.get("ok") and len(kinds) == 6 and kinds[0] == 0 and all(k > 0 for k in kinds[1:]),
           "reply %s, moving-wall particles per snapshot %s" % (belt, kinds))
 
+    # a change that makes the flow faster than c0 was derived for is applied, with a warning naming the remedy
+    fast = Surge("control_fast", ["-s", "time.end_s=0.1"], publish=False, paused=True)
+    ctl = surge_client.Control(fast.ctl, 10)
+    slow = ctl.request({"cmd": "set", "key": "walls.bottom_speed_mps", "value": -0.01})
+    quick = ctl.request({"cmd": "set", "key": "walls.bottom_speed_mps", "value": -5})
+    ctl.request({"cmd": "stop"})
+    fast.wait()
+    check("control: a belt at 0.01 m/s gets no warning; at 5 m/s (c0 = 19.8 m/s) one that names c0 and the remedy",
+          slow.get("ok") and "warning" not in slow and quick.get("ok") and "times the expected speed 5 m/s" in
+          quick.get("warning", "") and "numerics.c0_factor" in quick.get("warning", "") and fast.rc == 0,
+          "replies %s / %s\n%s" % (slow, quick, fast.describe()))
+
 
 # ---------------------------------------------------------------------------------------------------------------
 BAD_REQUESTS = [  # (request bytes, words the error must contain)

@@ -256,6 +256,8 @@ int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, cha
     return 0;
 }
 
+double surge_sim_expected_speed_mps(const surge_sim *sim) { return scene_expected_speed(&sim->params); }
+
 int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
 {
     if (surge_snapshot_reserve(snap, sim->count) != 0)

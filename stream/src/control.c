@@ -16,7 +16,7 @@
 
 #include "surge/run.h"
 
-enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100 };
+enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10 };
 
 struct surge_control {
     void *socket;
@@ -213,6 +213,7 @@ static cJSON *command_set(surge_control *c, const cJSON *request, surge_sim *sim
     }
     const surge_params before = *surge_sim_params(sim);
     surge_param_format(&before, info, previous, sizeof previous);
+    const double speed_before_mps = surge_sim_expected_speed_mps(sim);
     if (surge_sim_set_param(sim, name, text, message, sizeof message) != 0)
         return error_reply("%s", message);
     char applied[64];
@@ -224,6 +225,15 @@ static cJSON *command_set(surge_control *c, const cJSON *request, surge_sim *sim
     cJSON_AddItemToObject(r, "value", param_value(surge_sim_params(sim), info));
     cJSON_AddItemToObject(r, "previous", param_value(&before, info));
     cJSON_AddStringToObject(r, "applies", "from the next step on");
+    /* c0 was derived at the start; a change that speeds the flow up can leave it too slow for weak compressibility */
+    const double c0_mps = surge_sim_derived(sim)->c0_mps, speed_mps = surge_sim_expected_speed_mps(sim);
+    if (speed_mps > speed_before_mps && c0_mps < MIN_C0_OVER_EXPECTED_SPEED * speed_mps) {
+        snprintf(message, sizeof message, "c0 = %.3g m/s is now %.2g times the expected speed %.3g m/s (it should be "
+                 "%d or more: density errors grow as (u/c0)^2 and the health monitor stops the run at "
+                 "health.max_density_deviation); for this setting restart with a larger numerics.c0_factor or "
+                 "numerics.c0_mps", c0_mps, c0_mps / speed_mps, speed_mps, MIN_C0_OVER_EXPECTED_SPEED);
+        cJSON_AddStringToObject(r, "warning", message);
+    }
     return r;
 }
 

@@ -60,6 +60,10 @@ const surge_health *surge_sim_health(const surge_sim *sim);
 /* Changes a parameter marked live between steps; -1 with a message if not live or out of range. */
 int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, char *err, size_t err_len);
 
+/* The scene's largest expected speed for the parameters in force now (live changes included); c0 stays what
+ * it was derived as at the start (surge_derived). */
+double surge_sim_expected_speed_mps(const surge_sim *sim);
+
 /* Copies the current state (all particles, ordered by id). */
 int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap);
 
