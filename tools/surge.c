@@ -422,18 +422,13 @@ static int close_live_links(live_links *l, const surge_sim *sim)
 /* Density diffusion relaxes pressure over the kernel scale. Around a boulder of radius r in a very viscous fluid
  * that lets the flow carry a divergence of about delta (h/r) nu / (c0 r) of its strain rate, and the suspension
  * loses its extra viscosity (docs/validation/poiseuille_loaded.md). Warns where the estimate passes 5 %. */
-static void warn_diffusive_compressibility(surge_sim *sim)
+static void warn_diffusive_compressibility(const surge_sim *sim)
 {
     const surge_params *p = surge_sim_params(sim);
     const surge_derived *d = surge_sim_derived(sim);
     if (d->boulder_count == 0 || !(p->numerics.density_diffusion > 0))
         return;
-    surge_snapshot s = {0};
-    surge_sim_snapshot(sim, &s);
-    double radius_m = INFINITY;
-    for (int i = 0; i < s.boulders.count; i++)
-        radius_m = fmin(radius_m, s.boulders.radius_m[i]);
-    surge_snapshot_free(&s);
+    const double radius_m = d->smallest_boulder_radius_m;
     const double estimate =
         p->numerics.density_diffusion * (d->h_m / radius_m) * p->fluid.viscosity_m2ps / (d->c0_mps * radius_m);
     if (estimate > 0.05)

@@ -53,6 +53,9 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->derived.wall_count = sim->wall_count;
     sim->derived.fluid_count = sim->count - sim->wall_count;
     sim->derived.boulder_count = sim->boulders.count;
+    sim->derived.smallest_boulder_radius_m = INFINITY;
+    for (int i = 0; i < sim->boulders.count; i++)
+        sim->derived.smallest_boulder_radius_m = fmin(sim->derived.smallest_boulder_radius_m, sim->boulders.radius[i]);
     grid_sort_walls(sim);
     grid_sort_fluid(sim);
     boundary_wall_speeds(sim, 0.0);

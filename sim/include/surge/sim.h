@@ -18,6 +18,7 @@ typedef struct surge_derived {
     int32_t fluid_count;
     int32_t wall_count;        /* boulders' particles included */
     int32_t boulder_count;
+    double smallest_boulder_radius_m; /* infinity without boulders */
 } surge_derived;
 
 typedef enum surge_health_check {
