@@ -8,6 +8,9 @@ Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP ctrl_c   Ctrl-C in a terminal (SIGINT to the whole process group) during a run with --movie: surge stops,
                  and the movie holds every frame drawn (ffmpeg is in its own process group, so it is not
                  stopped halfway).
+  GROUP restart  a rendering run killed hard after a periodic checkpoint, restarted into the same folders:
+                 frames.csv lists each PNG once, in time order, on the frame cadence, without the frames the
+                 killed run drew after its checkpoint.
   GROUP offline  `surge render RUN_DIR` turns the run's snapshots into as many PNG frames and movie frames.
   GROUP inputs   bad rendering options get exit status 2 or 3 and a message naming the problem.
 
@@ -18,6 +21,7 @@ import os
 import re
 import shutil
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -149,6 +153,58 @@ def group_ctrl_c():
           "ffprobe: %s, %d drawn; %s" % (info, drawn, stderr[-300:]))
 
 
+def checkpoint_time_s(path):
+    with open(path, "rb") as f:
+        head = f.read(24)
+        f.seek(24 + struct.unpack("<Q", head[16:24])[0] + 8)
+        return struct.unpack("<d", f.read(8))[0]
+
+
+def frame_rows(frames):
+    path = os.path.join(frames, "frames.csv")
+    if not os.path.exists(path):
+        return []
+    with open(path) as f:
+        lines = [line.split(",") for line in f.read().splitlines()[1:] if line]
+    return [(int(a), int(b), float(c)) for a, b, c in lines if c]
+
+
+def group_restart():
+    d = fresh("restart")
+    out, frames = os.path.join(d, "out"), os.path.join(d, "frames")
+    interval = 0.005
+    cadence = ["-s", "render.frame_interval_s=%g" % interval, "-s", "render.width_px=320", "-s", "render.height_px=180",
+               "-s", "output.checkpoint_interval_s=0.05", "--threads", "1"]
+    proc = subprocess.Popen([SURGE, "run", TANK, "-o", out, "--frames", frames, "-s", "time.end_s=100"] + cadence,
+                            stderr=subprocess.DEVNULL, env=ENV)
+    checkpoint = os.path.join(out, "checkpoint.bin")
+    deadline, killed_after = time.time() + 120, []
+    while time.time() < deadline and proc.poll() is None:
+        if os.path.exists(checkpoint):
+            t_ck = checkpoint_time_s(checkpoint)
+            killed_after = [r for r in frame_rows(frames) if r[2] > t_ck + 2 * interval]
+            if killed_after:
+                break
+        time.sleep(0.05)
+    proc.kill()
+    proc.wait()
+    t_ck = checkpoint_time_s(checkpoint) if os.path.exists(checkpoint) else None
+    after = [r for r in frame_rows(frames) if t_ck is not None and r[2] > t_ck]
+    check("restart: the killed run drew frames after its last checkpoint (the case under test)", bool(after),
+          "checkpoint at %s, rows %s" % (t_ck, frame_rows(frames)[-5:]))
+    code, stderr = run(["run", "--restart", checkpoint, "--frames", frames, "-s",
+                        "time.end_s=%.9g" % ((t_ck or 0) + 0.03)] + cadence[-2:])
+    rows = frame_rows(frames)
+    times = [t for _, _, t in rows]
+    numbers = [n for n, _, _ in rows]
+    pngs = sorted(int(f[6:-4]) for f in os.listdir(frames) if f.startswith("frame_") and f.endswith(".png"))
+    slots = [int(t / interval + 1e-9) for t in times]  # a frame is drawn at the first step past each multiple
+    check("restart: frames.csv in time order, each PNG listed once, numbers increasing, one frame per interval",
+          code == 0 and len(rows) > len(after) and all(b > a for a, b in zip(slots, slots[1:])) and
+          all(b > a for a, b in zip(numbers, numbers[1:])) and pngs == numbers,
+          "exit %d; times %s; numbers %s; PNGs %s\n%s" % (code, times, numbers, pngs, stderr[-300:]))
+
+
 def group_offline():
     d = fresh("offline")
     code, stderr = run(["run", TANK, "-o", os.path.join(d, "out")] + COMMON)
@@ -252,6 +308,7 @@ def group_inputs():
 
 
 os.makedirs(WORK, exist_ok=True)
-{"live": group_live, "ctrl_c": group_ctrl_c, "offline": group_offline, "inputs": group_inputs}[GROUP]()
+{"live": group_live, "ctrl_c": group_ctrl_c, "restart": group_restart, "offline": group_offline,
+ "inputs": group_inputs}[GROUP]()
 print("%d check(s) failed" % len(failures) if failures else "all checks passed")
 sys.exit(1 if failures else 0)

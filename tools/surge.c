@@ -374,7 +374,7 @@ static int open_live_links(const cli *c, const char *outdir, const surge_sim *si
     }
     if (c->frames_dir || c->movie_path) {
         surge_renderer_def def = {.frames_dir = c->frames_dir, .movie_path = c->movie_path, .font_path = c->font_path,
-                                  .continue_frames = c->restart_path != NULL};
+                                  .continue_frames = c->restart_path != NULL, .resume_time_s = surge_sim_time(sim)};
         if (l->publisher) {
             def.on_frame = publish_rendered_frame;
             def.user = l->publisher;

@@ -28,6 +28,7 @@ struct surge_renderer {
     /* renderer thread */
     uint64_t last_sequence, frames_drawn, movie_frames;
     uint64_t first_frame_number; /* 0, or after the frames already in the folder (continue_frames) */
+    FILE *index;                 /* frames.csv: frame,step,time_s of each PNG written */
     double draw_s, encode_s;
     char error[1024]; /* the first failure; later frames are not attempted */
 };
@@ -78,6 +79,11 @@ static int render_frame(surge_renderer *r, const surge_frame *f)
             snprintf(path, sizeof path, "%s/frame_%06llu.png", r->frames_dir,
                      (unsigned long long)(r->first_frame_number + f->sequence - 1));
             rc = write_file(path, png, len, err, err_len);
+            if (rc == 0 && (fprintf(r->index, "%llu,%lld,%.17g\n", (unsigned long long)(r->first_frame_number +
+                            f->sequence - 1), (long long)f->diag.step, f->diag.time_s) < 0 || fflush(r->index) != 0)) {
+                snprintf(err, err_len, "cannot write '%.900s/frames.csv': %s", r->frames_dir, strerror(errno));
+                rc = -1;
+            }
         }
         if (rc == 0 && r->def.on_frame)
             r->def.on_frame(png, len, f->diag.step, f->diag.time_s, r->def.user);
@@ -128,6 +134,62 @@ static uint64_t next_frame_number(const char *path)
     return next;
 }
 
+/* frames.csv rows to keep on restart: those drawn at or before the restart's time; the PNGs of the others are
+ * removed, and the last kept frame's number and time are noted. */
+typedef struct frame_index_trim {
+    const char *frames_dir;
+    double resume_time_s;
+    long long last_kept_frame;
+    double last_kept_time_s;
+} frame_index_trim;
+
+static int keep_frame_row(const char *line, void *context)
+{
+    frame_index_trim *trim = context;
+    unsigned long long frame;
+    long long step;
+    double time_s;
+    if (sscanf(line, "%llu,%lld,%lf", &frame, &step, &time_s) != 3)
+        return 1; /* the header */
+    if (time_s <= trim->resume_time_s) {
+        if ((long long)frame > trim->last_kept_frame)
+            trim->last_kept_frame = (long long)frame, trim->last_kept_time_s = time_s;
+        return 1;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/frame_%06llu.png", trim->frames_dir, frame);
+    remove(path);
+    return 0;
+}
+
+/* Opens frames.csv for appending; on a restart first drops what the interrupted run drew after its checkpoint.
+ * Sets the first frame number and, where frames.csv lists kept frames, the next frame's time. */
+static int open_frame_index(surge_renderer *r, const surge_params *params, char *err, size_t err_len)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/frames.csv", r->frames_dir);
+    if (r->def.continue_frames) {
+        frame_index_trim trim = {r->frames_dir, r->def.resume_time_s, -1, 0};
+        if (surge_file_keep_lines(path, keep_frame_row, &trim, err, err_len) != 0)
+            return -1;
+        r->first_frame_number = next_frame_number(r->frames_dir); /* frames.csv may not list older frames */
+        if (trim.last_kept_frame >= 0) {
+            const double interval = params->render.frame_interval_s;
+            r->next_frame_s = (floor(trim.last_kept_time_s / interval + 1e-9) + 1.0) * interval;
+        }
+    } else if (remove(path) != 0 && errno != ENOENT) {
+        snprintf(err, err_len, "cannot replace '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    r->index = fopen(path, "a");
+    if (!r->index || fseek(r->index, 0, SEEK_END) != 0 ||
+        (ftell(r->index) == 0 && fprintf(r->index, "frame,step,time_s\n") < 0)) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
 /* Creates the frames folder and checks that files can be written into it. */
 static int make_folder(const char *path, char *err, size_t err_len)
 {
@@ -162,17 +224,19 @@ surge_renderer *surge_renderer_start(const surge_renderer_def *def, const surge_
         }
         snprintf(r->frames_dir, sizeof r->frames_dir, "%s", def->frames_dir);
     }
+    r->next_frame_s = -INFINITY;
     const int w = params->render.width_px, h = params->render.height_px;
-    if ((def->frames_dir && make_folder(def->frames_dir, err, err_len) != 0) ||
+    if ((def->frames_dir && (make_folder(def->frames_dir, err, err_len) != 0 ||
+                             open_frame_index(r, params, err, err_len) != 0)) ||
         !(r->canvas = surge_canvas_create(w, h, def->font_path, err, err_len)) ||
         (def->movie_path && !(r->movie = surge_movie_open(def->movie_path, w, h, params->render.movie_fps, err,
                                                           err_len)))) {
         surge_canvas_destroy(r->canvas);
+        if (r->index)
+            fclose(r->index);
         free(r);
         return NULL;
     }
-    if (def->frames_dir && def->continue_frames)
-        r->first_frame_number = next_frame_number(def->frames_dir);
     r->mailbox = surge_mailbox_create();
     if (!r->mailbox || pthread_create(&r->thread, NULL, renderer_main, r) != 0) {
         snprintf(err, err_len, "cannot start the renderer thread");
@@ -181,10 +245,11 @@ surge_renderer *surge_renderer_start(const surge_renderer_def *def, const surge_
             surge_movie_close(r->movie, ignored, sizeof ignored);
         surge_mailbox_destroy(r->mailbox);
         surge_canvas_destroy(r->canvas);
+        if (r->index)
+            fclose(r->index);
         free(r);
         return NULL;
     }
-    r->next_frame_s = -INFINITY;
     return r;
 }
 
@@ -219,6 +284,10 @@ int surge_renderer_finish(surge_renderer *r, surge_render_report *report, char *
         report->movie_frames = r->movie_frames;
         report->draw_s = r->draw_s;
         report->encode_s = r->encode_s;
+    }
+    if (r->index && fclose(r->index) != 0 && rc == 0) {
+        snprintf(err, err_len, "cannot write '%.900s/frames.csv': %s", r->frames_dir, strerror(errno));
+        rc = -1;
     }
     surge_mailbox_destroy(r->mailbox);
     surge_canvas_destroy(r->canvas);

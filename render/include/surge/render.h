@@ -62,8 +62,10 @@ int surge_movie_close(surge_movie *movie, char *err, size_t err_len);
 /* ---- rendering alongside the solver ---- */
 
 typedef struct surge_renderer_def {
-    const char *frames_dir; /* frame_NNNNNN.png per frame; NULL: no PNG files */
-    int continue_frames;    /* number on after the frames already in frames_dir (a restarted run), not from 0 */
+    const char *frames_dir; /* frame_NNNNNN.png per frame, listed in frames.csv; NULL: no PNG files */
+    int continue_frames;    /* a restarted run: number on after the frames already in frames_dir, not from 0 */
+    double resume_time_s;   /* with continue_frames: the restart's time; frames.csv rows (and their PNGs) drawn
+                               after it by the interrupted run are removed; the cadence goes on from the last kept */
     const char *movie_path; /* NULL: no movie */
     const char *font_path;  /* NULL: SURGE_DEFAULT_FONT */
     /* called in the renderer thread with each frame as PNG (for the stream); NULL: not needed */
