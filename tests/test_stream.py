@@ -21,6 +21,7 @@ import json
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import time
@@ -283,6 +284,32 @@ def group_control():
     check("control: a bed set moving live is a moving wall (kind 2) in the snapshots after the change",
           belt.get("ok") and len(kinds) == 6 and kinds[0] == 0 and all(k > 0 for k in kinds[1:]),
           "reply %s, moving-wall particles per snapshot %s" % (belt, kinds))
+
+    # a change made while paused at the step of a periodic checkpoint goes into that checkpoint (the journal lists
+    # it at that step, and a restart keeps the journal up to the checkpoint's step)
+    held = Surge("control_checkpoint", ["-s", "time.end_s=10", "-s", "output.checkpoint_interval_s=1e-6"],
+                 publish=False, paused=True)
+    ctl = surge_client.Control(held.ctl, 10)
+    ctl.request({"cmd": "step", "n": 3})
+    at_3 = wait_for(lambda: (lambda s: s if s["paused"] and s["step"] == 3 else None)(ctl.request({"cmd": "status"})), 20)
+    old = ctl.request({"cmd": "get", "key": "fluid.viscosity_m2ps"})["value"]
+    reply = ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": old * 2})
+    time.sleep(0.5)  # the paused run serves its boundary every 0.1 s
+    held.proc.kill()
+    held.wait()
+    checkpoint = os.path.join(held.out, "checkpoint.bin")
+    stored, step = None, None
+    if os.path.exists(checkpoint):
+        with open(checkpoint, "rb") as f:
+            data = f.read()
+        plen = struct.unpack_from("<Q", data, 16)[0]
+        text = data[24:24 + plen].decode()
+        m = re.search(r"\[fluid\][^\[]*?viscosity_m2ps\s*=\s*([^\s;#]+)", text)
+        stored = float(m.group(1)) if m else None
+        step = struct.unpack_from("<q", data, 24 + plen)[0]
+    check("control: a set while paused at a checkpoint's step is in that checkpoint",
+          at_3 and reply.get("ok") and step == 3 and stored == old * 2,
+          "status %s, reply %s, checkpoint step %s, viscosity %s (set %s)" % (at_3, reply, step, stored, old * 2))
 
     # a change that makes the flow faster than c0 was derived for is applied, with a warning naming the remedy
     fast = Surge("control_fast", ["-s", "time.end_s=0.1"], publish=False, paused=True)

@@ -270,6 +270,14 @@ double surge_param_get_number(const surge_params *p, const surge_param_info *inf
     return 0;
 }
 
+bool surge_params_live_differ(const surge_params *a, const surge_params *b)
+{
+    for (int i = 0; i < REGISTRY_COUNT; i++)
+        if (registry[i].live && surge_param_get_number(a, &registry[i]) != surge_param_get_number(b, &registry[i]))
+            return true;
+    return false;
+}
+
 /* The n-th name of "a|b|c" into buf; returns 0 when n is out of range. */
 static int enum_name(const char *names, int n, char *buf, size_t len)
 {

@@ -19,6 +19,8 @@ typedef struct run_outputs {
     FILE *csv;
     surge_snapshot snap;
     int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
+    int64_t last_checkpoint_step;  /* the step of the checkpoint on disk (-1: none written by this run) */
+    surge_params checkpoint_params; /* the parameters it holds */
 } run_outputs;
 
 surge_run_options surge_default_run_options(void)
@@ -104,11 +106,15 @@ static int write_diagnostics(const surge_sim *sim, run_outputs *o, char *err, si
     return 0;
 }
 
-static int write_checkpoint(const surge_sim *sim, const run_outputs *o, char *err, size_t err_len)
+static int write_checkpoint(const surge_sim *sim, run_outputs *o, char *err, size_t err_len)
 {
     char path[4096];
     join(path, sizeof path, o->dir, "checkpoint.bin");
-    return surge_sim_checkpoint_write(sim, path, err, err_len);
+    if (surge_sim_checkpoint_write(sim, path, err, err_len) != 0)
+        return -1;
+    o->last_checkpoint_step = surge_sim_step_count(sim);
+    o->checkpoint_params = *surge_sim_params(sim);
+    return 0;
 }
 
 /* The first multiple of interval strictly after t. */
@@ -180,7 +186,8 @@ static int call_boundary(const surge_run_options *opt, surge_sim *sim, double *h
 
 surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
 {
-    run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1};
+    run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1,
+                     .last_checkpoint_step = -1};
     surge_run_result result = SURGE_RUN_IO_ERROR;
     char path[4096];
     if (surge_make_folders(opt->output_dir, "the output", err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
@@ -228,6 +235,11 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
 
     int requests = call_boundary(opt, sim, &held_s);
     for (;;) {
+        /* a change made at the step of the checkpoint on disk goes into it: the journal lists the change at this
+         * step, and a restart from this checkpoint keeps the journal up to it */
+        if (surge_sim_step_count(sim) == o.last_checkpoint_step &&
+            surge_params_live_differ(&o.checkpoint_params, surge_sim_params(sim)))
+            requests |= SURGE_REQUEST_CHECKPOINT;
         if (requests & SURGE_REQUEST_SNAPSHOT && surge_sim_step_count(sim) != o.last_snapshot_step &&
             write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
             goto done;

@@ -450,17 +450,6 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     return p;
 }
 
-/* Whether a live parameter differs from the last state posted. */
-static int live_parameters_changed(const surge_params *a, const surge_params *b)
-{
-    for (int i = 0; i < surge_param_count(); i++) {
-        const surge_param_info *info = surge_param_at(i);
-        if (info->live && surge_param_get_number(a, info) != surge_param_get_number(b, info))
-            return 1;
-    }
-    return 0;
-}
-
 void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
 {
     if (!atomic_load(&p->wanted))
@@ -468,7 +457,7 @@ void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
     const int64_t step = surge_sim_step_count(sim);
     const double now = surge_wall_clock_s();
     /* a parameter changed at this step boundary goes out at once, so that stats show it from its step on */
-    const int changed = p->last_step >= 0 && live_parameters_changed(&p->last_params, surge_sim_params(sim));
+    const int changed = p->last_step >= 0 && surge_params_live_differ(&p->last_params, surge_sim_params(sim));
     if (!changed && p->last_step >= 0 && step - p->last_step < p->def.every_steps)
         return;
     if (!changed && p->def.max_rate_hz > 0 && now - p->last_wall_s < 1.0 / p->def.max_rate_hz)

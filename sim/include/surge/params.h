@@ -174,6 +174,8 @@ int surge_param_set(surge_params *p, const surge_param_info *info, const char *v
    SURGE_TEXT_PARAM_BYTES holds any value). */
 void surge_param_format(const surge_params *p, const surge_param_info *info, char *buf, size_t len);
 double surge_param_get_number(const surge_params *p, const surge_param_info *info);
+/* Whether any parameter marked live differs between a and b (text parameters are never live). */
+bool surge_params_live_differ(const surge_params *a, const surge_params *b);
 
 /* Reads an INI-style case file over p. Errors name path:line. */
 int surge_params_load(surge_params *p, const char *path, char *err, size_t err_len);
