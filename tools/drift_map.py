@@ -8,32 +8,48 @@ toe: the mean of (kernel-summed density) / (particle density) over fluid particl
 than 2h below the column's top particle), separately in the lower 35 % ("l") and the rest ("h") of that depth.
 1 means the spacing matches the densities (see tools/operator_check.py). Reads params.ini; numpy only.
 """
+import argparse
 import os
 import sys
 
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cli_checks  # noqa: E402
 import vtp  # noqa: E402
 from operator_check import kernel_sum_ratio, read_run  # noqa: E402
+from run_params import ParamsError  # noqa: E402
 
 COLUMN_M = 0.02
 LOWER_FRACTION = 0.35
 
 
+def fail(message):
+    cli_checks.fail("drift_map", message)
+
+
 def main():
-    if len(sys.argv) < 3:
-        sys.exit(__doc__)
-    run_dir, names = sys.argv[1], sys.argv[2:]
-    params, dp, h, mass, length = read_run(run_dir)
-    x_wall = params.real("walls", "upstream_x_m")
-    for name in names:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("run_dir")
+    parser.add_argument("snapshots", nargs="+", metavar="SNAPSHOT.vtp", help="file names inside RUN_DIR")
+    args = parser.parse_args()
+    try:
+        params, dp, h, mass, length = read_run(args.run_dir)
+        if not params.flag("walls", "upstream"):
+            fail("%s: the scene has no upstream wall (walls.upstream = false)" % params.path)
+        x_wall = params.real("walls", "upstream_x_m")
+    except ParamsError as e:
+        fail(str(e))
+    for name in args.snapshots:
+        path = os.path.join(args.run_dir, name)
         try:
-            s = vtp.read_vtp(os.path.join(run_dir, name))
-        except (OSError, ValueError, KeyError) as e:
-            sys.exit("drift_map: %s: cannot read the snapshot (%s)" % (name, e))
+            s = vtp.read_vtp(path, ("time_s", "kind", "density_kgpm3"), finite=True)
+        except vtp.VtpError as e:
+            fail(str(e))
         x, y, rho = s["points"][:, 0], s["points"][:, 1], s["density_kgpm3"]
         fluid = np.where(s["kind"] == 0)[0]
+        if fluid.size == 0:
+            fail("%s: no fluid particles" % path)
         toe = x[fluid].max()
         row = []
         for x0 in np.arange(x_wall, toe, COLUMN_M):

@@ -22,7 +22,6 @@ with the belt in continuity, fixed for no-slip), in folders named with that suff
 done only when it has a row for the current corner.
 """
 import argparse
-import csv
 import os
 import shutil
 import subprocess
@@ -32,6 +31,7 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
+import cli_checks  # noqa: E402
 import study  # noqa: E402
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
            "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity", "corner"]
@@ -62,13 +62,10 @@ def corner_of(row):
     return row.get("corner") or "belt"
 
 
-def finished_rows(csv_path):
+def finished(rows):
     """Grid points with a successful run; a failed one stays in the CSV as a record and is run again (fresh)."""
-    if not os.path.isfile(csv_path):
-        return set()
-    with open(csv_path) as f:
-        return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
-                 continuity_of(r)) for r in csv.DictReader(f) if r["status"] == "ok" and corner_of(r) == CORNER}
+    return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
+             continuity_of(r)) for r in rows if r["status"] == "ok" and corner_of(r) == CORNER}
 
 
 def run_one(args, case, dp, ch, deadline):
@@ -84,7 +81,7 @@ def run_one(args, case, dp, ch, deadline):
     rc, progress = study.run_resumable("freydier_convergence: " + name, folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
-    steps, sim_time = study.particle_steps(folder)
+    steps, sim_time = study.particle_steps("freydier_convergence", folder)
     row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
            "continuity": args.continuity, "corner": CORNER,
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
@@ -111,14 +108,12 @@ def run_one(args, case, dp, ch, deadline):
 
 
 def command_run(args):
-    study.check_columns("freydier_convergence", args.csv, COLUMNS)
+    done = finished(study.existing_rows("freydier_convergence", args.csv, COLUMNS, dict(
+        case=str, dp_m=float, ch=float, shifting=str, status=str)))
     deadline = time.time() + args.budget_s if args.budget_s else None
-    done = finished_rows(args.csv)
-    for case in args.cases.split(","):
-        if case not in ("id1", "id2"):
-            fail("--cases: unknown case '%s' (id1, id2)" % case)
-        for dp in study.positive_numbers("freydier_convergence", args.dp, "dp"):
-            for ch in study.positive_numbers("freydier_convergence", args.ch, "ch"):
+    for case in args.cases:
+        for dp in args.dp:
+            for ch in args.ch:
                 if (case, dp, ch, args.shifting, args.shape, args.continuity) in done:
                     continue
                 if deadline and time.time() > deadline:
@@ -135,7 +130,9 @@ def command_chart(args):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
-    rows = [r for r in study.read_rows("freydier_convergence", args.csv) if r["status"] == "ok"]
+    rows = [r for r in study.read_rows("freydier_convergence", args.csv, dict(
+        case=str, ch=str, threads=str, status=str, dp_m=float, wall_s=float, **dict.fromkeys(METRICS, float)))
+        if r["status"] == "ok"]
     if not rows:
         fail("%s: no finished runs to chart" % args.csv)
     targets = {"zeta_f": 0.01, "zeta_h": 0.05, "zeta_fs": 0.10, "zeta_u_076": 0.05, "zeta_u_150": 0.05,
@@ -182,33 +179,32 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run")
-    run.add_argument("--cases", default="id1,id2")
+    run.add_argument("--cases", default="id1,id2", type=cli_checks.names(["id1", "id2"]))
     run.add_argument("--dp", default="0.001,0.0005")
     run.add_argument("--ch", default="1,1.3,1.5,1.8,2.2")
     run.add_argument("--shifting", default="lind", choices=["none", "velocity", "lind"])
     run.add_argument("--shape", default="block", choices=["block", "lubrication"])
     run.add_argument("--continuity", default="renormalised", choices=["renormalised", "plain"],
                      help="numerics.continuity_correction true (renormalised, the default) or false (plain)")
-    run.add_argument("--end-s", type=float, default=40.0)
-    run.add_argument("--threads", type=int, default=2)
-    run.add_argument("--budget-s", type=float, default=0.0)
-    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "convergence"))
+    run.add_argument("--end-s", type=cli_checks.positive, default=40.0)
+    run.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
+    run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "convergence"))
     run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
-    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
-    run.add_argument("--parked-dir", default=PARKED_DIR)
+    run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+    run.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR)
     for command in ("park", "unpark"):
         parking = sub.add_parser(command)
-        parking.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "convergence"))
-        parking.add_argument("--parked-dir", default=PARKED_DIR)
+        parking.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "convergence"))
+        parking.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR)
     chart = sub.add_parser("chart")
     chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
-    chart.add_argument("--png", default=os.path.join(ROOT, "docs", "validation", "freydier_accuracy_vs_cost.png"))
+    chart.add_argument("--png", type=cli_checks.png_file,
+                       default=os.path.join(ROOT, "docs", "validation", "freydier_accuracy_vs_cost.png"))
     args = parser.parse_args()
     if args.command == "run":
-        if args.end_s <= 0 or args.threads < 1 or args.budget_s < 0:
-            fail("--end-s must be > 0, --threads >= 1, --budget-s >= 0")
-        if not os.access(args.surge, os.X_OK):
-            fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
+        args.dp = study.positive_numbers("freydier_convergence", args.dp, "dp")
+        args.ch = study.positive_numbers("freydier_convergence", args.ch, "ch")
         return command_run(args)
     if args.command == "park":
         if not study.park("freydier_convergence", args.runs_dir, args.parked_dir):

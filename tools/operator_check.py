@@ -24,8 +24,13 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cli_checks  # noqa: E402
 import vtp  # noqa: E402
 from run_params import ParamsError, RunParams  # noqa: E402
+
+
+def fail(message):
+    cli_checks.fail("operator_check", message)
 
 
 def wendland(q, h):
@@ -43,39 +48,58 @@ def kernel_sum_ratio(a, x, y, rho, mass, h, length):
 
 
 def read_run(run_dir):
-    """(params, dp, h, particle mass, period length) of a run folder; exits with the reason if params.ini is bad."""
+    """(params, dp, h, particle mass, period length) of a run folder; ParamsError naming what is wrong in params.ini."""
+    params = RunParams(run_dir)
+    dp, rho0 = params.positive("numerics", "dp_m"), params.positive("fluid", "density_kgpm3")
+    h = params.positive("numerics", "ch") * math.sqrt(2) * dp
+    return params, dp, h, rho0 * dp * dp, params.positive("domain", "length_m")
+
+
+def zone(path, args):
+    """(snapshot, fluid in the column over [x0, x1], fluid in the box) of one file; fails when the file cannot be
+    read, holds non-finite values or no fluid particle in the box."""
     try:
-        params = RunParams(run_dir)
-        dp, rho0 = params.real("numerics", "dp_m"), params.real("fluid", "density_kgpm3")
-        h = params.real("numerics", "ch") * math.sqrt(2) * dp
-        return params, dp, h, rho0 * dp * dp, params.real("domain", "length_m")
-    except ParamsError as e:
-        sys.exit("%s: %s" % (os.path.basename(sys.argv[0]), e))
+        s = vtp.read_vtp(path, ("time_s", "kind", "density_kgpm3", "velocity_mps", "pressure_pa"), finite=True)
+    except vtp.VtpError as e:
+        fail(str(e))
+    x, y = s["points"][:, 0], s["points"][:, 1]
+    column = (s["kind"] == 0) & (x > args.x[0]) & (x < args.x[1])
+    box = column & (y > args.y[0]) & (y < args.y[1])
+    if not box.any():
+        fail("%s: no fluid particle in the box x %g..%g m, y %g..%g m" % (path, *args.x, *args.y))
+    return s, column, box
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("run_dir")
-    parser.add_argument("--x", nargs=2, type=float, required=True, metavar=("X0", "X1"))
-    parser.add_argument("--y", nargs=2, type=float, required=True, metavar=("Y0", "Y1"))
-    parser.add_argument("--every", type=int, default=50, help="moment matrix of every N-th snapshot (default 50)")
-    parser.add_argument("--last", type=int, default=51, help="snapshots for the profile fit (default 51)")
+    parser.add_argument("--x", nargs=2, type=cli_checks.number, required=True, metavar=("X0", "X1"))
+    parser.add_argument("--y", nargs=2, type=cli_checks.number, required=True, metavar=("Y0", "Y1"))
+    parser.add_argument("--every", type=cli_checks.positive_int, default=50,
+                        help="moment matrix of every N-th snapshot (default 50)")
+    parser.add_argument("--last", type=cli_checks.positive_int, default=51,
+                        help="snapshots for the profile fit (default 51)")
     args = parser.parse_args()
-    params, dp, h, mass, length = read_run(args.run_dir)
-    rho0, nu = params.real("fluid", "density_kgpm3"), params.real("fluid", "viscosity_m2ps")
-    g, theta = params.real("body", "gravity_mps2"), math.radians(params.real("body", "slope_deg"))
-    belt = params.real("walls", "bottom_speed_mps")
+    if not (args.x[0] < args.x[1] and args.y[0] < args.y[1]):
+        parser.error("the box must have X0 < X1 and Y0 < Y1")
+    try:
+        params, dp, h, mass, length = read_run(args.run_dir)
+        rho0, nu = params.real("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
+        g, theta = params.positive("body", "gravity_mps2"), math.radians(params.real("body", "slope_deg"))
+        belt = params.real("walls", "bottom_speed_mps")
+    except ParamsError as e:
+        fail(str(e))
     alpha = 7 / (4 * math.pi * h * h)
     files = sorted(glob.glob(os.path.join(args.run_dir, "snap_*.vtp")))
     if not files:
-        sys.exit("operator_check: no snap_*.vtp in %s" % args.run_dir)
+        fail("no snap_*.vtp in %s" % args.run_dir)
 
     print("operator_check: %s, zone x %g..%g m, y %g..%g m" % (args.run_dir, args.x[0], args.x[1], *args.y))
     print("%8s %10s %22s %10s %10s" % ("t (s)", "particles", "kernel sum / density", "M_xx", "M_yy"))
     for path in files[::args.every] + ([files[-1]] if (len(files) - 1) % args.every else []):
-        s = vtp.read_vtp(path)
+        s, _, box = zone(path, args)
         x, y, rho = s["points"][:, 0], s["points"][:, 1], s["density_kgpm3"]
-        inside = np.where((s["kind"] == 0) & (x > args.x[0]) & (x < args.x[1]) & (y > args.y[0]) & (y < args.y[1]))[0]
+        inside = np.where(box)[0]
         ratios, moment = [], np.zeros(2)
         for a in inside:
             dx = x[a] - x
@@ -89,15 +113,13 @@ def main():
             factor = alpha / h * (-5 * q[pair] * (1 - q[pair] / 2) ** 3) / r[pair]   # grad_a W = factor r_ab
             volume = mass / rho[pair]
             moment += [np.sum(volume * dx[pair] ** 2 * -factor), np.sum(volume * dy[pair] ** 2 * -factor)]
-        n = max(len(inside), 1)
-        print("%8.2f %10d %22.4f %10.4f %10.4f" % (s["time_s"], len(inside), np.mean(ratios) if ratios else float("nan"),
-                                                 moment[0] / n, moment[1] / n))
+        print("%8.2f %10d %22.4f %10.4f %10.4f" % (s["time_s"], len(inside), np.mean(ratios),
+                                                 moment[0] / len(inside), moment[1] / len(inside)))
 
     heights, velocities, pressures, tops = [], [], [], []
     for path in files[-args.last:]:
-        s = vtp.read_vtp(path)
-        x, y = s["points"][:, 0], s["points"][:, 1]
-        column = (s["kind"] == 0) & (x > args.x[0]) & (x < args.x[1])
+        s, column, _ = zone(path, args)
+        y = s["points"][:, 1]
         heights.append(y[column])
         velocities.append(s["velocity_mps"][column, 0] - belt)
         pressures.append(s["pressure_pa"][column])

@@ -37,6 +37,7 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
+import cli_checks  # noqa: E402
 import study  # noqa: E402
 import vtp  # noqa: E402
 from run_params import RunParams  # noqa: E402
@@ -56,25 +57,33 @@ def fail(message):
 
 
 def measure(folder):
-    """(u_max, mu_eq/mu0, phi_actual, n_discs) of a finished run."""
+    """(u_max, mu_eq/mu0, phi_actual, n_discs) of a finished run; ValueError (ParamsError, VtpError) naming the file
+    and what is wrong where the run cannot be measured."""
     params = RunParams(folder)
-    rho, nu0 = params.real("fluid", "density_kgpm3"), params.real("fluid", "viscosity_m2ps")
-    force, gap = params.real("body", "force_x_mps2"), params.real("domain", "height_m")
-    length = params.real("domain", "length_m")
+    rho, nu0 = params.positive("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
+    force, gap = params.real("body", "force_x_mps2"), params.positive("domain", "height_m")
+    length = params.positive("domain", "length_m")
     speeds = []
     for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd")):
         if WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6:
-            s = vtp.read_vtp(os.path.join(folder, name))
+            path = os.path.join(folder, name)
+            s = vtp.read_vtp(path, ("kind", "velocity_mps"), finite=True)
             band = (s["kind"] == 0) & (np.abs(s["points"][:, 1] - gap / 2) <= HALF_BAND_M)
+            if not band.any():
+                raise ValueError("%s: no fluid particle within %g m of the centre line" % (path, HALF_BAND_M))
             speeds.append(s["velocity_mps"][band, 0].astype(float).mean())
     if not speeds:
         raise ValueError("%s: no snapshot between %g and %g s" % (folder, *WINDOW_S))
     u_max = float(np.mean(speeds))
+    if force == 0 or u_max == 0:
+        raise ValueError("%s: [body] force_x_mps2 = %g and u_max = %g m/s: no driven flow to measure a viscosity by"
+                         % (params.path, force, u_max))
     mu_ratio = gap * gap * rho * force / (8 * u_max) / (rho * nu0)
     radii = np.zeros(0)
     if os.path.isfile(os.path.join(folder, "boulders.pvd")):
-        first = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]
-        radii = vtp.read_vtp(os.path.join(folder, first))["radius_m"]
+        discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+        if discs:
+            radii = vtp.read_vtp(os.path.join(folder, discs[0][1]), ("radius_m",))["radius_m"]
     return u_max, mu_ratio, float(np.sum(np.pi * radii ** 2) / (length * gap)), int(radii.size)
 
 
@@ -96,9 +105,8 @@ REFERENCE_COLUMNS = ["phi", "seed", "phi_actual", "n_discs", "mu_local_einstein"
 
 
 def command_reference(args):
-    phis = [float(v) for v in args.phi.split(",") if v.strip()]
     rows = []
-    for phi in phis:
+    for phi in args.phi:
         folder = os.path.join(args.runs_dir, "placement_phi%g_seed%d" % (phi, args.seed))
         argv = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
                 "-s", "numerics.dp_m=0.01", "-s", "boulders.solid_fraction=%g" % phi, "-s", "boulders.seed=%d" % args.seed,
@@ -143,20 +151,21 @@ def run_one(args, phi, deadline):
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
+    steps, sim_time = study.particle_steps(TOOL, folder)
     row = {"phi": phi, "dp_m": "%.6g" % args.dp, "ch": args.ch, "seed": args.seed, "threads": args.threads,
            "wall_s": "%.1f" % progress["wall_s"], "u_max_mps": "nan", "mu_eq_over_mu0": "nan",
-           "phi_actual": "nan", "n_discs": 0, "particle_steps": 0, "sim_time_s": 0}
-    if os.path.isfile(os.path.join(folder, "diagnostics.csv")):
-        steps, sim_time = study.particle_steps(folder)
+           "phi_actual": "nan", "n_discs": 0, "particle_steps": steps, "sim_time_s": "%.3f" % sim_time}
+    try:
         params = RunParams(folder)
-        row.update({"particle_steps": steps, "sim_time_s": "%.3f" % sim_time,
-                    "c0_mps": "%.4g" % params.derived("c0_mps"),
+        row.update({"c0_mps": "%.4g" % params.derived("c0_mps"),
                     "density_diffusion": "%g" % params.real("numerics", "density_diffusion")})
-    if rc == 0:
-        u_max, mu_ratio, phi_actual, n_discs = measure(folder)
-        row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
-                    "phi_actual": "%.4f" % phi_actual, "n_discs": n_discs, "status": "ok"})
-    else:
+        if rc == 0:
+            u_max, mu_ratio, phi_actual, n_discs = measure(folder)
+            row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
+                        "phi_actual": "%.4f" % phi_actual, "n_discs": n_discs, "status": "ok"})
+    except ValueError as e:  # ParamsError, VtpError, nothing to measure
+        fail("%s: %s" % (name, e))
+    if rc != 0:
         row["status"] = "exit %d (health monitor)" % rc if rc == 1 else "exit %d" % rc
     progress["status"] = row["status"]
     study.write_progress(folder, progress)
@@ -166,17 +175,13 @@ def run_one(args, phi, deadline):
 
 
 def command_run(args):
-    study.check_columns("poiseuille_loaded", args.csv, COLUMNS)
+    rows = study.existing_rows(TOOL, args.csv, COLUMNS, dict(
+        phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float))
     deadline = time.time() + args.budget_s if args.budget_s else None
-    phis = [float(v) for v in args.phi.split(",") if v.strip()] if args.phi else []
-    if not phis or any(not 0 <= v < 0.8 for v in phis):
-        fail("--phi: expected comma-separated solid fractions in [0, 0.8), got '%s'" % args.phi)
     diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
-    done = set()
-    if os.path.isfile(args.csv):
-        done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
-                 float(r["density_diffusion"])) for r in study.read_rows(TOOL, args.csv)}
-    for phi in phis:
+    done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
+             float(r["density_diffusion"])) for r in rows}
+    for phi in args.phi:
         if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion) in done:
             continue
         if deadline and time.time() > deadline:
@@ -227,11 +232,15 @@ def read_reference(path):
         return {}
     case = RunParams(os.path.join(ROOT, "cases", "poiseuille_loaded.ini"))
     band_clear = local_einstein([], 0.0, case.real("domain", "length_m"), case.real("domain", "height_m"))
-    return {float(r["phi"]): float(r["mu_local_einstein"]) / band_clear for r in study.read_rows(TOOL, path)}
+    return {float(r["phi"]): float(r["mu_local_einstein"]) / band_clear
+            for r in study.read_rows(TOOL, path, dict(phi=float, mu_local_einstein=float))}
 
 
 def command_report(args):
-    every_run = [r for r in study.read_rows(TOOL, args.csv) if r["status"] == "ok"]
+    every_run = [r for r in study.read_rows(TOOL, args.csv, dict(
+        status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
+        c0_mps=float if args.c0 or args.png else str,
+        density_diffusion=float if args.diffusion is not None or args.png else str)) if r["status"] == "ok"]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
@@ -242,6 +251,9 @@ def command_report(args):
     loaded = [r for r in rows if float(r["phi"]) > 0]
     if len(loaded) < 3:
         fail("%s: %d finished runs with discs; the fit needs 3" % (args.csv, len(loaded)))
+    clear_all, clear_here = clear_fluid_values(every_run), clear_fluid_values(rows)
+    if not clear_all:
+        fail("%s: no finished clear-fluid run (phi = 0): mu_eq/mu0 relative to the clear fluid needs one" % args.csv)
     phi = np.array([float(r["phi_actual"]) for r in loaded])
     mu = np.array([float(r["mu_eq_over_mu0"]) for r in loaded])
     phi_m, p, rmse = fit(phi, mu)
@@ -252,7 +264,6 @@ def command_report(args):
     for r in rows:
         print("  phi %.4f  mu_eq/mu0 %.4f  wall %s s" % (float(r["phi_actual"]) if r["phi_actual"] != "nan" else 0,
                                                       float(r["mu_eq_over_mu0"]), r["wall_s"]))
-    clear_all, clear_here = clear_fluid_values(every_run), clear_fluid_values(rows)
     dps = sorted({float(r["dp_m"]) for r in loaded})
     clear = np.array([clear_value(clear_here or clear_all, float(r["dp_m"])) for r in loaded])
     relative = mu / clear
@@ -353,50 +364,58 @@ def plot(png, rows, reference, rel_fit, selected):
     print("%s: wrote %s" % (TOOL, png))
 
 
+def solid_fractions(with_zero):
+    """An argparse type: comma-separated solid fractions in [0, 0.8) (with_zero) or (0, 0.8)."""
+    def parse(text):
+        try:
+            phis = [float(v) for v in text.split(",") if v.strip()]
+        except ValueError:
+            phis = []
+        if not phis or any(not (0 <= v if with_zero else 0 < v) or not v < 0.8 for v in phis):
+            raise argparse.ArgumentTypeError("expected comma-separated solid fractions in %s0, 0.8), got '%s'"
+                                             % ("[" if with_zero else "(", text))
+        return phis
+    return parse
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run")
-    run.add_argument("--phi", default="0,0.05,0.1,0.2,0.3,0.4,0.5")
-    run.add_argument("--dp", type=float, default=1 / 150)
-    run.add_argument("--ch", type=float, default=1.8)
+    run.add_argument("--phi", default="0,0.05,0.1,0.2,0.3,0.4,0.5", type=solid_fractions(with_zero=True))
+    run.add_argument("--dp", type=cli_checks.positive, default=1 / 150)
+    run.add_argument("--ch", type=cli_checks.positive, default=1.8)
     run.add_argument("--seed", type=int, default=1)
-    run.add_argument("--c0", type=float, default=0.0, help="numerics.c0_mps (0: derived from the scene)")
-    run.add_argument("--diffusion", type=float, default=-1.0,
+    run.add_argument("--c0", type=cli_checks.non_negative, default=0.0,
+                     help="numerics.c0_mps (0: derived from the scene)")
+    run.add_argument("--diffusion", type=cli_checks.number, default=-1.0,
                      help="numerics.density_diffusion (delta; default: the case's)")
-    run.add_argument("--threads", type=int, default=2)
-    run.add_argument("--budget-s", type=float, default=0.0)
-    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
+    run.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
+    run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
     run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
-    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
     ref = sub.add_parser("reference")
-    ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5")
+    ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5", type=solid_fractions(with_zero=False))
     ref.add_argument("--seed", type=int, default=1)
-    ref.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
+    ref.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
     ref.add_argument("--csv", default=REFERENCE_CSV)
-    ref.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    ref.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     rep = sub.add_parser("report")
     rep.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
-    rep.add_argument("--png", default=None)
-    rep.add_argument("--dp", type=float, default=None, help="fit only the runs at this dp")
-    rep.add_argument("--c0", type=float, default=None, help="fit only the runs with this c0")
-    rep.add_argument("--diffusion", type=float, default=None, help="fit only the runs with this delta")
+    rep.add_argument("--png", type=cli_checks.png_file, default=None)
+    rep.add_argument("--dp", type=cli_checks.positive, default=None, help="fit only the runs at this dp")
+    rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
+    rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
     args = parser.parse_args()
     if args.command == "run":
-        if not args.dp > 0 or not args.ch > 0 or args.threads < 1 or args.budget_s < 0 or not args.c0 >= 0 \
-                or not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
-            fail("--dp and --ch must be > 0, --c0 >= 0, --diffusion in [0, 1], --threads >= 1, --budget-s >= 0")
+        if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
+            fail("--diffusion must be in [0, 1]")
         return command_run(args)
     if args.command == "reference":
-        try:
-            phis = [float(v) for v in args.phi.split(",") if v.strip()]
-        except ValueError:
-            phis = []
-        if not phis or any(not 0 < v < 0.8 for v in phis):
-            fail("--phi: expected comma-separated solid fractions in (0, 0.8), got '%s'" % args.phi)
         return command_reference(args)
     if args.command == "measure":
         try:

@@ -21,21 +21,28 @@ import sys
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import cli_checks  # noqa: E402
+
+
+def fail(message):
+    cli_checks.fail("render_bench", message)
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
-    parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--end-s", type=float, default=0.03)
-    parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--out", default=os.path.join(ROOT, "runs", "render_bench"))
+    parser.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+    parser.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    parser.add_argument("--end-s", type=cli_checks.positive, default=0.03)
+    parser.add_argument("--repeat", type=cli_checks.positive_int, default=3)
+    parser.add_argument("--out", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "render_bench"))
     args = parser.parse_args()
-    if args.threads < 1 or args.repeat < 1 or args.end_s <= 0:
-        parser.error("--threads and --repeat must be >= 1 and --end-s > 0")
-    print("render_bench: %s, %s" % (time.strftime("%Y-%m-%d"), " ".join(sys.argv)), flush=True)
     bench = os.path.join(os.path.dirname(args.surge), "surge-render-bench")
-    subprocess.run([bench, "1920", "1080", "20"], check=True)
+    if not (os.path.isfile(bench) and os.access(bench, os.X_OK)):
+        fail("%s: not an executable (it is built next to surge)" % bench)
+    print("render_bench: %s, %s" % (time.strftime("%Y-%m-%d"), " ".join(sys.argv)), flush=True)
+    if subprocess.run([bench, "1920", "1080", "20"]).returncode != 0:
+        fail("%s failed" % bench)
 
     film = os.path.join(ROOT, "cases", "incline_film.ini")
     common = ["--threads", str(args.threads), "-s", "time.end_s=%g" % args.end_s, "-s", "output.snapshot_interval_s=0",
@@ -53,7 +60,7 @@ def main():
                                capture_output=True, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
             rate = re.findall(r"([0-9.]+) steps/s", p.stderr)
             if p.returncode != 0 or not rate:
-                sys.exit("render_bench: %s failed:\n%s" % (name, p.stderr))
+                fail("%s failed (exit status %d):\n%s" % (name, p.returncode, p.stderr))
             rates[name].append(float(rate[-1]))
             m = re.search(r"rendered (\d+) of (\d+) frames due.*?([0-9.]+) ms per frame drawing, ([0-9.]+) ms encoding",
                           p.stderr)

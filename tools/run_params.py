@@ -3,7 +3,7 @@ next to its outputs (it reloads as a case file), with '# derived:' header lines 
 
     params = RunParams(run_dir)          # ParamsError if missing or unreadable
     dp = params.real("numerics", "dp_m")  # ParamsError naming the file, section and key if absent or not a number
-    params.flag("walls", "upstream"); params.derived("c0_mps")
+    params.positive("numerics", "ch"); params.flag("walls", "upstream"); params.derived("c0_mps")
 
 Shared by the analysis tools so that each reads the file the same way and fails with the same clear message."""
 import configparser
@@ -56,6 +56,13 @@ class RunParams:
             raise ParamsError("%s: [%s] %s = %r is not a number" % (self.path, section, key, text))
         if not math.isfinite(value):
             raise ParamsError("%s: [%s] %s = %r is not finite" % (self.path, section, key, text))
+        return value
+
+    def positive(self, section, key):
+        """[section] key as a finite float > 0."""
+        value = self.real(section, key)
+        if value <= 0:
+            raise ParamsError("%s: [%s] %s = %g must be > 0" % (self.path, section, key, value))
         return value
 
     def flag(self, section, key, default=None):

@@ -13,7 +13,6 @@ check that failed), the health message, wall time, the final time reached, the l
 the mean x velocity of the fluid over the last second (the drift of its centre of mass).
 """
 import argparse
-import csv
 import os
 import re
 import subprocess
@@ -23,7 +22,9 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
+import cli_checks  # noqa: E402
 import study  # noqa: E402
+import vtp  # noqa: E402
 COLUMNS = ["case", "dp_m", "shifting", "ch", "cfl", "c0_factor", "end_s", "status", "message", "wall_s",
            "time_reached_s", "max_density_deviation", "mean_vx_last_s_mps", "frame"]
 
@@ -38,13 +39,11 @@ def cell_name(args, shifting, ch, cfl, c0f):
 
 def diagnostics_summary(folder):
     """Time reached, largest density deviation, mean fluid x velocity over the last second."""
-    with open(os.path.join(folder, "diagnostics.csv")) as f:
-        rows = [r for r in csv.reader(f)][1:]
-    if not rows:
-        return 0.0, float("nan"), float("nan")
-    t = [float(r[0]) for r in rows]
-    last = [float(r[7]) for r, ti in zip(rows, t) if ti >= t[-1] - 1.0]
-    return t[-1], max(float(r[5]) for r in rows), sum(last) / len(last)
+    rows = study.read_rows("stability_map", os.path.join(folder, "diagnostics.csv"), dict(
+        time_s=float, max_density_deviation=float, mean_vx_mps=float))
+    t = [float(r["time_s"]) for r in rows]
+    last = [float(r["mean_vx_mps"]) for r, ti in zip(rows, t) if ti >= t[-1] - 1.0]
+    return t[-1], max(float(r["max_density_deviation"]) for r in rows), sum(last) / len(last)
 
 
 def draw_frame(folder, png, title):
@@ -53,14 +52,21 @@ def draw_frame(folder, png, title):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
-    import vtp
     path = os.path.join(folder, "last_good.vtp")
-    if not os.path.isfile(path):
-        path = os.path.join(folder, vtp.read_pvd(os.path.join(folder, "run.pvd"))[-1][1])
-    s = vtp.read_vtp(path)
+    try:
+        if not os.path.isfile(path):
+            entries = vtp.read_pvd(os.path.join(folder, "run.pvd"))
+            if not entries:
+                fail("%s: lists no snapshots" % os.path.join(folder, "run.pvd"))
+            path = os.path.join(folder, entries[-1][1])
+        s = vtp.read_vtp(path, ("time_s", "velocity_mps", "kind"))
+    except vtp.VtpError as e:
+        fail(str(e))
     x, y = s["points"][:, 0], s["points"][:, 1]
     speed = np.hypot(s["velocity_mps"][:, 0], s["velocity_mps"][:, 1])
     fluid = s["kind"] == 0
+    if not fluid.any():
+        fail("%s: no fluid particles" % path)
     fig, ax = plt.subplots(figsize=(11, 2.8))
     ax.scatter(x[~fluid], y[~fluid], s=1.5, c="0.6")
     sc = ax.scatter(x[fluid], y[fluid], s=2.5, c=speed[fluid], cmap="viridis")
@@ -85,8 +91,10 @@ def run_cell(args, shifting, ch, cfl, c0f):
             "-s", "time.end_s=%g" % args.end_s, "-s", "output.snapshot_interval_s=0.5",
             "-s", "output.progress_interval_s=0", "--threads", str(args.threads), "-o", folder]
     start = time.time()
-    r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, env=study.solver_environment())
+    r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, errors="replace",
+                       env=study.solver_environment())
     wall = time.time() - start
+    study.stop_on_surge_error("stability_map: " + name, folder, r.returncode, r.stderr)
     message = ""
     if r.returncode == 0:
         status = "healthy"
@@ -108,18 +116,13 @@ def run_cell(args, shifting, ch, cfl, c0f):
 
 
 def command_run(args):
-    study.check_columns("stability_map", args.csv, COLUMNS)
-    done = set()
-    if os.path.isfile(args.csv):
-        with open(args.csv) as f:
-            done = {(r["case"], float(r["dp_m"]), r["shifting"], float(r["ch"]), float(r["cfl"]), float(r["c0_factor"]),
-                     float(r["end_s"])) for r in csv.DictReader(f)}
-    for shifting in args.shifting.split(","):
-        if shifting not in ("none", "velocity", "lind"):
-            fail("--shifting: unknown form '%s' (none, velocity, lind)" % shifting)
-        for ch in study.positive_numbers("stability_map", args.ch, "ch"):
-            for cfl in study.positive_numbers("stability_map", args.cfl, "cfl"):
-                for c0f in study.positive_numbers("stability_map", args.c0_factor, "c0-factor"):
+    done = {(r["case"], float(r["dp_m"]), r["shifting"], float(r["ch"]), float(r["cfl"]), float(r["c0_factor"]),
+             float(r["end_s"])) for r in study.existing_rows("stability_map", args.csv, COLUMNS, dict(
+                 case=str, dp_m=float, shifting=str, ch=float, cfl=float, c0_factor=float, end_s=float))}
+    for shifting in args.shifting:
+        for ch in args.ch:
+            for cfl in args.cfl:
+                for c0f in args.c0_factor:
                     if (args.case, args.dp, shifting, ch, cfl, c0f, args.end_s) in done:
                         continue
                     row = run_cell(args, shifting, ch, cfl, c0f)
@@ -133,7 +136,8 @@ def command_chart(args):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    rows = study.read_rows("stability_map", args.csv)
+    rows = study.read_rows("stability_map", args.csv, dict(
+        case=str, dp_m=str, end_s=str, shifting=str, status=str, ch=float, cfl=float, c0_factor=float))
     forms = ["none", "velocity", "lind"]
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), sharey=True)
     for ax, form in zip(axes, forms):
@@ -165,26 +169,26 @@ def main():
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run")
     run.add_argument("--case", default="id1", choices=["id1", "id2"])
-    run.add_argument("--dp", type=float, default=0.002)
-    run.add_argument("--shifting", default="none,velocity,lind")
+    run.add_argument("--dp", type=cli_checks.positive, default=0.002)
+    run.add_argument("--shifting", default="none,velocity,lind", type=cli_checks.names(["none", "velocity", "lind"]))
     run.add_argument("--ch", default="1.3,1.8")
     run.add_argument("--cfl", default="0.2,0.5")
     run.add_argument("--c0-factor", default="10,5")
-    run.add_argument("--end-s", type=float, default=3.0)
-    run.add_argument("--threads", type=int, default=2)
-    run.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "stability"))
+    run.add_argument("--end-s", type=cli_checks.positive, default=3.0)
+    run.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "stability"))
     run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
-    run.add_argument("--frames", default=os.path.join(ROOT, "docs", "validation", "stability"))
-    run.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
+    run.add_argument("--frames", type=cli_checks.folder, default=os.path.join(ROOT, "docs", "validation", "stability"))
+    run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     chart = sub.add_parser("chart")
     chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
-    chart.add_argument("--png", default=os.path.join(ROOT, "docs", "validation", "stability_map.png"))
+    chart.add_argument("--png", type=cli_checks.png_file,
+                       default=os.path.join(ROOT, "docs", "validation", "stability_map.png"))
     args = parser.parse_args()
     if args.command == "run":
-        if args.dp <= 0 or args.end_s <= 0 or args.threads < 1:
-            fail("--dp and --end-s must be > 0, --threads >= 1")
-        if not os.access(args.surge, os.X_OK):
-            fail("%s: not an executable (build first: sh tools/setup.sh)" % args.surge)
+        args.ch = study.positive_numbers("stability_map", args.ch, "ch")
+        args.cfl = study.positive_numbers("stability_map", args.cfl, "cfl")
+        args.c0_factor = study.positive_numbers("stability_map", args.c0_factor, "c0-factor")
         return command_run(args)
     return command_chart(args)
 

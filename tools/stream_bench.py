@@ -30,6 +30,7 @@ import zmq
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
+import cli_checks  # noqa: E402
 import surge_client  # noqa: E402
 
 
@@ -83,28 +84,29 @@ def run_config(args, name, case, overrides, publish, subscriber, extra):
     if sub:
         sub.start()
     time.sleep(1.0)  # the subscription reaches the publisher
-    surge_client.Control(ctl, 30).request({"cmd": "resume"})
+    if proc.poll() is None:  # else it stopped at startup: its stderr says why
+        surge_client.Control(ctl, 30).request({"cmd": "resume"})
     _, stderr = proc.communicate(timeout=1800)
     if sub:
         sub.done.set()
         sub.join(5)
     rate = re.findall(r"([0-9.]+) steps/s", stderr)
     if proc.returncode != 0 or not rate:
-        sys.exit("stream_bench: %s failed:\n%s" % (" ".join(argv), stderr))
+        cli_checks.fail("stream_bench", "%s failed (exit status %d):\n%s" % (" ".join(argv), proc.returncode, stderr))
     states_per_s, mbps = sub.rates() if sub and subscriber != "stalled" else (0.0, 0.0)
     return float(rate[-1]), states_per_s, mbps
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--surge", default=os.path.join(ROOT, "build", "surge"))
-    parser.add_argument("--threads", type=int, default=2)
-    parser.add_argument("--end-s", type=float, default=0.03, help="simulated seconds per run (default 0.03)")
-    parser.add_argument("--repeat", type=int, default=3, help="runs of each configuration (default 3)")
-    parser.add_argument("--out", default=os.path.join(ROOT, "runs", "stream_bench"))
+    parser.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+    parser.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    parser.add_argument("--end-s", type=cli_checks.positive, default=0.03,
+                        help="simulated seconds per run (default 0.03)")
+    parser.add_argument("--repeat", type=cli_checks.positive_int, default=3,
+                        help="runs of each configuration (default 3)")
+    parser.add_argument("--out", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "stream_bench"))
     args = parser.parse_args()
-    if args.threads < 1 or args.end_s <= 0 or args.repeat < 1:
-        parser.error("--threads and --repeat must be >= 1 and --end-s > 0")
     film = os.path.join(ROOT, "cases", "incline_film.ini")
     tank = os.path.join(ROOT, "cases", "still_tank.ini")
     every = ["--publish-every", "1", "--publish-hz", "0"]

@@ -1,24 +1,23 @@
 """Helpers shared by the study drivers (freydier_convergence.py, stability_map.py, poiseuille_loaded.py): option
 parsing, errors, resumable runs and the append-only CSV tables they write."""
+import collections
 import csv
 import gzip
 import json
+import math
 import os
 import shutil
 import signal
 import struct
 import subprocess
 import sys
+import threading
 import time
+import zlib
 
 import vtp
-from run_params import RunParams
-
-
-def fail(program, message):
-    """One-line error on stderr, exit status 2 (bad input)."""
-    print("%s: %s" % (program, message), file=sys.stderr)
-    sys.exit(2)
+from cli_checks import fail
+from run_params import ParamsError, RunParams
 
 
 def positive_numbers(program, text, option):
@@ -27,21 +26,63 @@ def positive_numbers(program, text, option):
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         fail(program, "--%s: expected comma-separated numbers, got '%s'" % (option, text))
-    if not values or any(v <= 0 for v in values):
+    if not values or any(not 0 < v < math.inf for v in values):
         fail(program, "--%s: expected positive numbers, got '%s'" % (option, text))
     return values
 
 
-def check_columns(program, csv_path, columns):
-    """An existing table must have this tool's columns, in order (checked before a study starts, so that a long run
-    does not end on a table it cannot extend)."""
-    if not os.path.isfile(csv_path):
-        return
-    with open(csv_path, newline="") as f:
-        header = next(csv.reader(f), [])
-    if header != list(columns):
-        fail(program, "%s: its columns (%s) are not this tool's (%s)" % (csv_path, ",".join(header),
-                                                                         ",".join(columns)))
+KIND_NAMES = {float: "a number", int: "an integer"}
+
+
+def _read_table(program, csv_path, types, header=None):
+    """The rows (dicts) of a CSV table, which must have the columns of types ({column: float, int or str}) and in
+    each row a value there that the type reads (float: a number, nan included); with header, exactly these columns
+    in this order. Fails naming the file, and the line and column, otherwise."""
+    try:
+        with open(csv_path, newline="") as f:
+            reader = csv.DictReader(f)
+            columns = reader.fieldnames
+            if not columns:
+                fail(program, "%s: empty, not a CSV table" % csv_path)
+            if header is not None and columns != list(header):
+                fail(program, "%s: its columns (%s) are not this tool's (%s)" % (csv_path, ",".join(columns),
+                                                                                 ",".join(header)))
+            missing = [c for c in types if c not in columns]
+            if missing:
+                fail(program, "%s: no column %s (its columns: %s)" % (csv_path, ", ".join(missing), ",".join(columns)))
+            rows = []
+            for row in reader:
+                for column, kind in types.items():
+                    if row[column] is None:
+                        fail(program, "%s, line %d: no %s value (a row shorter than the header)"
+                             % (csv_path, reader.line_num, column))
+                    try:
+                        kind(row[column])
+                    except ValueError:
+                        fail(program, "%s, line %d: %s = %r is not %s" % (csv_path, reader.line_num, column,
+                                                                          row[column], KIND_NAMES[kind]))
+                rows.append(row)
+    except OSError as e:
+        fail(program, "%s: cannot read it (%s)" % (csv_path, e.strerror or e))
+    except (UnicodeDecodeError, csv.Error) as e:
+        fail(program, "%s: not a CSV text table (%s)" % (csv_path, e))
+    return rows
+
+
+def read_rows(program, csv_path, types):
+    """The rows of a CSV table (see _read_table); fails with a message naming the file when it has none."""
+    rows = _read_table(program, csv_path, types)
+    if not rows:
+        fail(program, "%s: no rows" % csv_path)
+    return rows
+
+
+def existing_rows(program, csv_path, columns, types):
+    """The rows of a study's table ([] before it exists), read before the study starts so that a long run does not
+    end on a table it cannot extend: it must have this tool's columns, in order, and values of these types."""
+    if not os.path.lexists(csv_path):
+        return []
+    return _read_table(program, csv_path, types, header=columns)
 
 
 def append_row(csv_path, columns, row):
@@ -63,13 +104,27 @@ def solver_environment():
     return env
 
 
+def _is_number(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
 def read_progress(folder):
-    """progress.json of a run folder: wall seconds summed over its pieces and its status."""
+    """progress.json of a run folder: wall seconds summed over its pieces and its status ({"wall_s": 0.0, "status":
+    "new"} where there is none). ValueError naming the file when it is not such a JSON object."""
+    path = os.path.join(folder, "progress.json")
     try:
-        with open(os.path.join(folder, "progress.json")) as f:
-            return json.load(f)
-    except (OSError, ValueError):
+        with open(path) as f:
+            progress = json.load(f)
+    except FileNotFoundError:
         return {"wall_s": 0.0, "status": "new"}
+    except (OSError, ValueError) as e:
+        raise ValueError("%s: cannot read it (%s)" % (path, e))
+    if not (isinstance(progress, dict) and isinstance(progress.get("status"), str)
+            and all(_is_number(progress.get(k, 0.0)) for k in ("wall_s", "piece_started_unix"))):
+        raise ValueError("%s: not a run's progress (a JSON object with a status, and numbers for wall_s and "
+                         "piece_started_unix)" % path)
+    progress.setdefault("wall_s", 0.0)
+    return progress
 
 
 def write_progress(folder, progress):
@@ -77,13 +132,37 @@ def write_progress(folder, progress):
         json.dump(progress, f, indent=1)
 
 
+def stop_on_surge_error(program, folder, returncode, stderr):
+    """Stops the study with surge's own message (the last line of its stderr) when surge refused its input or could
+    not write its output (exit 2 or 3) or left no params.ini or diagnostics.csv in folder: the next run would fail
+    the same way."""
+    missing = [f for f in ("params.ini", "diagnostics.csv") if not os.path.isfile(os.path.join(folder, f))]
+    if returncode in (2, 3) or missing:
+        lines = [line for line in stderr.splitlines() if line.strip()]
+        fail(program, "surge exited with status %d%s: %s" % (
+            returncode, "" if returncode in (2, 3) else " and left no %s in %s" % (" or ".join(missing), folder),
+            lines[-1] if lines else "(no message)"))
+
+
+def _echo(stream, tail):
+    """Copies surge's stderr to ours as it comes, keeping its last lines in tail."""
+    for line in stream:
+        sys.stderr.write(line)
+        sys.stderr.flush()
+        tail.append(line)
+
+
 def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     """Runs surge for one study point in folder: from its checkpoint when an earlier piece was interrupted, else
     fresh_argv (which names the case and -o folder; the run starts over); common options go to both. At the deadline (wall clock,
     None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
-    progress) with the wall time of all pieces in progress["wall_s"]; the caller records the final status."""
+    progress) with the wall time of all pieces in progress["wall_s"]; the caller records the final status. Stops the
+    study (exit 2) when surge fails on its input or output (stop_on_surge_error)."""
     os.makedirs(folder, exist_ok=True)
-    progress = read_progress(folder)
+    try:
+        progress = read_progress(folder)
+    except ValueError as e:
+        fail(tool, str(e))
     checkpoint = os.path.join(folder, "checkpoint.bin")
     if os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running"):
         argv = [surge, "run", "--restart", checkpoint] + common
@@ -95,7 +174,11 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     progress["status"] = "running"
     progress["piece_started_unix"] = start  # lets park() count a running piece's time up to its last checkpoint
     write_progress(folder, progress)
-    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, env=solver_environment())
+    proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, errors="replace",
+                            env=solver_environment())
+    tail = collections.deque(maxlen=5)
+    echo = threading.Thread(target=_echo, args=(proc.stderr, tail), daemon=True)
+    echo.start()
     try:
         while proc.poll() is None:
             if deadline and time.time() > deadline:
@@ -106,11 +189,14 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     except KeyboardInterrupt:
         proc.send_signal(signal.SIGINT)
         proc.wait()
+    echo.join()
     progress["wall_s"] += time.time() - start
     del progress["piece_started_unix"]
     if proc.returncode == 4:
         progress["status"] = "interrupted"
     write_progress(folder, progress)
+    if proc.returncode != 4:
+        stop_on_surge_error(tool, folder, proc.returncode, "".join(tail))
     return proc.returncode, progress
 
 
@@ -119,23 +205,35 @@ PARKED_FILES = ("checkpoint.bin", "progress.json", "params.ini", "diagnostics.cs
 
 
 def checkpoint_time(path):
-    """(step, simulated time in s) recorded in a checkpoint's header (layout in sim/src/checkpoint.c)."""
+    """(step, simulated time in s) recorded in a checkpoint's header (layout in sim/src/checkpoint.c); ValueError
+    naming the file when it is not a surge checkpoint."""
     with open(path, "rb") as f:
         head = f.read(24)
         if len(head) < 24 or head[:8] != b"SURGECK1":
             raise ValueError("%s: not a surge checkpoint" % path)
-        f.seek(24 + struct.unpack("<Q", head[16:24])[0])
+        offset = 24 + struct.unpack("<Q", head[16:24])[0]
+        if offset + 16 > os.fstat(f.fileno()).st_size:
+            raise ValueError("%s: a surge checkpoint cut short" % path)
+        f.seek(offset)
         step, time_s = struct.unpack("<qd", f.read(16))
     return step, time_s
 
 
 def _first_snapshot(folder):
-    """The first snapshot listed in the folder's run.pvd (the initial state, which the metrics read), or None."""
+    """The first snapshot listed in the folder's run.pvd (the initial state, which the metrics read), or None;
+    ValueError when run.pvd names a file outside the folder."""
     try:
         entries = vtp.read_pvd(os.path.join(folder, "run.pvd"))
-    except (OSError, ValueError, vtp.ET.ParseError):
+    except vtp.VtpError:
         return None
+    if entries and os.path.basename(entries[0][1]) != entries[0][1]:
+        raise ValueError("%s lists %r, not a file of the run folder" % (os.path.join(folder, "run.pvd"), entries[0][1]))
     return entries[0][1] if entries else None
+
+
+def _names(folder):
+    """The entries of a folder (none if it does not exist), less the staging folders of park and unpark."""
+    return sorted(n for n in os.listdir(folder) if not n.startswith(".")) if os.path.isdir(folder) else []
 
 
 def park(tool, runs_dir, parked_dir):
@@ -143,12 +241,16 @@ def park(tool, runs_dir, parked_dir):
     snapshot, the large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
     run is carried in it and resumed by unpark in a fresh checkout. A run still going is parked at its last periodic
     checkpoint (written atomically), with the wall time of its current piece counted up to that checkpoint. Returns
-    the names parked."""
+    the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
+    leaving its earlier parked copy, if any, as it was."""
     parked = []
-    for name in sorted(os.listdir(runs_dir)) if os.path.isdir(runs_dir) else []:
+    for name in _names(runs_dir):
         folder = os.path.join(runs_dir, name)
         checkpoint = os.path.join(folder, "checkpoint.bin")
-        progress = read_progress(folder)
+        try:
+            progress = read_progress(folder)
+        except ValueError as e:
+            fail(tool, str(e))
         if progress["status"] not in ("interrupted", "running") or not os.path.isfile(checkpoint):
             continue
         if progress["status"] == "running":
@@ -158,32 +260,44 @@ def park(tool, runs_dir, parked_dir):
             progress["wall_s"] += os.path.getmtime(checkpoint) - started
             progress["status"] = "interrupted"
         target = os.path.join(parked_dir, name)
-        shutil.rmtree(target, ignore_errors=True)
-        os.makedirs(target)
-        first = _first_snapshot(folder)
-        for f in PARKED_FILES + ((first,) if first else ()):
-            source = os.path.join(folder, f)
-            if not os.path.isfile(source):
-                continue
-            if f == "progress.json":
-                with open(os.path.join(target, f), "w") as out:
-                    json.dump(progress, out, indent=1)
-            elif f.endswith((".bin", ".vtp")):
-                with open(source, "rb") as src, gzip.GzipFile(os.path.join(target, f + ".gz"), "wb", mtime=0) as dst:
-                    shutil.copyfileobj(src, dst)
-            else:
-                shutil.copyfile(source, os.path.join(target, f))
+        staging = os.path.join(parked_dir, "." + name + ".parking")
+        shutil.rmtree(staging, ignore_errors=True)
+        try:
+            step, time_s = checkpoint_time(checkpoint)
+            os.makedirs(staging)
+            first = _first_snapshot(folder)
+            for f in PARKED_FILES + ((first,) if first else ()):
+                source = os.path.join(folder, f)
+                if not os.path.isfile(source):
+                    continue
+                if f == "progress.json":
+                    with open(os.path.join(staging, f), "w") as out:
+                        json.dump(progress, out, indent=1)
+                elif f.endswith((".bin", ".vtp")):
+                    with open(source, "rb") as src, \
+                            gzip.GzipFile(os.path.join(staging, f + ".gz"), "wb", mtime=0) as dst:
+                        shutil.copyfileobj(src, dst)
+                else:
+                    shutil.copyfile(source, os.path.join(staging, f))
+            shutil.rmtree(target, ignore_errors=True)
+            os.rename(staging, target)
+        except (OSError, ValueError) as e:
+            fail(tool, "cannot park %s: %s" % (folder, e))
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
         parked.append(name)
-        print("%s: parked %s at its checkpoint of t = %.3f s (step %d) in %s"
-              % (tool, name, checkpoint_time(checkpoint)[1], checkpoint_time(checkpoint)[0], target), flush=True)
+        print("%s: parked %s at its checkpoint of t = %.3f s (step %d) in %s" % (tool, name, time_s, step, target),
+              flush=True)
     return parked
 
 
 def unpark(tool, parked_dir, runs_dir):
     """Restores each parked run into runs_dir/NAME unless that folder already holds a run (which is newer or
-    finished); the next `run` then continues it from its checkpoint. Returns the names restored."""
+    finished); the next `run` then continues it from its checkpoint. Returns the names restored. A parked run that
+    cannot be restored (a corrupt file, no valid checkpoint, a folder inside it) stops it with exit status 2, and
+    nothing of that run is written into runs_dir."""
     restored = []
-    for name in sorted(os.listdir(parked_dir)) if os.path.isdir(parked_dir) else []:
+    for name in _names(parked_dir):
         source = os.path.join(parked_dir, name)
         folder = os.path.join(runs_dir, name)
         if not os.path.isfile(os.path.join(source, "progress.json")):
@@ -191,37 +305,44 @@ def unpark(tool, parked_dir, runs_dir):
         if os.path.isfile(os.path.join(folder, "progress.json")):
             print("%s: %s already holds a run; left as it is" % (tool, folder), flush=True)
             continue
-        os.makedirs(folder, exist_ok=True)
-        for f in os.listdir(source):
-            if f.endswith(".gz"):
-                with gzip.open(os.path.join(source, f), "rb") as src, open(os.path.join(folder, f[:-3]), "wb") as dst:
-                    shutil.copyfileobj(src, dst)
-            else:
-                shutil.copyfile(os.path.join(source, f), os.path.join(folder, f))
-        restored.append(name)
+        staging = os.path.join(runs_dir, "." + name + ".unparking")
+        shutil.rmtree(staging, ignore_errors=True)
         try:
-            step, time_s = checkpoint_time(os.path.join(folder, "checkpoint.bin"))
-        except (OSError, ValueError, struct.error) as e:
+            read_progress(source)
+            os.makedirs(staging)
+            for f in os.listdir(source):
+                if not os.path.isfile(os.path.join(source, f)):
+                    raise ValueError("%s is not a file (a parked run holds files only)" % f)
+                if f.endswith(".gz"):
+                    try:
+                        with gzip.open(os.path.join(source, f), "rb") as src, \
+                                open(os.path.join(staging, f[:-3]), "wb") as dst:
+                            shutil.copyfileobj(src, dst)
+                    except (EOFError, zlib.error, gzip.BadGzipFile) as e:
+                        raise ValueError("%s: not a whole gzip file (%s)" % (f, e))
+                else:
+                    shutil.copyfile(os.path.join(source, f), os.path.join(staging, f))
+            try:
+                step, time_s = checkpoint_time(os.path.join(staging, "checkpoint.bin"))
+            except (OSError, ValueError):
+                raise ValueError("no checkpoint.bin.gz holding a surge checkpoint")
+            os.makedirs(folder, exist_ok=True)
+            for f in os.listdir(staging):
+                os.replace(os.path.join(staging, f), os.path.join(folder, f))
+        except (OSError, ValueError) as e:
             fail(tool, "parked run %s: %s" % (source, e))
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+        restored.append(name)
         print("%s: restored %s at its checkpoint of t = %.3f s (step %d)" % (tool, folder, time_s, step), flush=True)
     return restored
 
 
-def particle_steps(folder):
+def particle_steps(tool, folder):
     """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
-    fluid = int(RunParams(folder).derived("fluid particles"))
-    with open(os.path.join(folder, "diagnostics.csv")) as f:
-        rows = list(csv.reader(f))
-    last = rows[-1]
-    return fluid * int(last[1]), float(last[0])
-
-
-def read_rows(tool, csv_path):
-    """The rows of a study's CSV table; fails with a message naming the file when it is missing or empty."""
-    if not os.path.isfile(csv_path):
-        fail(tool, "%s: no such file" % csv_path)
-    with open(csv_path) as f:
-        rows = list(csv.DictReader(f))
-    if not rows:
-        fail(tool, "%s: no rows" % csv_path)
-    return rows
+    try:
+        fluid = int(RunParams(folder).derived("fluid particles"))
+    except ParamsError as e:
+        fail(tool, str(e))
+    last = read_rows(tool, os.path.join(folder, "diagnostics.csv"), {"time_s": float, "step": int})[-1]
+    return fluid * int(last["step"]), float(last["time_s"])

@@ -16,7 +16,17 @@ DTYPES = {"f64": "<f8", "f32": "<f4", "i32": "<i4", "u8": "u1"}
 
 
 class ProtocolError(Exception):
-    pass
+    """A message or reply that does not follow docs/protocol.md; the message says what is wrong."""
+
+
+def _is_number(value):
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _is_field(field):
+    """A well-formed entry of a header's fields: {"name", "dtype" (one of DTYPES), "components" >= 1, ...}."""
+    return (isinstance(field, dict) and isinstance(field.get("name"), str) and isinstance(field.get("dtype"), str)
+            and field["dtype"] in DTYPES and isinstance(field.get("components"), int) and field["components"] >= 1)
 
 
 def subscribe(endpoint, topics, context=None, latest_only=True):
@@ -35,20 +45,32 @@ def decode(parts):
     """Decodes one multipart message: (topic, header dict, {field name: numpy array})."""
     if len(parts) < 2:
         raise ProtocolError("a message has a topic frame and a JSON header frame, got %d frames" % len(parts))
-    topic = parts[0].decode()
-    header = json.loads(parts[1])
+    try:
+        topic = parts[0].decode("ascii")
+        header = json.loads(parts[1])
+    except ValueError as e:
+        raise ProtocolError("a topic frame in ASCII and a JSON header frame expected (%s)" % e)
+    if not isinstance(header, dict):
+        raise ProtocolError("%s: the header is not a JSON object" % topic)
     if header.get("schema") != SCHEMA:
         raise ProtocolError("schema %r, this client reads schema %d" % (header.get("schema"), SCHEMA))
+    if not (_is_number(header.get("step")) and _is_number(header.get("time_s"))):
+        raise ProtocolError("%s: the header has no step and time_s" % topic)
     fields = header.get("fields", [])
+    if not (isinstance(fields, list) and all(_is_field(f) for f in fields)
+            and (not fields or isinstance(header.get("count"), int) and header["count"] >= 0)):
+        raise ProtocolError("%s: malformed fields or count in the header" % topic)
     if len(parts) != 2 + len(fields):
         raise ProtocolError("%s: header lists %d fields but %d array frames follow"
                             % (topic, len(fields), len(parts) - 2))
     arrays = {}
     for field, data in zip(fields, parts[2:]):
-        a = np.frombuffer(data, dtype=DTYPES[field["dtype"]])
-        if a.size != header["count"] * field["components"]:
-            raise ProtocolError("%s: field %s has %d values, expected %d"
-                                % (topic, field["name"], a.size, header["count"] * field["components"]))
+        dtype = np.dtype(DTYPES[field["dtype"]])
+        if len(data) != header["count"] * field["components"] * dtype.itemsize:
+            raise ProtocolError("%s: field %s has %d bytes, expected %d values of %s"
+                                % (topic, field["name"], len(data), header["count"] * field["components"],
+                                   field["dtype"]))
+        a = np.frombuffer(data, dtype=dtype)
         arrays[field["name"]] = a.reshape(-1, field["components"]) if field["components"] > 1 else a
     return topic, header, arrays
 
@@ -88,13 +110,21 @@ class Control:
         self.sock.connect(self.endpoint)
 
     def request(self, message):
-        """Sends a dict (as JSON) or raw bytes; returns the reply as a dict."""
+        """Sends a dict (as JSON) or raw bytes; returns the reply as a dict (ProtocolError if it is not a JSON
+        object)."""
         self.sock.send(message if isinstance(message, bytes) else json.dumps(message).encode())
         if not self.sock.poll(self.timeout_ms):
             self.sock.close()
             self._open()
             raise TimeoutError("no reply from %s within %.1f s" % (self.endpoint, self.timeout_ms / 1000))
-        return json.loads(self.sock.recv())
+        raw = self.sock.recv()
+        try:
+            reply = json.loads(raw)
+        except ValueError:
+            reply = None
+        if not isinstance(reply, dict):
+            raise ProtocolError("the reply is not a JSON object: %r" % raw[:100])
+        return reply
 
     def close(self):
         self.sock.close()

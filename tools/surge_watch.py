@@ -15,7 +15,10 @@ import os
 import sys
 import time
 
+import zmq
+
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import cli_checks  # noqa: E402
 import surge_client  # noqa: E402
 
 FIELDS = {  # colour field: (label, unit, state fields needed)
@@ -82,40 +85,51 @@ class View:
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("-e", "--endpoint", default="tcp://127.0.0.1:5555",
+    parser.add_argument("-e", "--endpoint", type=cli_checks.endpoint, default="tcp://127.0.0.1:5555",
                         help="surge's publisher (default tcp://127.0.0.1:5555; a bare port means loopback)")
     parser.add_argument("--field", choices=sorted(FIELDS), default="speed", help="colour field (default speed)")
-    parser.add_argument("--png", help="no window: rewrite this PNG with the newest state (at most twice a second)")
-    parser.add_argument("--record", metavar="DIR", help="save every state received (all fields) and the stats")
+    parser.add_argument("--png", type=cli_checks.png_file,
+                        help="no window: rewrite this PNG with the newest state (at most twice a second)")
+    parser.add_argument("--record", metavar="DIR", type=cli_checks.folder,
+                        help="save every state received (all fields) and the stats")
     parser.add_argument("--count", type=int, default=0, help="stop after this many states (0: no limit)")
-    parser.add_argument("--duration", type=float, default=0, help="stop after this many seconds (0: no limit)")
+    parser.add_argument("--duration", type=cli_checks.positive, help="stop after this many seconds (default: no limit)")
     args = parser.parse_args()
-    if args.count < 0 or args.duration < 0:
-        parser.error("--count and --duration must be >= 0")
+    if args.count < 0:
+        parser.error("--count must be >= 0")
     interactive = not args.png and not args.record
     if interactive and not os.environ.get("DISPLAY") and not os.environ.get("WAYLAND_DISPLAY"):
         parser.error("no display: use --png FILE or --record DIR")
-    endpoint = "tcp://127.0.0.1:%s" % args.endpoint if args.endpoint.isdigit() else args.endpoint
 
     import numpy as np
+    fields = ["x_m", "y_m", "kind"] + FIELDS[args.field][2]
+    state_topic = "state" if args.record else "state/" + ",".join(fields)  # every field when recording
+    try:
+        sub = surge_client.subscribe(args.endpoint, [state_topic, "stats"], latest_only=not args.record)
+    except zmq.ZMQError as e:
+        parser.error("--endpoint %s: %s" % (args.endpoint, e))
+    stats_log = None
     if args.record:
         os.makedirs(args.record, exist_ok=True)
-        state_topic = "state"  # every field
         stats_log = open(os.path.join(args.record, "stats.jsonl"), "w")
-    else:
-        state_topic = "state/" + ",".join(["x_m", "y_m", "kind"] + FIELDS[args.field][2])
-        stats_log = None
-    sub = surge_client.subscribe(endpoint, [state_topic, "stats"], latest_only=not args.record)
+    print("surge_watch: waiting for surge's states from %s" % args.endpoint, file=sys.stderr, flush=True)
     view = View(args.field, interactive) if not args.record else None
     start, states, stats, last_png = time.time(), 0, None, 0.0
     while True:
         if args.duration and time.time() - start > args.duration:
             break
-        if args.record:
-            message = surge_client.receive(sub, 200)
-            latest = {message[0]: message[1:]} if message else {}
-        else:
-            latest = surge_client.receive_latest(sub, 200)
+        try:
+            if args.record:
+                message = surge_client.receive(sub, 200)
+                latest = {message[0]: message[1:]} if message else {}
+            else:
+                latest = surge_client.receive_latest(sub, 200)
+            if not args.record and state_topic in latest and not set(fields) <= set(latest[state_topic][1]):
+                raise surge_client.ProtocolError("a state without the fields %s" % ", ".join(fields))
+        except surge_client.ProtocolError as e:
+            cli_checks.fail("surge_watch", "bad message from %s: %s" % (args.endpoint, e))
+        except KeyboardInterrupt:
+            break
         if "stats" in latest:
             stats = latest["stats"][0]
             if stats_log:

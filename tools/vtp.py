@@ -1,6 +1,6 @@
 """Minimal readers for the VTK files surge writes (Python 3 standard library + numpy only).
 
-read_vtp(path) -> dict
+read_vtp(path, required=(), finite=False) -> dict
     Reads a VTK XML PolyData file whose arrays are in a raw <AppendedData> block (as written by
     surge_vtp_write), honouring byte_order and header_type (UInt32 or UInt64). Returns:
       "points"              float array (n, 3)
@@ -8,9 +8,13 @@ read_vtp(path) -> dict
       one entry per PointData array, by name: shape (n,) or (n, k)
       one entry per FieldData array, by name: a Python scalar when it holds a single value
       (e.g. "time_s" -> float, "step" -> int), else an array.
+    required names arrays the caller needs (with finite=True: holding finite values only).
 
 read_pvd(path) -> list of (time: float, file: str)
     The <DataSet> entries of a .pvd time collection, in file order.
+
+Both raise VtpError (a ValueError), its message naming the file and what is wrong, for a file that cannot be read
+or is malformed, or lacks a required array.
 
 write_vtp(path, points, point_data, time_s, step)
     Writes a snapshot in the format of surge_vtp_write (sim/src/vtk_output.c), byte for byte for
@@ -28,6 +32,7 @@ write_pvd(path, entries)
 Synthetic runs for tests are built with these two (see tests/test_freydier_metrics.py).
 """
 
+import math
 import os
 import xml.etree.ElementTree as ET
 
@@ -42,6 +47,21 @@ _TYPES = {
 }
 
 
+class VtpError(ValueError):
+    """A .vtp or .pvd file that cannot be read, or lacks what the caller needs; the message names the file."""
+
+
+def _int(element, name, default=None):
+    """An integer attribute of an XML element (default where it is absent; ValueError if that is None)."""
+    text = element.get(name, default)
+    if text is None:
+        raise ValueError("<%s> has no %s attribute" % (element.tag, name))
+    try:
+        return int(text)
+    except ValueError:
+        raise ValueError("<%s> %s=%r is not an integer" % (element.tag, name, text))
+
+
 def _split(data):
     """Returns (xml_root, offset of the first byte after the '_' marker) for a raw-appended file."""
     tag = data.find(b"<AppendedData")
@@ -54,6 +74,8 @@ def _split(data):
     # Parse the header only: everything up to the opening AppendedData tag, closed by hand.
     root = ET.fromstring(data[:tag_close + 1] + b"</AppendedData></VTKFile>")
     appended = root.find("AppendedData")
+    if appended is None:
+        raise ValueError("<AppendedData> is not an element of <VTKFile>")
     if appended.get("encoding") != "raw":
         raise ValueError("unsupported AppendedData encoding %r" % appended.get("encoding"))
     return root, marker + 1
@@ -61,78 +83,124 @@ def _split(data):
 
 def _decode(data, base, array, endian, header_dtype):
     """Decodes one appended DataArray element into a numpy array of shape (n,) or (n, k)."""
+    name = array.get("Name")
     if array.get("format") != "appended":
-        raise ValueError("array %r: only format=\"appended\" is supported" % array.get("Name"))
+        raise ValueError("array %r: only format=\"appended\" is supported" % name)
     type_name = array.get("type")
     if type_name not in _TYPES:
-        raise ValueError("array %r: unsupported type %r" % (array.get("Name"), type_name))
+        raise ValueError("array %r: unsupported type %r" % (name, type_name))
     dtype = np.dtype(endian + _TYPES[type_name])
-    start = base + int(array.get("offset"))
-    header = np.frombuffer(data, dtype=header_dtype, count=1, offset=start)
-    nbytes = int(header[0])
+    start = base + _int(array, "offset")
+    if not base <= start <= len(data) - header_dtype.itemsize:
+        raise ValueError("array %r: offset %d is outside the appended data" % (name, start - base))
+    nbytes = int(np.frombuffer(data, dtype=header_dtype, count=1, offset=start)[0])
     start += header_dtype.itemsize
     if nbytes % dtype.itemsize != 0 or start + nbytes > len(data):
-        raise ValueError("array %r: bad block size %d" % (array.get("Name"), nbytes))
+        raise ValueError("array %r: bad block size %d" % (name, nbytes))
     values = np.frombuffer(data, dtype=dtype, count=nbytes // dtype.itemsize, offset=start)
     values = values.astype(dtype.newbyteorder("="))  # native byte order, owned copy
-    ncomp = int(array.get("NumberOfComponents", "1"))
-    if ncomp > 1:
-        if values.size % ncomp != 0:
-            raise ValueError("array %r: size %d not a multiple of %d" % (array.get("Name"), values.size, ncomp))
-        values = values.reshape(-1, ncomp)
-    return values
+    ncomp = _int(array, "NumberOfComponents", "1")
+    if ncomp < 1 or values.size % ncomp != 0:
+        raise ValueError("array %r: size %d not a multiple of %d components" % (name, values.size, ncomp))
+    return values.reshape(-1, ncomp) if ncomp > 1 else values
 
 
-def read_vtp(path):
-    with open(path, "rb") as f:
-        data = f.read()
+def _parse_vtp(data):
+    """The arrays of a VTK XML PolyData file's bytes (see read_vtp); ValueError or ET.ParseError if malformed."""
     root, base = _split(data)
     if root.get("type") != "PolyData":
-        raise ValueError("%s: not a PolyData file (type=%r)" % (path, root.get("type")))
+        raise ValueError("not a PolyData file (type=%r)" % root.get("type"))
     if root.get("compressor"):
-        raise ValueError("%s: compressed files are not supported" % path)
-    endian = {"LittleEndian": "<", "BigEndian": ">"}[root.get("byte_order", "LittleEndian")]
+        raise ValueError("compressed files are not supported")
+    byte_order = root.get("byte_order", "LittleEndian")
+    if byte_order not in ("LittleEndian", "BigEndian"):
+        raise ValueError("unknown byte_order %r" % byte_order)
+    endian = "<" if byte_order == "LittleEndian" else ">"
     header_type = root.get("header_type", "UInt32")
     if header_type not in ("UInt32", "UInt64"):
-        raise ValueError("%s: unsupported header_type %r" % (path, header_type))
+        raise ValueError("unsupported header_type %r" % header_type)
     header_dtype = np.dtype(endian + _TYPES[header_type])
 
     poly = root.find("PolyData")
-    pieces = poly.findall("Piece")
+    pieces = poly.findall("Piece") if poly is not None else []
     if len(pieces) != 1:
-        raise ValueError("%s: expected one Piece, found %d" % (path, len(pieces)))
+        raise ValueError("expected one <PolyData><Piece>, found %d" % len(pieces))
     piece = pieces[0]
-    n = int(piece.get("NumberOfPoints"))
+    n = _int(piece, "NumberOfPoints")
 
     def decode(array):
+        if array.get("Name") is None:
+            raise ValueError("a <DataArray> has no Name")
         return _decode(data, base, array, endian, header_dtype)
 
     result = {}
-    points = decode(piece.find("Points/DataArray")).reshape(-1, 3)
-    if points.shape[0] != n:
-        raise ValueError("%s: %d points, header says %d" % (path, points.shape[0], n))
-    result["points"] = points
+    points = piece.find("Points/DataArray")
+    if points is None:
+        raise ValueError("no <Points> array")
+    points = decode(points)
+    if points.size != 3 * n:
+        raise ValueError("%d point coordinates, expected 3 x %d" % (points.size, n))
+    result["points"] = points.reshape(n, 3)
     for array in piece.findall("Verts/DataArray"):
         result["verts_" + array.get("Name")] = decode(array)
     for array in piece.findall("PointData/DataArray"):
         values = decode(array)
         if values.shape[0] != n:
-            raise ValueError("%s: array %r has %d tuples, expected %d" % (path, array.get("Name"), values.shape[0], n))
+            raise ValueError("array %r has %d tuples, expected %d" % (array.get("Name"), values.shape[0], n))
         result[array.get("Name")] = values
     for array in poly.findall("FieldData/DataArray"):
         name = array.get("Name")
         if name in result:
-            raise ValueError("%s: field data %r clashes with another array" % (path, name))
+            raise ValueError("field data %r clashes with another array" % name)
         values = decode(array)
         result[name] = values.reshape(-1)[0].item() if values.size == 1 else values
     return result
 
 
+def read_vtp(path, required=(), finite=False):
+    """The arrays of a snapshot (see the module's docstring). required: names of arrays the caller needs, and with
+    finite=True these must hold finite values only. Raises VtpError, naming the file and what is wrong, for a file
+    that cannot be read or is malformed, or lacks a required array."""
+    try:
+        with open(path, "rb") as f:
+            data = f.read()
+        result = _parse_vtp(data)
+    except OSError as e:
+        raise VtpError("%s: cannot read it (%s)" % (path, e.strerror or e))
+    except ET.ParseError as e:
+        raise VtpError("%s: malformed XML (%s)" % (path, e))
+    except ValueError as e:
+        raise VtpError("%s: %s" % (path, e))
+    for name in required:
+        if name not in result:
+            raise VtpError("%s: no %s array" % (path, name))
+        if finite and not np.all(np.isfinite(result[name])):
+            raise VtpError("%s: non-finite values (NaN or infinity) in %s" % (path, name))
+    return result
+
+
 def read_pvd(path):
-    root = ET.parse(path).getroot()
+    """The (time, file) entries of a .pvd collection; VtpError naming the file if it is unreadable or malformed."""
+    try:
+        root = ET.parse(path).getroot()
+    except OSError as e:
+        raise VtpError("%s: cannot read it (%s)" % (path, e.strerror or e))
+    except ET.ParseError as e:
+        raise VtpError("%s: malformed XML (%s)" % (path, e))
     if root.get("type") != "Collection":
-        raise ValueError("%s: not a Collection file (type=%r)" % (path, root.get("type")))
-    return [(float(d.get("timestep")), d.get("file")) for d in root.findall("Collection/DataSet")]
+        raise VtpError("%s: not a Collection file (type=%r)" % (path, root.get("type")))
+    entries = []
+    for k, dataset in enumerate(root.findall("Collection/DataSet")):
+        timestep, file = dataset.get("timestep"), dataset.get("file")
+        try:
+            time_s = float(timestep)
+        except (TypeError, ValueError):
+            time_s = math.nan
+        if not math.isfinite(time_s) or not file:
+            raise VtpError("%s: <DataSet> %d has timestep=%r file=%r, expected a time and a file name"
+                           % (path, k + 1, timestep, file))
+        entries.append((time_s, file))
+    return entries
 
 
 # ------------------------------------------------------------------------------------------------

@@ -20,13 +20,13 @@ import sys
 
 import numpy as np
 
+import cli_checks
 from run_params import ParamsError, RunParams
-from vtp import read_vtp
+from vtp import VtpError, read_vtp
 
 
 def fail(message):
-    print("wall_contact: " + message, file=sys.stderr)
-    sys.exit(2)
+    cli_checks.fail("wall_contact", message)
 
 
 def run_parameters(run_dir):
@@ -34,8 +34,8 @@ def run_parameters(run_dir):
         params = RunParams(run_dir)
         if not params.flag("walls", "upstream"):
             fail("%s: the scene has no upstream wall (walls.upstream = false)" % params.path)
-        return (params.real("numerics", "dp_m"), params.real("walls", "upstream_x_m"),
-                params.real("fluid", "density_kgpm3"))
+        return (params.positive("numerics", "dp_m"), params.real("walls", "upstream_x_m"),
+                params.positive("fluid", "density_kgpm3"))
     except ParamsError as e:
         fail(str(e))
 
@@ -43,9 +43,9 @@ def run_parameters(run_dir):
 def measure(snapshot, dp, x_wall, rho0):
     """One snapshot's distances (in dp) and the corner's density deviation; see the module's docstring."""
     try:
-        d = read_vtp(snapshot)
-    except (OSError, ValueError, KeyError) as e:
-        fail("%s: cannot read the snapshot (%s)" % (snapshot, e))
+        d = read_vtp(snapshot, ("time_s", "kind", "density_kgpm3"), finite=True)
+    except VtpError as e:
+        fail(str(e))
     fluid = d["kind"] == 0
     if not np.any(fluid & (d["points"][:, 1] < 2 * dp)):
         fail("%s: no fluid particle within 2 dp of the belt" % snapshot)
@@ -67,11 +67,9 @@ def measure(snapshot, dp, x_wall, rho0):
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("run_dir")
-    ap.add_argument("--after-s", type=float, default=0.5)
-    ap.add_argument("--every", type=int, default=1)
+    ap.add_argument("--after-s", type=cli_checks.number, default=0.5)
+    ap.add_argument("--every", type=cli_checks.positive_int, default=1)
     args = ap.parse_args()
-    if args.every < 1:
-        fail("--every must be a positive integer (got %d)" % args.every)
     dp, x_wall, rho0 = run_parameters(args.run_dir)
     snapshots = sorted(glob.glob(os.path.join(args.run_dir, "snap_*.vtp")))[::args.every]
     if not snapshots:
@@ -82,13 +80,14 @@ def main():
         print("t %7.3f s  behind_wall %6.2f  corner_y %5.2f  corner_drho %.4f  bed_y [mm:dp] %s" %
               (r["time_s"], r["behind_wall"], r["corner_y"], r["corner_drho"], bands))
     late = [r for r in rows if r["time_s"] > args.after_s]
-    if late:
-        behind = np.array([r["behind_wall"] for r in late])
-        print("after %g s (%d snapshots): behind_wall mean %.2f max %.2f; corner_y min %.2f; corner_drho mean "
-              "%.4f max %.4f" % (args.after_s, len(late), behind.mean(), behind.max(),
-                                 np.nanmin([r["corner_y"] for r in late]),
-                                 np.nanmean([r["corner_drho"] for r in late]),
-                                 np.nanmax([r["corner_drho"] for r in late])))
+    if not late:
+        fail("no snapshot after --after-s %g s (the last is at %g s)" % (args.after_s, rows[-1]["time_s"]))
+    behind = np.array([r["behind_wall"] for r in late])
+    print("after %g s (%d snapshots): behind_wall mean %.2f max %.2f; corner_y min %.2f; corner_drho mean "
+          "%.4f max %.4f" % (args.after_s, len(late), behind.mean(), behind.max(),
+                             np.nanmin([r["corner_y"] for r in late]),
+                             np.nanmean([r["corner_drho"] for r in late]),
+                             np.nanmax([r["corner_drho"] for r in late])))
     return 0
 
 

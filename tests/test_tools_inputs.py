@@ -1,0 +1,375 @@
+#!/usr/bin/python3
+"""Bad inputs to the Python tools (tools/*.py, tools/surgectl): each gets a clear error naming what is wrong, exit
+status 2 (3 for surgectl's unexpected replies), and never a traceback, a hang or a number printed from garbage.
+
+usage: test_tools_inputs.py SURGE SOURCE_DIR WORK_DIR
+
+One tiny real run (about 2 s) gives the files; the damaged inputs are built from it in WORK_DIR: snapshots without
+points or a kind array or with NaN, malformed run.pvd, bad params.ini, CSV tables with garbage, checkpoints and
+parked runs that cannot be restored, stub surge binaries that exit at once, and ZeroMQ peers that send garbage.
+Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
+"""
+import csv
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import zmq
+
+SURGE, SOURCE, WORK = sys.argv[1:4]
+TOOLS = os.path.join(SOURCE, "tools")
+sys.path.insert(0, TOOLS)
+import freydier_convergence  # noqa: E402
+import poiseuille_loaded  # noqa: E402
+import vtp  # noqa: E402
+
+failures = []
+
+
+def check(name, ok, detail=""):
+    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + detail.replace("\n", "\n    ")))
+    if not ok:
+        failures.append(name)
+    return ok
+
+
+def tool(name, *args, timeout=60):
+    """Runs tools/NAME with args; returns the completed process (text output)."""
+    return subprocess.run([sys.executable, os.path.join(TOOLS, name)] + [str(a) for a in args], capture_output=True,
+                          text=True, timeout=timeout, stdin=subprocess.DEVNULL)
+
+
+def expect(name, r, *words, rc=2):
+    """The tool exited with rc, its stderr holds every word and no traceback."""
+    check(name, r.returncode == rc and all(w in r.stderr for w in words) and "Traceback" not in r.stderr,
+          "rc %d (expected %d), stderr: %s" % (r.returncode, rc, r.stderr.strip()[-600:]))
+
+
+def path(*parts):
+    return os.path.join(WORK, *parts)
+
+
+def folder(name, files=()):
+    """A fresh folder in WORK with copies of the real run's files."""
+    d = path(name)
+    shutil.rmtree(d, ignore_errors=True)
+    os.makedirs(d)
+    for f in files:
+        shutil.copy(path("run", f), d)
+    return d
+
+
+def write(file, data):
+    with open(file, "wb" if isinstance(data, bytes) else "w") as f:
+        f.write(data)
+    return file
+
+
+def params_with(**values):
+    """The real run's params.ini with a `key = value` line in place of its own for each of values."""
+    text = PARAMS
+    for key, value in values.items():
+        text = re.sub(r"(?m)^%s = .*$" % key, "%s = %s" % (key, value), text, count=1)
+    return text
+
+
+def script(name, text):
+    """An executable shell script in WORK (a stub surge)."""
+    write(path(name), "#!/bin/sh\n" + text)
+    os.chmod(path(name), 0o755)
+    return path(name)
+
+
+def serve(endpoint, kind, frames, stop):
+    """A ZeroMQ peer until stop is set: PUB sends frames over and over, REP answers each request with frames."""
+    sock = zmq.Context.instance().socket(kind)
+    sock.bind(endpoint)
+    while not stop.is_set():
+        if kind == zmq.PUB:
+            sock.send_multipart(frames)
+            time.sleep(0.05)
+        elif sock.poll(50):
+            sock.recv()
+            sock.send_multipart(frames)
+    sock.close(linger=0)
+
+
+def with_peer(endpoint, kind, frames, run):
+    stop = threading.Event()
+    peer = threading.Thread(target=serve, args=(endpoint, kind, frames, stop), daemon=True)
+    peer.start()
+    try:
+        return run()
+    finally:
+        stop.set()
+        peer.join(5)
+
+
+shutil.rmtree(WORK, ignore_errors=True)
+os.makedirs(WORK)
+
+# ---- the real run: 0.2 s of a coarse ID1 front, snapshots every 0.05 s ----
+r = subprocess.run([SURGE, "run", os.path.join(SOURCE, "cases", "freydier_id1.ini"), "-o", path("run"),
+                    "-s", "numerics.dp_m=0.004", "-s", "time.end_s=0.2", "-s", "walls.upstream_x_m=0.03",
+                    "-s", "fluid.x0_m=0.03", "-s", "fluid.x1_m=0.3", "-s", "fluid.shape=lubrication",
+                    "-s", "output.snapshot_interval_s=0.05", "-s", "output.progress_interval_s=0", "--threads", "1"],
+                   capture_output=True, text=True, timeout=120, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+if r.returncode != 0:
+    print("the tiny real run failed:\n" + r.stderr)
+    sys.exit(1)
+PARAMS = open(path("run", "params.ini")).read()
+SNAPS = [f for _, f in vtp.read_pvd(path("run", "run.pvd"))]
+FIRST = open(path("run", SNAPS[0]), "rb").read()
+RUN_FILES = ["params.ini", "run.pvd", "diagnostics.csv"] + SNAPS
+
+
+def damaged(name, change):
+    """A copy of the run whose first snapshot's bytes are change(bytes)."""
+    d = folder(name, RUN_FILES)
+    write(os.path.join(d, SNAPS[0]), change(FIRST))
+    return d
+
+
+def rewritten(name, **arrays):
+    """A copy of the run whose snapshots are rewritten with some arrays replaced by arrays[name](snapshot)."""
+    d = folder(name, RUN_FILES)
+    for f in SNAPS:
+        s = vtp.read_vtp(path("run", f))
+        point_data = {k: s[k] for k in ("velocity_mps", "density_kgpm3", "pressure_pa", "kind", "id")}
+        point_data.update({k: change(s) for k, change in arrays.items()})
+        vtp.write_vtp(os.path.join(d, f), s["points"], point_data, s["time_s"], s["step"])
+    return d
+
+
+no_points = damaged("no_points", lambda b: b.replace(b"Points>", b"Pointz>", 2))
+bad_xml = damaged("bad_xml", lambda b: b.replace(b"<PointData", b"<Point<Data", 1))
+no_kind = damaged("no_kind", lambda b: b.replace(b'Name="kind"', b'Name="kinx"', 1))
+no_offset = damaged("no_offset", lambda b: b.replace(b'offset="0"', b'offzet="0"', 1))
+non_finite = rewritten("non_finite", density_kgpm3=lambda s: np.where(s["kind"] == 0, np.nan, s["density_kgpm3"]))
+no_fluid = rewritten("no_fluid", kind=lambda s: np.ones_like(s["kind"]))
+
+# ---- 1. tools/vtp.py: one error class, naming the file, for every malformed input ----
+for name, d in (("no <Points>", no_points), ("malformed XML", bad_xml), ("no offset attribute", no_offset)):
+    try:
+        vtp.read_vtp(os.path.join(d, SNAPS[0]))
+        check("read_vtp: " + name, False, "no error")
+    except vtp.VtpError as e:
+        check("read_vtp: " + name, SNAPS[0] in str(e) and d in str(e), str(e))
+try:
+    vtp.read_vtp(os.path.join(no_kind, SNAPS[0]), ("kind",))
+    check("read_vtp: a required array missing", False, "no error")
+except vtp.VtpError as e:
+    check("read_vtp: a required array missing", "no kind array" in str(e), str(e))
+bad_pvd = write(path("bad.pvd"), open(path("run", "run.pvd")).read().replace('file="', 'fil="', 1))
+try:
+    vtp.read_pvd(bad_pvd)
+    check("read_pvd: a DataSet without a file", False, "no error")
+except vtp.VtpError as e:
+    check("read_pvd: a DataSet without a file", bad_pvd in str(e) and "file" in str(e), str(e))
+
+# ---- 2. the study drivers and surge's own errors ----
+refusing = script("surge_refusing", 'echo "surge: bad option (stub)" >&2\nexit 2\n')
+header_only = folder("header_only", ["params.ini"])
+write(os.path.join(header_only, "diagnostics.csv"), open(path("run", "diagnostics.csv")).readline())
+copying = script("surge_header_only",  # a surge that "runs" by copying header_only into its -o folder
+                 'out=""; prev=""\nfor a in "$@"; do [ "$prev" = "-o" ] && out="$a"; prev="$a"; done\n'
+                 'mkdir -p "$out" && cp %s/* "$out"/\n' % header_only)
+FC = "freydier_convergence.py"
+common = ["--cases", "id1", "--dp", "0.004", "--ch", "1.8", "--end-s", "0.2", "--runs-dir", path("fc_runs"),
+          "--csv", path("fc.csv"), "--parked-dir", path("fc_parked")]
+expect("freydier_convergence run: surge exits 2 at once: its message", tool(FC, "run", "--surge", refusing, *common),
+       "surge: bad option (stub)", "status 2")
+expect("freydier_convergence run: diagnostics.csv with a header only",
+       tool(FC, "run", "--surge", copying, *common), "diagnostics.csv", "no rows")
+expect("stability_map run: surge exits 2 at once: its message",
+       tool("stability_map.py", "run", "--surge", refusing, "--shifting", "none", "--ch", "1.8", "--cfl", "0.2",
+            "--c0-factor", "10", "--runs-dir", path("sm_runs"), "--csv", path("sm.csv"), "--frames", path("sm_frames")),
+       "surge: bad option (stub)")
+expect("poiseuille_loaded run: surge exits 2 at once: its message",
+       tool("poiseuille_loaded.py", "run", "--surge", refusing, "--phi", "0", "--runs-dir", path("pl_runs"),
+            "--csv", path("pl.csv")), "surge: bad option (stub)")
+expect("freydier_convergence run --cases id3 refused before anything runs",
+       tool(FC, "run", "--surge", refusing, "--cases", "id1,id3"), "--cases", "id3")
+expect("freydier_convergence run --end-s nan", tool(FC, "run", "--surge", refusing, "--end-s", "nan"), "--end-s")
+expect("freydier_convergence run --dp inf", tool(FC, "run", "--surge", refusing, "--dp", "inf"), "--dp")
+expect("freydier_convergence run --surge a folder", tool(FC, "run", "--surge", WORK), "--surge", "not an executable")
+expect("stability_map run --end-s -1", tool("stability_map.py", "run", "--surge", refusing, "--end-s", "-1"),
+       "--end-s")
+expect("poiseuille_loaded run --c0 -1", tool("poiseuille_loaded.py", "run", "--surge", refusing, "--c0", "-1"), "--c0")
+
+# ---- 3. park and unpark: bad checkpoints, progress files, archives; nothing half-written ----
+bad_ck_runs = folder("park_runs")
+os.makedirs(os.path.join(bad_ck_runs, "a"))
+write(os.path.join(bad_ck_runs, "a", "progress.json"), '{"status": "interrupted", "wall_s": 1.5}')
+write(os.path.join(bad_ck_runs, "a", "checkpoint.bin"), b"garbage, not a checkpoint")
+parked = folder("parked")
+os.makedirs(os.path.join(parked, "a"))
+write(os.path.join(parked, "a", "earlier"), "an earlier parked copy")
+expect("park: a bad checkpoint", tool(FC, "park", "--runs-dir", bad_ck_runs, "--parked-dir", parked),
+       "checkpoint.bin", "not a surge checkpoint")
+check("park: the earlier parked copy is left as it was, nothing half-written",
+      sorted(os.listdir(parked)) == ["a"] and os.listdir(os.path.join(parked, "a")) == ["earlier"],
+      str(os.listdir(parked)))
+write(os.path.join(bad_ck_runs, "a", "progress.json"), '["interrupted"]')
+expect("park: progress.json not an object with a status",
+       tool(FC, "park", "--runs-dir", bad_ck_runs, "--parked-dir", parked), "progress.json")
+for name, files in (("corrupt .gz", {"checkpoint.bin.gz": b"\x1f\x8b\x08\x00garbage"}),
+                    ("a folder inside the parked run", {"sub/": None})):
+    source = folder("unpark_source")
+    os.makedirs(os.path.join(source, "b"))
+    write(os.path.join(source, "b", "progress.json"), '{"status": "interrupted", "wall_s": 1.5}')
+    for f, data in files.items():
+        if data is None:
+            os.makedirs(os.path.join(source, "b", f))
+        else:
+            write(os.path.join(source, "b", f), data)
+    restored = folder("unpark_runs")
+    expect("unpark: " + name, tool(FC, "unpark", "--parked-dir", source, "--runs-dir", restored), "parked run")
+    check("unpark: %s leaves nothing in the runs folder" % name, os.listdir(restored) == [], str(os.listdir(restored)))
+expect("park --parked-dir a file", tool(FC, "park", "--runs-dir", bad_ck_runs, "--parked-dir",
+                                        path("run", "params.ini")), "--parked-dir", "not a folder")
+
+# ---- 4. CSV tables and --png ----
+garbage_csv = path("fc_garbage.csv")
+with open(garbage_csv, "w", newline="") as f:
+    writer = csv.DictWriter(f, fieldnames=freydier_convergence.COLUMNS)
+    writer.writeheader()
+    writer.writerow(dict({c: "1" for c in freydier_convergence.COLUMNS}, case="id1", status="ok", dp_m="abc"))
+expect("freydier_convergence chart: a value that is not a number: file, line and column",
+       tool(FC, "chart", "--csv", garbage_csv, "--png", path("fc.png")), garbage_csv, "line 2", "dp_m")
+expect("freydier_convergence run: the same table refused before anything runs",
+       tool(FC, "run", "--surge", refusing, "--csv", garbage_csv), "dp_m")
+binary_csv = write(path("binary.csv"), bytes(range(256)) * 8)
+expect("stability_map chart: a binary file", tool("stability_map.py", "chart", "--csv", binary_csv), binary_csv,
+       "not a CSV")
+expect("stability_map chart: --png into a missing folder",
+       tool("stability_map.py", "chart", "--png", path("nowhere", "map.png")), "--png", "nowhere")
+expect("freydier_convergence chart: --png with another extension", tool(FC, "chart", "--png", path("chart.svg")),
+       "--png", ".png")
+no_clear = path("pl_no_clear.csv")
+with open(no_clear, "w", newline="") as f:
+    writer = csv.DictWriter(f, fieldnames=poiseuille_loaded.COLUMNS)
+    writer.writeheader()
+    for phi in (0.1, 0.2, 0.3):
+        writer.writerow(dict(dict.fromkeys(poiseuille_loaded.COLUMNS, "1"), phi=phi, phi_actual=phi, status="ok",
+                             mu_eq_over_mu0=1 + 2 * phi))
+r = tool("poiseuille_loaded.py", "report", "--csv", no_clear)
+expect("poiseuille_loaded report without a phi = 0 run", r, "phi = 0")
+check("poiseuille_loaded report without a phi = 0 run prints no nan", "nan" not in r.stdout, r.stdout)
+
+# ---- 5. operator_check ----
+OC = "operator_check.py"
+box = ["--x", "0.05", "0.2", "--y", "0.002", "0.01"]
+r = tool(OC, path("run"), *box, "--every", "2", "--last", "2")
+check("operator_check on the real run", r.returncode == 0 and "nu_eff / nu" in r.stdout, r.stderr.strip())
+expect("operator_check --every 0", tool(OC, path("run"), *box, "--every", "0"), "--every")
+expect("operator_check --last 0", tool(OC, path("run"), *box, "--last", "0"), "--last")
+expect("operator_check: a reversed box", tool(OC, path("run"), "--x", "0.2", "0.05", "--y", "0.002", "0.01"), "X0 < X1")
+expect("operator_check: a box with no fluid", tool(OC, path("run"), "--x", "5", "6", "--y", "0.002", "0.01"),
+       "no fluid particle in the box")
+r = tool(OC, non_finite, *box)
+expect("operator_check: NaN in a snapshot", r, "non-finite", "density_kgpm3")
+check("operator_check: NaN in a snapshot prints no nan", "nan" not in r.stdout, r.stdout)
+bad_params = folder("bad_params", RUN_FILES)
+write(os.path.join(bad_params, "params.ini"), params_with(dp_m="abc"))
+expect("operator_check: a bad params.ini", tool(OC, bad_params, *box), "params.ini", "dp_m")
+
+# ---- 6. drift_map ----
+expect("drift_map without arguments", tool("drift_map.py"), "usage")
+check("drift_map --help", tool("drift_map.py", "--help").returncode == 0)
+expect("drift_map: no kind array", tool("drift_map.py", no_kind, SNAPS[0]), "no kind array")
+expect("drift_map: malformed XML", tool("drift_map.py", bad_xml, SNAPS[0]), SNAPS[0], "malformed XML")
+expect("drift_map: no fluid", tool("drift_map.py", no_fluid, SNAPS[0]), "no fluid")
+no_key = folder("no_key", RUN_FILES)
+write(os.path.join(no_key, "params.ini"), PARAMS.replace("upstream_x_m =", "upstream_y_m =", 1))
+expect("drift_map: a missing params.ini key", tool("drift_map.py", no_key, SNAPS[0]), "upstream_x_m")
+
+# ---- 7. wall_contact ----
+r = tool("wall_contact.py", path("run"), "--after-s", "0.1")
+check("wall_contact on the real run", r.returncode == 0 and "after 0.1 s" in r.stdout, r.stderr.strip())
+expect("wall_contact: no <Points>", tool("wall_contact.py", no_points), SNAPS[0], "no <Points>")
+expect("wall_contact: NaN density", tool("wall_contact.py", non_finite), "non-finite", "density_kgpm3")
+expect("wall_contact --after-s nan", tool("wall_contact.py", path("run"), "--after-s", "nan"), "--after-s")
+expect("wall_contact: no snapshot after --after-s", tool("wall_contact.py", path("run"), "--after-s", "100"),
+       "no snapshot after")
+
+# ---- 8. poiseuille_loaded measure (a run driven along x, its snapshots listed in the window) ----
+def driven(name, force, height):
+    """A copy of the run with a body force along x, a channel of the given height and its snapshots listed at
+    0.8-0.95 s (the window of the measurement)."""
+    d = folder(name, RUN_FILES)
+    write(os.path.join(d, "params.ini"), params_with(force_x_mps2=force, height_m=height))
+    vtp.write_pvd(os.path.join(d, "run.pvd"), [(0.8 + 0.05 * k, f) for k, f in enumerate(SNAPS[:4])])
+    return d
+
+
+expect("poiseuille_loaded measure: force_x_mps2 = 0",
+       tool("poiseuille_loaded.py", "measure", driven("force0", 0, 0.02)), "force_x_mps2")
+expect("poiseuille_loaded measure: no fluid in the centre band",
+       tool("poiseuille_loaded.py", "measure", driven("empty_band", 1, 0.2)), "centre line")
+d = driven("measure_no_kind", 1, 0.02)
+shutil.copy(os.path.join(no_kind, SNAPS[0]), d)
+expect("poiseuille_loaded measure: no kind array", tool("poiseuille_loaded.py", "measure", d), SNAPS[0], "kind")
+d = driven("measure_bad_pvd", 1, 0.02)
+write(os.path.join(d, "run.pvd"), "<VTKFile")
+expect("poiseuille_loaded measure: malformed run.pvd", tool("poiseuille_loaded.py", "measure", d), "run.pvd")
+
+# ---- 9. surge_watch ----
+SW = "surge_watch.py"
+expect("surge_watch -e foo", tool(SW, "-e", "foo", "--record", path("rec")), "endpoint", "foo")
+expect("surge_watch --record onto a file", tool(SW, "--record", path("run", "params.ini")), "--record",
+       "not a folder")
+expect("surge_watch --png into a missing folder", tool(SW, "--png", path("nowhere", "live.png")), "--png")
+expect("surge_watch --duration 0", tool(SW, "--record", path("rec"), "--duration", "0"), "--duration")
+r = tool(SW, "-e", "ipc://" + path("nobody.sock"), "--record", path("rec"), "--duration", "0.3")
+check("surge_watch says what it waits for", r.returncode == 0 and "waiting" in r.stderr and "nobody.sock" in r.stderr,
+      r.stderr.strip())
+pub = "ipc://" + path("pub.sock")
+r = with_peer(pub, zmq.PUB, [b"stats", b"not json"],
+              lambda: tool(SW, "-e", pub, "--record", path("rec"), "--duration", "20"))
+expect("surge_watch: a publisher sending garbage", r, "bad message", "JSON")
+
+# ---- 10. stream_bench and render_bench ----
+expect("stream_bench --surge missing", tool("stream_bench.py", "--surge", path("no_surge")), "--surge")
+expect("stream_bench --out a file", tool("stream_bench.py", "--out", path("run", "params.ini")), "--out")
+expect("stream_bench --end-s 0", tool("stream_bench.py", "--end-s", "0"), "--end-s")
+start = time.time()
+r = tool("stream_bench.py", "--surge", refusing, "--out", path("sb"), "--repeat", "1")
+expect("stream_bench: surge exits at startup: its message", r, "surge: bad option (stub)")
+check("stream_bench: surge exiting at startup does not stall", time.time() - start < 15,
+      "%.1f s" % (time.time() - start))
+expect("render_bench --surge a folder", tool("render_bench.py", "--surge", WORK), "--surge")
+
+# ---- 11. surgectl ----
+ctl = "ipc://" + path("ctl.sock")
+expect("surgectl: a reply that is not a JSON object",
+       with_peer(ctl, zmq.REP, [b"[1, 2]"], lambda: tool("surgectl", "-e", ctl, "-t", "5", "status")),
+       "unexpected reply", rc=3)
+expect("surgectl list: a reply without params",
+       with_peer(ctl, zmq.REP, [json.dumps({"ok": True}).encode()],
+                 lambda: tool("surgectl", "-e", ctl, "-t", "5", "list")),
+       "unexpected reply", "params", rc=3)
+expect("surgectl -t nan", tool("surgectl", "-t", "nan", "status"), "--timeout")
+
+# ---- 12. freydier_metrics ----
+no_wall = folder("no_wall", RUN_FILES)
+write(os.path.join(no_wall, "params.ini"), params_with(upstream="false"))
+expect("freydier_metrics: no upstream wall", tool("freydier_metrics.py", no_wall), "walls.upstream")
+expect("freydier_metrics --png a folder", tool("freydier_metrics.py", path("run"), "--png", WORK), "--png")
+
+# ---- 13. make_colormaps ----
+expect("make_colormaps with an argument", tool("make_colormaps.py", "extra"), "unrecognized arguments")
+p = subprocess.Popen([sys.executable, os.path.join(TOOLS, "make_colormaps.py")], stdout=subprocess.PIPE,
+                     stderr=subprocess.PIPE)
+p.stdout.close()  # before it writes: a reader that stopped early (| head)
+err = p.stderr.read().decode()
+p.wait(60)
+check("make_colormaps into a closed pipe: no traceback", "Traceback" not in err, err)
+
+sys.exit(1 if failures else 0)
