@@ -224,11 +224,11 @@ def group_offline():
     # a restarted run adds its frames after the first run's instead of overwriting them
     cont_run, cont_frames = os.path.join(d, "cont"), os.path.join(d, "cont_frames")
     code6, stderr6 = run(["run", TANK, "-o", cont_run, "--frames", cont_frames] + COMMON[2:] + ["-s", "time.end_s=0.1"])
-    first = sorted(os.listdir(cont_frames)) if code6 == 0 else []
+    first = sorted(f for f in os.listdir(cont_frames) if f.endswith(".png")) if code6 == 0 else []
     first_bytes = [open(os.path.join(cont_frames, f), "rb").read() for f in first]
     code7, stderr7 = run(["run", "--restart", os.path.join(cont_run, "checkpoint.bin"), "--frames", cont_frames,
                           "-s", "time.end_s=0.2", "-s", "output.progress_interval_s=0"])
-    after = sorted(os.listdir(cont_frames)) if code7 == 0 else []
+    after = sorted(f for f in os.listdir(cont_frames) if f.endswith(".png")) if code7 == 0 else []
     kept = after[:len(first)] == first and all(open(os.path.join(cont_frames, f), "rb").read() == b
                                                for f, b in zip(first, first_bytes))
     check("offline: a restarted run numbers its frames on after the first run's, which stay as they were",
