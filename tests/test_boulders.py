@@ -28,16 +28,12 @@ import numpy as np
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
 import vtp  # noqa: E402
 
-failures = []
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
 
-
-def check(name, ok, detail=""):
-    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + str(detail).replace("\n", "\n    ")))
-    if not ok:
-        failures.append(name)
 
 
 def surge(name, args, timeout_s=300):
@@ -241,5 +237,4 @@ def group_inputs():
 
 os.makedirs(WORK, exist_ok=True)
 {"settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
-print("%d check(s) failed" % len(failures) if failures else "all checks passed")
-sys.exit(1 if failures else 0)
+sys.exit(finish())

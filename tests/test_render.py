@@ -27,10 +27,11 @@ import sys
 import time
 
 import numpy as np
-import zmq
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
 import surge_client  # noqa: E402
 
 TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
@@ -38,13 +39,7 @@ COMMON = ["-s", "time.end_s=0.2", "-s", "render.width_px=640", "-s", "render.hei
           "-s", "render.frame_interval_s=0.02", "-s", "render.movie_fps=10", "-s", "output.snapshot_interval_s=0.05",
           "--threads", "1"]
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
-failures = []
 
-
-def check(name, ok, detail=""):
-    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + str(detail).replace("\n", "\n    ")))
-    if not ok:
-        failures.append(name)
 
 
 def run(args, timeout=180):
@@ -310,5 +305,4 @@ def group_inputs():
 os.makedirs(WORK, exist_ok=True)
 {"live": group_live, "ctrl_c": group_ctrl_c, "restart": group_restart, "offline": group_offline,
  "inputs": group_inputs}[GROUP]()
-print("%d check(s) failed" % len(failures) if failures else "all checks passed")
-sys.exit(1 if failures else 0)
+sys.exit(finish())

@@ -31,18 +31,13 @@ import zmq
 
 SURGE, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
 import surge_client  # noqa: E402
 import vtp  # noqa: E402
 
 TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
-failures = []
 
-
-def check(name, ok, detail=""):
-    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + detail.replace("\n", "\n    ")))
-    if not ok:
-        failures.append(name)
-    return ok
 
 
 class Surge:
@@ -503,5 +498,4 @@ def group_stalled():
 groups = {"state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
-print("%d check(s) failed" % len(failures) if failures else "all checks passed")
-sys.exit(1 if failures else 0)
+sys.exit(finish())

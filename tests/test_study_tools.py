@@ -12,16 +12,12 @@ import sys
 
 source, work = sys.argv[1], sys.argv[2]
 sys.path.insert(0, os.path.join(source, "tools"))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
 import study  # noqa: E402
 
 os.makedirs(work, exist_ok=True)
-failures = []
 
-
-def check(name, ok, detail=""):
-    print("%s: %s %s" % (name, "ok" if ok else "FAILED", detail))
-    if not ok:
-        failures.append(name)
 
 
 table = os.path.join(work, "table.csv")
@@ -136,7 +132,6 @@ runs_dir, parked_dir, restored_dir = (os.path.join(work, d) for d in ("park_runs
 for d in (runs_dir, parked_dir, restored_dir):
     shutil.rmtree(d, ignore_errors=True)
 import struct  # noqa: E402
-import time  # noqa: E402
 header_params = b"[numerics]\ndp_m = 0.001\n"
 checkpoint = (b"SURGECK1" + struct.pack("<IIQ", 2, 4, len(header_params)) + header_params
               + struct.pack("<qd", 120, 0.5) + bytes(range(256)) * 40)
@@ -190,4 +185,4 @@ progress = study.read_progress(os.path.join(parked_running, "interrupted_run"))
 check("a running run is parked as interrupted with its piece's time up to the checkpoint",
       progress["status"] == "interrupted" and abs(progress["wall_s"] - 42.5) < 1e-6
       and "piece_started_unix" not in progress, str(progress))
-sys.exit(1 if failures else 0)
+sys.exit(finish())

@@ -6,7 +6,7 @@ usage: test_tools_inputs.py SURGE SOURCE_DIR WORK_DIR
 
 One tiny real run (about 2 s) gives the files; the damaged inputs are built from it in WORK_DIR: snapshots without
 points or a kind array or with NaN, malformed run.pvd, bad params.ini, CSV tables with garbage, checkpoints and
-parked runs that cannot be restored, stub surge binaries that exit at once, and ZeroMQ peers that send garbage.
+parked runs that cannot be restored, stand-in surge scripts (exit at once, or write nothing), and ZeroMQ peers that send garbage.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -25,18 +25,13 @@ import zmq
 SURGE, SOURCE, WORK = sys.argv[1:4]
 TOOLS = os.path.join(SOURCE, "tools")
 sys.path.insert(0, TOOLS)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from checks import check, finish  # noqa: E402
 import freydier_convergence  # noqa: E402
 import poiseuille_loaded  # noqa: E402
 import vtp  # noqa: E402
 
-failures = []
 
-
-def check(name, ok, detail=""):
-    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + detail.replace("\n", "\n    ")))
-    if not ok:
-        failures.append(name)
-    return ok
 
 
 def tool(name, *args, timeout=60):
@@ -80,7 +75,7 @@ def params_with(**values):
 
 
 def script(name, text):
-    """An executable shell script in WORK (a stub surge)."""
+    """An executable shell script in WORK (a stand-in for surge)."""
     write(path(name), "#!/bin/sh\n" + text)
     os.chmod(path(name), 0o755)
     return path(name)
@@ -174,7 +169,7 @@ except vtp.VtpError as e:
     check("read_pvd: a DataSet without a file", bad_pvd in str(e) and "file" in str(e), str(e))
 
 # ---- 2. the study drivers and surge's own errors ----
-refusing = script("surge_refusing", 'echo "surge: bad option (stub)" >&2\nexit 2\n')
+refusing = script("surge_refusing", 'echo "surge: bad option (stand-in)" >&2\nexit 2\n')
 header_only = folder("header_only", ["params.ini"])
 write(os.path.join(header_only, "diagnostics.csv"), open(path("run", "diagnostics.csv")).readline())
 copying = script("surge_header_only",  # a surge that "runs" by copying header_only into its -o folder
@@ -184,16 +179,23 @@ FC = "freydier_convergence.py"
 common = ["--cases", "id1", "--dp", "0.004", "--ch", "1.8", "--end-s", "0.2", "--runs-dir", path("fc_runs"),
           "--csv", path("fc.csv"), "--parked-dir", path("fc_parked")]
 expect("freydier_convergence run: surge exits 2 at once: its message", tool(FC, "run", "--surge", refusing, *common),
-       "surge: bad option (stub)", "status 2")
+       "surge: bad option (stand-in)", "status 2")
 expect("freydier_convergence run: diagnostics.csv with a header only",
        tool(FC, "run", "--surge", copying, *common), "diagnostics.csv", "no rows")
 expect("stability_map run: surge exits 2 at once: its message",
        tool("stability_map.py", "run", "--surge", refusing, "--shifting", "none", "--ch", "1.8", "--cfl", "0.2",
             "--c0-factor", "10", "--runs-dir", path("sm_runs"), "--csv", path("sm.csv"), "--frames", path("sm_frames")),
-       "surge: bad option (stub)")
+       "surge: bad option (stand-in)")
 expect("poiseuille_loaded run: surge exits 2 at once: its message",
        tool("poiseuille_loaded.py", "run", "--surge", refusing, "--phi", "0", "--runs-dir", path("pl_runs"),
-            "--csv", path("pl.csv")), "surge: bad option (stub)")
+            "--csv", path("pl.csv")), "surge: bad option (stand-in)")
+silent = script("surge_silent", "exit 0\n")  # a surge that "succeeds" and writes nothing
+expect("poiseuille_loaded reference: surge wrote no run",
+       tool("poiseuille_loaded.py", "reference", "--surge", silent, "--phi", "0.1", "--runs-dir", path("pl_runs"),
+            "--csv", path("pl_ref.csv")), "phi = 0.1", "wrote no run")
+expect("poiseuille_loaded reference: --csv in a missing folder",
+       tool("poiseuille_loaded.py", "reference", "--surge", SURGE, "--phi", "0.1", "--runs-dir", path("pl_runs"),
+            "--csv", path("missing", "pl_ref.csv")), "--csv", "missing")
 expect("freydier_convergence run --cases id3 refused before anything runs",
        tool(FC, "run", "--surge", refusing, "--cases", "id1,id3"), "--cases", "id3")
 expect("freydier_convergence run --end-s nan", tool(FC, "run", "--surge", refusing, "--end-s", "nan"), "--end-s")
@@ -294,6 +296,12 @@ expect("drift_map: a missing params.ini key", tool("drift_map.py", no_key, SNAPS
 r = tool("wall_contact.py", path("run"), "--after-s", "0.1")
 check("wall_contact on the real run", r.returncode == 0 and "after 0.1 s" in r.stdout, r.stderr.strip())
 expect("wall_contact: no <Points>", tool("wall_contact.py", no_points), SNAPS[0], "no <Points>")
+no_corner = rewritten("no_corner", kind=lambda s: np.where(  # the corner's fluid (3 dp = 12 mm) turned to wall
+    (s["kind"] == 0) & (s["points"][:, 0] < 0.042) & (s["points"][:, 1] < 0.012), 1, s["kind"]))
+r = tool("wall_contact.py", no_corner, "--after-s", "0.1")
+check("wall_contact: no fluid in the corner is said, not printed as nan",
+      r.returncode == 0 and "no fluid within 3 dp" in r.stdout and "nan" not in r.stdout.splitlines()[-1]
+      and "Warning" not in r.stderr, r.stdout[-300:] + r.stderr)
 expect("wall_contact: NaN density", tool("wall_contact.py", non_finite), "non-finite", "density_kgpm3")
 expect("wall_contact --after-s nan", tool("wall_contact.py", path("run"), "--after-s", "nan"), "--after-s")
 expect("wall_contact: no snapshot after --after-s", tool("wall_contact.py", path("run"), "--after-s", "100"),
@@ -341,7 +349,7 @@ expect("stream_bench --out a file", tool("stream_bench.py", "--out", path("run",
 expect("stream_bench --end-s 0", tool("stream_bench.py", "--end-s", "0"), "--end-s")
 start = time.time()
 r = tool("stream_bench.py", "--surge", refusing, "--out", path("sb"), "--repeat", "1")
-expect("stream_bench: surge exits at startup: its message", r, "surge: bad option (stub)")
+expect("stream_bench: surge exits at startup: its message", r, "surge: bad option (stand-in)")
 check("stream_bench: surge exiting at startup does not stall", time.time() - start < 15,
       "%.1f s" % (time.time() - start))
 expect("render_bench --surge a folder", tool("render_bench.py", "--surge", WORK), "--surge")
@@ -365,11 +373,15 @@ expect("freydier_metrics --png a folder", tool("freydier_metrics.py", path("run"
 
 # ---- 13. make_colormaps ----
 expect("make_colormaps with an argument", tool("make_colormaps.py", "extra"), "unrecognized arguments")
-p = subprocess.Popen([sys.executable, os.path.join(TOOLS, "make_colormaps.py")], stdout=subprocess.PIPE,
-                     stderr=subprocess.PIPE)
-p.stdout.close()  # before it writes: a reader that stopped early (| head)
-err = p.stderr.read().decode()
-p.wait(60)
-check("make_colormaps into a closed pipe: no traceback", "Traceback" not in err, err)
+# ---- 14. every tool that prints a table, into a reader that stopped early (| head): no traceback ----
+for name, *args in (("make_colormaps.py",), ("wall_contact.py", path("run"), "--after-s", "0.1"),
+                    ("operator_check.py", path("run"), "--x", "0.06", "0.12", "--y", "0.004", "0.011")):
+    p = subprocess.Popen([sys.executable, os.path.join(TOOLS, name)] + list(args), stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    p.stdout.close()  # before it writes
+    err = p.stderr.read().decode()
+    p.wait(60)
+    check("%s into a closed pipe: no traceback" % name, "Traceback" not in err and p.returncode == 1,
+          "rc %d, stderr: %s" % (p.returncode, err[-600:]))
 
-sys.exit(1 if failures else 0)
+sys.exit(finish())

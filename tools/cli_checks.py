@@ -102,3 +102,19 @@ def endpoint(text):
         raise argparse.ArgumentTypeError("expected a port or TRANSPORT://ADDRESS (e.g. tcp://127.0.0.1:5555), got "
                                          "'%s'" % text)
     return text
+
+
+def run(main):
+    """Runs a tool's main() and gives the exit status it returns (None: 0). A reader that stops early (| head)
+    ends the tool quietly with status 1: no BrokenPipe traceback, and none again when Python flushes at exit.
+
+    if __name__ == "__main__":
+        sys.exit(cli_checks.run(main))
+    """
+    try:
+        status = main()
+        sys.stdout.flush()
+        return status
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1

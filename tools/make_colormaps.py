@@ -4,10 +4,11 @@
   tools/make_colormaps.py > render/src/colormaps.c
 """
 import argparse
-import os
 import sys
 
 import matplotlib
+
+import cli_checks
 
 MAPS = ["viridis", "cividis"]
 
@@ -27,13 +28,8 @@ def main():
     for name in MAPS:
         print("    case SURGE_COLORMAP_%s: return %s;" % (name.upper(), name))
     print("    }\n    return viridis;\n}")
-    sys.stdout.flush()
 
 
 if __name__ == "__main__":
     argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter).parse_args()
-    try:
-        main()
-    except BrokenPipeError:  # the reader stopped early (| head): no traceback, and none again when Python exits
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        sys.exit(1)
+    sys.exit(cli_checks.run(main))

@@ -113,10 +113,20 @@ def command_reference(args):
                 "-s", "time.end_s=1e-6", "-s", "output.progress_interval_s=0", "--threads", "1"]
         if subprocess.run(argv, stdin=subprocess.DEVNULL, env=study.solver_environment()).returncode != 0:
             fail("placing the discs for phi = %g failed: %s" % (phi, " ".join(argv)))
-        params = RunParams(folder)
-        gap, length = params.real("domain", "height_m"), params.real("domain", "length_m")
-        discs = vtp.read_vtp(os.path.join(folder, vtp.read_pvd(os.path.join(folder, "boulders.pvd"))[0][1]))
+        if not os.path.isdir(folder):
+            fail("placing the discs for phi = %g: surge exited 0 but wrote no run in %s" % (phi, folder))
+        try:  # ParamsError and VtpError are ValueErrors
+            params = RunParams(folder)
+            gap, length = params.real("domain", "height_m"), params.real("domain", "length_m")
+            placed = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+            if not placed:
+                fail("%s: no boulder snapshot listed" % os.path.join(folder, "boulders.pvd"))
+            discs = vtp.read_vtp(os.path.join(folder, placed[0][1]), ("radius_m",), finite=True)
+        except (OSError, ValueError) as e:
+            fail("placing the discs for phi = %g: %s" % (phi, e))
         radii, centres_y = discs["radius_m"], discs["points"][:, 1]
+        if radii.size == 0:
+            fail("placing the discs for phi = %g: %s holds no disc" % (phi, placed[0][1]))
         if np.ptp(radii) > 0:
             fail("the reference assumes one radius; phi = %g placed radii %g-%g m" % (phi, radii.min(), radii.max()))
         phi_actual = float(np.sum(np.pi * radii ** 2) / (length * gap))
@@ -125,10 +135,13 @@ def command_reference(args):
                "mu_uniform_einstein": "%.5f" % (1 + 2 * phi_actual)}
         rows.append(row)
         print("%s: reference %s" % (TOOL, row), flush=True)
-    with open(args.csv, "w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=REFERENCE_COLUMNS)
-        writer.writeheader()
-        writer.writerows(rows)
+    try:
+        with open(args.csv, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=REFERENCE_COLUMNS)
+            writer.writeheader()
+            writer.writerows(rows)
+    except OSError as e:
+        fail("--csv: cannot write %s: %s" % (args.csv, e.strerror))
     print("%s: wrote %s" % (TOOL, args.csv))
     return 0
 
@@ -428,4 +441,4 @@ def main():
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(cli_checks.run(main))

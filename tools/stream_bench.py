@@ -136,4 +136,4 @@ def main():
         args.repeat, "; ".join("%s %s" % (n, " ".join("%.1f" % r[0] for r in rs)) for n, rs in results.items())))
 
 if __name__ == "__main__":
-    main()
+    sys.exit(cli_checks.run(main))

@@ -83,13 +83,17 @@ def main():
     if not late:
         fail("no snapshot after --after-s %g s (the last is at %g s)" % (args.after_s, rows[-1]["time_s"]))
     behind = np.array([r["behind_wall"] for r in late])
-    print("after %g s (%d snapshots): behind_wall mean %.2f max %.2f; corner_y min %.2f; corner_drho mean "
-          "%.4f max %.4f" % (args.after_s, len(late), behind.mean(), behind.max(),
-                             np.nanmin([r["corner_y"] for r in late]),
-                             np.nanmean([r["corner_drho"] for r in late]),
-                             np.nanmax([r["corner_drho"] for r in late])))
+    corner = [r for r in late if np.isfinite(r["corner_y"])]
+    if corner:
+        drho = np.array([r["corner_drho"] for r in corner])
+        corner_text = "corner_y min %.2f; corner_drho mean %.4f max %.4f (%d snapshots with corner fluid)" % (
+            min(r["corner_y"] for r in corner), drho.mean(), drho.max(), len(corner))
+    else:
+        corner_text = "no fluid within 3 dp of the wall face and the belt"
+    print("after %g s (%d snapshots): behind_wall mean %.2f max %.2f; %s" %
+          (args.after_s, len(late), behind.mean(), behind.max(), corner_text))
     return 0
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(cli_checks.run(main))
