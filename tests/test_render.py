@@ -11,7 +11,8 @@ Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP restart  a rendering run killed hard after a periodic checkpoint, restarted into the same folders:
                  frames.csv lists each PNG once, in time order, on the frame cadence, without the frames the
                  killed run drew after its checkpoint.
-  GROUP offline  `surge render RUN_DIR` turns the run's snapshots into as many PNG frames and movie frames.
+  GROUP offline  `surge render RUN_DIR` turns the run's snapshots into as many PNG frames and movie frames; a
+                 restarted run numbers its frames on, and its --movie starts with the first run's frames.
   GROUP inputs   bad rendering options get exit status 2 or 3 and a message naming the problem.
 
 Each check prints "name: ok" or "name: FAILED ..."; exits 1 if any failed. Every command has a timeout.
@@ -221,8 +222,9 @@ def group_offline():
     code6, stderr6 = run(["run", TANK, "-o", cont_run, "--frames", cont_frames] + COMMON[2:] + ["-s", "time.end_s=0.1"])
     first = sorted(f for f in os.listdir(cont_frames) if f.endswith(".png")) if code6 == 0 else []
     first_bytes = [open(os.path.join(cont_frames, f), "rb").read() for f in first]
+    cont_movie = os.path.join(d, "cont.mp4")
     code7, stderr7 = run(["run", "--restart", os.path.join(cont_run, "checkpoint.bin"), "--frames", cont_frames,
-                          "-s", "time.end_s=0.2", "-s", "output.progress_interval_s=0"])
+                          "--movie", cont_movie, "-s", "time.end_s=0.2", "-s", "output.progress_interval_s=0"])
     after = sorted(f for f in os.listdir(cont_frames) if f.endswith(".png")) if code7 == 0 else []
     kept = after[:len(first)] == first and all(open(os.path.join(cont_frames, f), "rb").read() == b
                                                for f, b in zip(first, first_bytes))
@@ -230,6 +232,19 @@ def group_offline():
           code6 == 0 and code7 == 0 and len(first) >= 5 and len(after) >= 2 * len(first) - 1 and kept,
           "first run %d frames, after the restart %d: %s\n%s%s" % (len(first), len(after), after[-3:], stderr6[-300:],
                                                                   stderr7[-300:]))
+
+    info = probe(cont_movie)
+    check("offline: the restarted run's movie starts with the first run's frames: one movie frame per PNG",
+          code7 == 0 and info is not None and info[0] == len(after) and
+          "(%d of them drawn before the restart)" % len(first) in stderr7,
+          "%d PNGs, ffprobe %s\n%s" % (len(after), info, stderr7[-400:]))
+    with open(os.path.join(cont_frames, first[2]), "wb") as f:
+        f.write(b"not a PNG")
+    code8, stderr8 = run(["run", "--restart", os.path.join(cont_run, "checkpoint.bin"), "--frames", cont_frames,
+                          "--movie", os.path.join(d, "cont2.mp4"), "-s", "time.end_s=0.3"])
+    check("offline: a damaged frame before the restart: refused at start, naming it, and no movie written",
+          code8 == 2 and first[2] in stderr8 and "Not a PNG" in stderr8 and
+          not os.path.exists(os.path.join(d, "cont2.mp4")), "exit %d\n%s" % (code8, stderr8[-400:]))
 
     # a run with a disc: offline frames draw it in the boulder colour with its orientation mark, which needs the
     # boulders_*.vtp written next to each snapshot (the mark's colour, 235 grey, is used for nothing else)

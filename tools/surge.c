@@ -70,7 +70,8 @@ static const char *usage_run =
     "\n"
     "rendering while it runs (settings: the [render] parameters, e.g. -s render.field=vx_rel):\n"
     "  --frames DIR          a PNG every render.frame_interval_s of simulated time (frame_NNNNNN.png)\n"
-    "  --movie FILE          an MP4 movie of the same frames (the ffmpeg program; H.264 when available)\n"
+    "  --movie FILE          an MP4 movie of the same frames (the ffmpeg program; H.264 when available); after\n"
+    "                        --restart with the --frames DIR of the first run, it starts with that run's frames\n"
     "  --font FILE           TrueType font for the labels (default DejaVu Sans)\n"
     "  The renderer never holds the solver back: a frame it is too busy to draw is skipped (reported at the\n"
     "  end; the movie repeats the previous image so that its time stays right).\n"
@@ -317,6 +318,7 @@ typedef struct live_links {
     surge_replay *replay;
     surge_journal *journal;
     surge_renderer *renderer;
+    const char *movie_path; /* NULL: no movie */
     char replay_error[1024]; /* set when a journal entry could not be replayed */
 } live_links;
 
@@ -381,6 +383,7 @@ static int open_live_links(const cli *c, const char *outdir, const surge_sim *si
         }
         if (!(l->renderer = surge_renderer_start(&def, surge_sim_params(sim), err, sizeof err)))
             goto fail;
+        l->movie_path = c->movie_path;
     }
     return 0;
 fail:
@@ -403,6 +406,9 @@ static int close_live_links(live_links *l, const surge_sim *sim)
                 (unsigned long long)r.frames_drawn, (unsigned long long)r.frames_due,
                 (unsigned long long)(r.frames_due - r.frames_drawn), r.frames_drawn ? 1e3 * r.draw_s / r.frames_drawn : 0,
                 r.frames_drawn ? 1e3 * r.encode_s / r.frames_drawn : 0);
+        if (l->movie_path)
+            fprintf(stderr, "surge: movie %s: %llu frames (%llu of them drawn before the restart)\n", l->movie_path,
+                    (unsigned long long)r.movie_frames, (unsigned long long)r.movie_frames_before_restart);
     }
     if (l->publisher) {
         surge_publisher_report r;

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "png_encode.h"
+#include "png_io.h"
 
 static const double pi = 3.14159265358979323846;
 #include "colormaps.h"

@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "png_io.h"
 #include "surge/mailbox.h"
 
 struct surge_renderer {
@@ -26,7 +27,7 @@ struct surge_renderer {
     atomic_int finishing;
     double next_frame_s; /* solver thread: simulated time of the next frame due */
     /* renderer thread */
-    uint64_t last_sequence, frames_drawn, movie_frames;
+    uint64_t last_sequence, frames_drawn, movie_frames, movie_frames_before_restart;
     uint64_t first_frame_number; /* 0, or after the frames already in the folder (continue_frames) */
     FILE *index;                 /* frames.csv: frame,step,time_s of each PNG written */
     double draw_s, encode_s;
@@ -190,6 +191,55 @@ static int open_frame_index(surge_renderer *r, const surge_params *params, char 
     return 0;
 }
 
+/* A restarted run's movie starts with the frames the interrupted run drew up to its checkpoint: the PNGs that
+ * frames.csv lists (after the trim), in order. A number missing between two listed frames (skipped while the
+ * renderer was busy) repeats the previous image, as it did live, so the movie keeps simulated time. With movie
+ * NULL, only checks that each listed PNG can be read and has this run's size (before the movie is started). */
+static int replay_kept_frames(surge_renderer *r, surge_movie *movie, int width, int height, char *err,
+                              size_t err_len)
+{
+    char path[4200];
+    snprintf(path, sizeof path, "%s/frames.csv", r->frames_dir);
+    FILE *index = fopen(path, "r");
+    uint8_t *rgba = movie ? malloc((size_t)width * (size_t)height * 4) : NULL;
+    if (!index || (movie && !rgba)) {
+        snprintf(err, err_len, "cannot read '%s': %s", path, index ? "out of memory" : strerror(errno));
+        if (index)
+            fclose(index);
+        free(rgba);
+        return -1;
+    }
+    long long previous = -1;
+    int rc = 0;
+    char line[256];
+    while (rc == 0 && fgets(line, sizeof line, index)) {
+        unsigned long long frame;
+        long long step;
+        double time_s;
+        if (sscanf(line, "%llu,%lld,%lf", &frame, &step, &time_s) != 3)
+            continue; /* the header */
+        if ((long long)frame <= previous) {
+            snprintf(err, err_len, "'%s': frame %llu listed after frame %lld, so the movie cannot be continued "
+                     "(render the whole movie from the PNGs, or use a new --frames folder)", path, frame, previous);
+            rc = -1;
+            break;
+        }
+        for (long long k = previous + 1; movie && previous >= 0 && k < (long long)frame && rc == 0; k++)
+            if ((rc = surge_movie_add(movie, rgba, err, err_len)) == 0)
+                r->movie_frames++;
+        char png[4200];
+        snprintf(png, sizeof png, "%s/frame_%06llu.png", r->frames_dir, frame);
+        if (rc == 0 && (rc = surge_png_read_rgba(png, width, height, rgba, err, err_len)) == 0 && movie &&
+            (rc = surge_movie_add(movie, rgba, err, err_len)) == 0)
+            r->movie_frames++;
+        previous = (long long)frame;
+    }
+    fclose(index);
+    free(rgba);
+    r->movie_frames_before_restart = r->movie_frames;
+    return rc;
+}
+
 /* Creates the frames folder and checks that files can be written into it. */
 static int make_folder(const char *path, char *err, size_t err_len)
 {
@@ -226,11 +276,17 @@ surge_renderer *surge_renderer_start(const surge_renderer_def *def, const surge_
     }
     r->next_frame_s = -INFINITY;
     const int w = params->render.width_px, h = params->render.height_px;
+    const int replay = def->frames_dir && def->movie_path && def->continue_frames;
     if ((def->frames_dir && (make_folder(def->frames_dir, err, err_len) != 0 ||
                              open_frame_index(r, params, err, err_len) != 0)) ||
+        (replay && replay_kept_frames(r, NULL, w, h, err, err_len) != 0) ||
         !(r->canvas = surge_canvas_create(w, h, def->font_path, err, err_len)) ||
         (def->movie_path && !(r->movie = surge_movie_open(def->movie_path, w, h, params->render.movie_fps, err,
-                                                          err_len)))) {
+                                                          err_len))) ||
+        (replay && replay_kept_frames(r, r->movie, w, h, err, err_len) != 0)) {
+        char ignored[256];
+        if (r->movie)
+            surge_movie_close(r->movie, ignored, sizeof ignored);
         surge_canvas_destroy(r->canvas);
         if (r->index)
             fclose(r->index);
@@ -282,6 +338,7 @@ int surge_renderer_finish(surge_renderer *r, surge_render_report *report, char *
         report->frames_due = surge_mailbox_posted(r->mailbox);
         report->frames_drawn = r->frames_drawn;
         report->movie_frames = r->movie_frames;
+        report->movie_frames_before_restart = r->movie_frames_before_restart;
         report->draw_s = r->draw_s;
         report->encode_s = r->encode_s;
     }

@@ -66,7 +66,7 @@ typedef struct surge_renderer_def {
     int continue_frames;    /* a restarted run: number on after the frames already in frames_dir, not from 0 */
     double resume_time_s;   /* with continue_frames: the restart's time; frames.csv rows (and their PNGs) drawn
                                after it by the interrupted run are removed; the cadence goes on from the last kept */
-    const char *movie_path; /* NULL: no movie */
+    const char *movie_path; /* NULL: no movie; with continue_frames and frames_dir it starts with the kept frames */
     const char *font_path;  /* NULL: SURGE_DEFAULT_FONT */
     /* called in the renderer thread with each frame as PNG (for the stream); NULL: not needed */
     void (*on_frame)(const uint8_t *png, size_t png_len, int64_t step, double time_s, void *user);
@@ -79,6 +79,7 @@ typedef struct surge_render_report {
     uint64_t frames_due;     /* frames the cadence asked for */
     uint64_t frames_drawn;   /* rendered; the others were skipped because the renderer was busy */
     uint64_t movie_frames;   /* in the movie: a skipped frame repeats the previous image, keeping time */
+    uint64_t movie_frames_before_restart; /* of those, read back from the frames folder (continue_frames) */
     double draw_s, encode_s; /* renderer-thread seconds drawing, and encoding (PNG, movie) */
 } surge_render_report;
 

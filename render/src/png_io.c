@@ -1,9 +1,11 @@
-/* The canvas as PNG in memory, with libpng (fast compression: frames are many). */
+/* PNG with libpng: the canvas encoded in memory (fast compression: frames are many), and frame files read back
+ * (a restarted run's movie starts with the frames already drawn). */
 #include <png.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "png_encode.h"
+#include "png_io.h"
 
 typedef struct memory_sink {
     uint8_t *data;
@@ -73,5 +75,33 @@ int surge_png_encode_rgba(const uint8_t *rgba, int width, int height, uint8_t **
     }
     *out = sink.data;
     *out_len = sink.len;
+    return 0;
+}
+
+int surge_png_read_rgba(const char *path, int width, int height, uint8_t *rgba, char *err, size_t err_len)
+{
+    png_image image;
+    memset(&image, 0, sizeof image);
+    image.version = PNG_IMAGE_VERSION;
+    if (!png_image_begin_read_from_file(&image, path)) {
+        snprintf(err, err_len, "cannot read the frame '%.900s': %s", path, image.message);
+        return -1;
+    }
+    if ((int)image.width != width || (int)image.height != height) {
+        snprintf(err, err_len, "the frame '%.900s' is %u x %u pixels, this run draws %d x %d", path, image.width,
+                 image.height, width, height);
+        png_image_free(&image);
+        return -1;
+    }
+    if (!rgba) {
+        png_image_free(&image);
+        return 0;
+    }
+    image.format = PNG_FORMAT_RGBA;
+    if (!png_image_finish_read(&image, NULL, rgba, 0, NULL)) {
+        snprintf(err, err_len, "cannot read the frame '%.900s': %s", path, image.message);
+        png_image_free(&image);
+        return -1;
+    }
     return 0;
 }
