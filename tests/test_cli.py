@@ -250,6 +250,11 @@ def group_inputs():
              lambda p, n: [at(p, n), "domain.height_m", "empty value"])
     bad_case("long_line", tank, numerics_line + 1, "# " + "x" * 3000,
              lambda p, n: [at(p, n), "longer than"])
+    bad_case("value_glued_semicolon", tank, domain_line + 1, "length_m = 0.4;0.5",
+             lambda p, n: [at(p, n), "domain.length_m", "'0.4;0.5'", "not a number"])
+    bad_case("list_glued_semicolon", tank + ["[boulders]", "placement = list"], len(tank) + 3,
+             "list_m = 0.1 0.05 0.02; 0.25 0.05 0.02",  # ';' as a disc separator: refused, not one disc
+             lambda p, n: [p, "boulders.list_m", "not a number"])
     # an error late in the file still names its own line (line counting is not thrown off by comments)
     bad_case("late_line_number", tank, len(tank) + 1, "bogus_key = 1",
              lambda p, n: [at(p, n), "bogus_key"])

@@ -279,6 +279,14 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
     return 0;
 }
 
+/* An error found after the case parsed (a rule across parameters, the scene it builds) names the set of
+ * parameters it came from. */
+static void print_case_error(const cli *c, const char *err)
+{
+    fprintf(stderr, "surge: %s%s: %s\n", c->case_path ? c->case_path : "cases/demo.ini (built in)",
+            c->override_count ? " with the -s overrides" : "", err);
+}
+
 /* Loads the case (or the default scene) and applies overrides. */
 static int load_case(const cli *c, surge_params *p)
 {
@@ -293,9 +301,8 @@ static int load_case(const cli *c, surge_params *p)
         fprintf(stderr, "surge: %s\n", err);
         return -1;
     }
-    if (surge_params_validate(p, err, sizeof err) != 0) { /* a rule across parameters: name the set they came from */
-        fprintf(stderr, "surge: %s%s: %s\n", c->case_path ? c->case_path : "cases/demo.ini (built in)",
-                c->override_count ? " with the -s overrides" : "", err);
+    if (surge_params_validate(p, err, sizeof err) != 0) {
+        print_case_error(c, err);
         return -1;
     }
     return 0;
@@ -476,7 +483,7 @@ static int command_run(int argc, char **argv)
             return EXIT_USAGE;
         sim = surge_sim_create(&p, err, sizeof err);
         if (!sim) {
-            fprintf(stderr, "surge: %s\n", err);
+            print_case_error(&c, err);
             return EXIT_USAGE;
         }
         if (c.output_dir)
@@ -683,7 +690,7 @@ static int command_check(int argc, char **argv)
     char err[1024];
     surge_sim *sim = surge_sim_create(&p, err, sizeof err);
     if (!sim) {
-        fprintf(stderr, "surge: %s: %s\n", c.case_path, err);
+        print_case_error(&c, err);
         return EXIT_USAGE;
     }
     const surge_derived *d = surge_sim_derived(sim);
