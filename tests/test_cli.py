@@ -456,6 +456,14 @@ def group_inputs():
 # GROUP blowup
 
 
+def checkpoint_position(path):
+    """(step, time_s) of a checkpoint: after the 24-byte header and the parameter text."""
+    with open(path, "rb") as f:
+        head = f.read(24)
+        f.seek(24 + struct.unpack("<Q", head[16:24])[0])
+        return struct.unpack("<qd", f.read(16))
+
+
 def read_csv_rows(path):
     with open(path) as f:
         lines = [l.rstrip("\n") for l in f if l.strip()]
@@ -652,16 +660,27 @@ def group_restart():
     checkpoint = os.path.join(dir_i, "checkpoint.bin")
     report("sigint_stops_with_checkpoint", exited(r_int, 4) and "interrupted" in r_int.stderr and
            os.path.isfile(checkpoint), r_int, "needs exit 4, 'interrupted' and checkpoint.bin")
-    r_cont = surge("run", "--restart", checkpoint, "-s", "time.end_s=0.01", timeout=RUN_TIMEOUT_S)
-    report("restart_after_sigint", exited(r_cont, 0) and state_hash(r_cont) is not None, r_cont)
+    try:
+        checkpoint_step, checkpoint_time_s = checkpoint_position(checkpoint)
+    except (OSError, struct.error):
+        checkpoint_step, checkpoint_time_s = None, 0.0
+    r_cont = surge("run", "--restart", checkpoint, "-s", "time.end_s=%.9g" % (checkpoint_time_s + 0.005),
+                   "-s", "output.diagnostics_interval_s=0", timeout=RUN_TIMEOUT_S)
+    try:
+        last_step = int(read_csv_rows(csv_path)[1][-1][1])
+    except (OSError, ValueError, IndexError):
+        last_step = None
+    report("restart_after_sigint_continues", exited(r_cont, 0) and state_hash(r_cont) is not None and
+           checkpoint_step is not None and last_step is not None and last_step > checkpoint_step, r_cont,
+           "checkpoint step %s, last diagnostics step after the restart %s" % (checkpoint_step, last_step))
 
-    # a restart into a new folder starts its diagnostics.csv with the header
+    # a restart into a new folder starts its diagnostics.csv with the header (from the continued run's checkpoint)
     dir_n = os.path.join(WORK, "N")
     shutil.rmtree(dir_n, ignore_errors=True)
-    with open(checkpoint, "rb") as f:
-        head = f.read(24)
-        f.seek(24 + struct.unpack("<Q", head[16:24])[0] + 8)
-        checkpoint_time_s = struct.unpack("<d", f.read(8))[0]
+    try:
+        checkpoint_time_s = checkpoint_position(checkpoint)[1]
+    except (OSError, struct.error):
+        checkpoint_time_s = 0.0
     r_new = surge("run", "--restart", checkpoint, "-s", "time.end_s=%.9g" % (checkpoint_time_s + 0.003),
                   "-s", "output.diagnostics_interval_s=0.001", "-o", dir_n,
                   timeout=RUN_TIMEOUT_S)
@@ -682,22 +701,29 @@ def group_restart():
     proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             cwd=WORK, env=ENV)
     checkpoint, csv_path = os.path.join(dir_k, "checkpoint.bin"), os.path.join(dir_k, "diagnostics.csv")
+    # stop the run (SIGSTOP) to look: kill it once diagnostics.csv has rows past the checkpoint on disk, else let
+    # it go on and look again, so the case under test does not depend on when a fixed sleep ends
     deadline = time.time() + RUN_TIMEOUT_S
-    while time.time() < deadline and proc.poll() is None and not os.path.isfile(checkpoint):
+    checkpoint_step, killed_rows, killed_steps = -1, [], []
+    err = "no checkpoint with diagnostics rows past it before the deadline"
+    while time.time() < deadline and proc.poll() is None:
+        if os.path.isfile(checkpoint):
+            proc.send_signal(signal.SIGSTOP)
+            try:
+                checkpoint_step = checkpoint_position(checkpoint)[0]
+                with open(csv_path) as f:
+                    whole_rows = f.read().endswith("\n")  # else a row is half written: look again
+                _, killed_rows = read_csv_rows(csv_path) if whole_rows else (None, [])
+                killed_steps = [int(row[1]) for row in killed_rows]
+            except (OSError, ValueError, IndexError, struct.error):
+                killed_rows, killed_steps = [], []
+            if killed_steps and max(killed_steps) > checkpoint_step:
+                err = None
+                break
+            proc.send_signal(signal.SIGCONT)
         time.sleep(0.05)
-    time.sleep(0.5)
     proc.kill()
     proc.wait()
-    try:
-        with open(checkpoint, "rb") as f:
-            head = f.read(24)
-            f.seek(24 + struct.unpack("<Q", head[16:24])[0])
-            checkpoint_step = struct.unpack("<q", f.read(8))[0]
-        _, killed_rows = read_csv_rows(csv_path)
-        killed_steps = [int(row[1]) for row in killed_rows]
-        err = None
-    except Exception as e:  # noqa: BLE001
-        checkpoint_step, killed_steps, err = -1, [], "%s: %s" % (type(e).__name__, e)
     report("hard_kill_left_rows_past_its_checkpoint", err is None and max(killed_steps) > checkpoint_step, None,
            err or "checkpoint step %d, last row step %d" % (checkpoint_step, max(killed_steps or [0])))
     end_s = float(killed_rows[-1][0]) + 0.002 if killed_rows else 0.01

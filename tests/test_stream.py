@@ -10,9 +10,8 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP inputs    every malformed control request gets its error reply and the run goes on to finish normally;
                   an oversize request or a vanished client does not disturb it; stop ends it with its outputs;
                   bad stream options and journals get clear errors.
-  GROUP stalled   a subscriber that never reads does not hold the solver back: the run finishes, messages were
-                  dropped for it, and the step rate against a run without subscribers is printed (measured in
-                  this run; the check only catches a blocked solver, not noise).
+  GROUP stalled   a subscriber that never reads (its subscription shown live first) does not hold the solver
+                  back: the run finishes and states were dropped for it (step rates: tools/stream_bench.py).
 
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
 WORK_DIR, so tests running side by side never share a port. Every wait has a timeout: a hang is a failure.
@@ -449,50 +448,35 @@ def group_inputs():
 
 
 # ---------------------------------------------------------------------------------------------------------------
-def steps_per_s(run):
-    m = re.findall(r"step (\d+) .* ([0-9.]+) steps/s", run.stderr)
-    return float(m[-1][1]) if m else None
-
-
 def group_stalled():
+    """A subscriber that never reads does not hold the solver back: the run finishes (a blocked publisher would
+    hang it, and Surge.wait gives up after 300 s), and the publisher dropped states for that subscriber. The
+    subscription is shown live first (the paused run's step-0 state arrives), so the drop is not a subscription
+    that never connected. Step rates are measured in tools/stream_bench.py, not here."""
     case_args = ["-s", "numerics.dp_m=0.004", "-s", "time.end_s=0.06", "-s", "output.snapshot_interval_s=0",
                  "-s", "output.progress_interval_s=1000", "--publish-hz", "0", "--publish-hwm", "2"]
-    ratios, dropped = [], []
-    ctx = zmq.Context.instance()
-    for attempt in range(2):  # alternate, so a slow spell of the machine does not fall on one side only
-        # both runs start paused and are resumed after the same wait, so their rates cover the same span
-        alone = Surge("stalled_alone_%d" % attempt, case_args, paused=True)
-        time.sleep(0.5)
-        surge_client.Control(alone.ctl, 10).request({"cmd": "resume"})
-        alone.wait(300)
-        stalled = Surge("stalled_sub_%d" % attempt, case_args, paused=True)
-        sub = ctx.socket(zmq.SUB)
-        sub.setsockopt(zmq.RCVHWM, 1)
-        sub.setsockopt(zmq.RCVBUF, 4096)
-        sub.connect(stalled.pub)
-        sub.setsockopt(zmq.SUBSCRIBE, b"state")
-        time.sleep(0.5)  # the subscription reaches the publisher; then the subscriber never reads
-        surge_client.Control(stalled.ctl, 10).request({"cmd": "resume"})
-        stalled.wait(300)
-        received = 0
-        while sub.poll(500):
-            sub.recv_multipart()
-            received += 1
-        sub.close()
-        published = re.search(r"published (\d+) states", stalled.stderr)
-        if not check("stalled: runs finish (attempt %d)" % attempt,
-                     alone.rc == 0 and stalled.rc == 0 and published,
-                     alone.describe() + "\n" + stalled.describe()):
-            return
-        a, s = steps_per_s(alone), steps_per_s(stalled)
-        ratios.append(s / a)
-        dropped.append((int(published.group(1)), received))
-        print("stalled: attempt %d: %.0f steps/s alone, %.0f steps/s with a stalled subscriber (ratio %.3f); "
-              "%d states published, %d reached the stalled subscriber" % (attempt, a, s, s / a, *dropped[-1]))
-    check("stalled: the publisher dropped messages for the stalled subscriber instead of waiting",
-          all(r < p for p, r in dropped), str(dropped))
-    check("stalled: the solver was not held back (ratio %.3f; a blocked solver would be near 0)" % max(ratios),
-          max(ratios) > 0.5, str(ratios))
+    stalled = Surge("stalled", case_args, paused=True)
+    sub = zmq.Context.instance().socket(zmq.SUB)
+    sub.setsockopt(zmq.RCVHWM, 1)
+    sub.setsockopt(zmq.RCVBUF, 4096)
+    sub.connect(stalled.pub)
+    sub.setsockopt(zmq.SUBSCRIBE, b"state")
+    first = wait_for(lambda: sub.recv_multipart() if sub.poll(100) else None, 20)
+    surge_client.Control(stalled.ctl, 10).request({"cmd": "resume"})  # from here the subscriber never reads
+    stalled.wait(300)
+    received = 0
+    while sub.poll(500):
+        sub.recv_multipart()
+        received += 1
+    sub.close()
+    published = re.search(r"published (\d+) states", stalled.stderr)
+    if not check("stalled: the subscription is live (the paused run's first state arrived) and the run finishes",
+                 first is not None and stalled.rc == 0 and published, stalled.describe()):
+        return
+    print("stalled: %s states published, %d reached the stalled subscriber after the first" %
+          (published.group(1), received))
+    check("stalled: the publisher dropped states for the stalled subscriber instead of waiting",
+          received < int(published.group(1)) - 1, "%d of %s" % (received, published.group(1)))
 
 
 groups = {"state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
