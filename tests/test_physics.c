@@ -257,7 +257,7 @@ static int test_restart(const char *dir)
            (unsigned long long)b, surge_sim_time(straight), surge_sim_time(second));
     expect_below("restart: state hashes differ (0 = identical)", a != b, 0);
     /* the state moved: the check is not between two idle states */
-    expect_below("restart: mean |vx| after 200 steps is not zero (1 = zero)",
+    expect_below("restart: max speed after 200 steps is not zero (1 = zero)",
                  surge_sim_diagnostics(straight).max_speed_mps == 0, 0);
     surge_sim_destroy(straight);
     surge_sim_destroy(second);

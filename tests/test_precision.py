@@ -3,8 +3,9 @@
 
 Both runs write (t, y, u, u_ref) per fluid particle at t = 0.1 s and 1 s, in the same particle order.
 The float build passes if its velocities differ from the double build's by much less than the
-discretisation error both share: max |u_float - u_double| <= 1e-3 u_max and the two L2 errors against
-the analytic solution agree within 1e-3 u_max."""
+discretisation error both share, 0 < max |u_float - u_double| <= 1e-3 u_max (the two L2 errors against the
+analytic solution then agree within that too, and are printed). A difference of exactly 0 fails: the two builds
+would not differ in precision at all."""
 import sys
 
 import numpy as np
@@ -24,7 +25,7 @@ def main():
         diff = np.max(np.abs(f[sel, 2] - d[sel, 2])) / U_MAX
         err_f = np.sqrt(np.mean((f[sel, 2] - f[sel, 3]) ** 2)) / U_MAX
         err_d = np.sqrt(np.mean((d[sel, 2] - d[sel, 3]) ** 2)) / U_MAX
-        ok = diff <= 1e-3 and abs(err_f - err_d) <= 1e-3
+        ok = 0 < diff <= 1e-3
         failed += not ok
         print(f"t = {t:.3f} s: max |u_float - u_double| / u_max = {diff:.3g}; "
               f"L2 error float {err_f:.5f}, double {err_d:.5f}  {'ok' if ok else 'FAILED'}")

@@ -172,6 +172,15 @@ static void group_colours(const char *work)
     surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 0, 0, 1, lo);
     surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 1, 0, 1, hi);
     surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 0.5, 0, 1, mid);
+    /* the maps themselves, against matplotlib's published end colours (independent of our generated table) */
+    uint8_t c_lo[3], c_hi[3];
+    surge_colormap_rgb(SURGE_COLORMAP_CIVIDIS, 0, 0, 1, c_lo);
+    surge_colormap_rgb(SURGE_COLORMAP_CIVIDIS, 1, 0, 1, c_hi);
+    const uint8_t viridis_lo[3] = {68, 1, 84}, viridis_hi[3] = {253, 231, 37};
+    const uint8_t cividis_lo[3] = {0, 34, 78}, cividis_hi[3] = {254, 232, 56};
+    check("colours: viridis and cividis end at matplotlib's colours",
+          near_rgb(lo, viridis_lo, 0) && near_rgb(hi, viridis_hi, 0) && near_rgb(c_lo, cividis_lo, 0) &&
+              near_rgb(c_hi, cividis_hi, 0), "");
     check("colours: colour bar right of the plot runs from color_min (bottom) to color_max (top)",
           l->colorbar_x0 > l->plot_x1 && near_rgb(pixel(&im, bar_x, l->colorbar_y1 - 1.5), lo, 3) &&
               near_rgb(pixel(&im, bar_x, l->colorbar_y0 + 1.5), hi, 3) &&

@@ -288,19 +288,24 @@ def group_control():
     at_3 = wait_for(lambda: (lambda s: s if s["paused"] and s["step"] == 3 else None)(ctl.request({"cmd": "status"})), 20)
     old = ctl.request({"cmd": "get", "key": "fluid.viscosity_m2ps"})["value"]
     reply = ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": old * 2})
-    time.sleep(0.5)  # the paused run serves its boundary every 0.1 s
+    checkpoint = os.path.join(held.out, "checkpoint.bin")
+
+    def stored_in_checkpoint():
+        """(viscosity, step) of the checkpoint on disk, or (None, None)."""
+        try:
+            with open(checkpoint, "rb") as f:
+                data = f.read()
+            plen = struct.unpack_from("<Q", data, 16)[0]
+            m = re.search(r"\[fluid\][^\[]*?viscosity_m2ps\s*=\s*([^\s;#]+)", data[24:24 + plen].decode())
+            return (float(m.group(1)) if m else None), struct.unpack_from("<q", data, 24 + plen)[0]
+        except (OSError, struct.error, UnicodeDecodeError, ValueError):
+            return None, None
+
+    # the rewrite follows the reply (after the boundary is served): wait for it, without a fixed sleep
+    wait_for(lambda: stored_in_checkpoint()[0] == old * 2 or None, 20)
     held.proc.kill()
     held.wait()
-    checkpoint = os.path.join(held.out, "checkpoint.bin")
-    stored, step = None, None
-    if os.path.exists(checkpoint):
-        with open(checkpoint, "rb") as f:
-            data = f.read()
-        plen = struct.unpack_from("<Q", data, 16)[0]
-        text = data[24:24 + plen].decode()
-        m = re.search(r"\[fluid\][^\[]*?viscosity_m2ps\s*=\s*([^\s;#]+)", text)
-        stored = float(m.group(1)) if m else None
-        step = struct.unpack_from("<q", data, 24 + plen)[0]
+    stored, step = stored_in_checkpoint()
     check("control: a set while paused at a checkpoint's step is in that checkpoint",
           at_3 and reply.get("ok") and step == 3 and stored == old * 2,
           "status %s, reply %s, checkpoint step %s, viscosity %s (set %s)" % (at_3, reply, step, stored, old * 2))

@@ -192,13 +192,17 @@ static int test_corner_continuity(void)
         interaction_compute(sim, 0);
         const double dp = p.numerics.dp_m, strain_scale = fabs(p.walls.bottom_speed_mps) / dp;
         double corner = 0, bulk = 0;
+        int corner_count = 0, bulk_count = 0;
         for (int a = sim->wall_count; a < sim->count; a++) {
             const double rate = fabs(sim->drho[a] / sim->rho[a]) / strain_scale;
             if (sim->x[a] - p.walls.upstream_x_m < 3 * dp && sim->y[a] < 3 * dp)
-                corner = fmax(corner, rate);
+                corner = fmax(corner, rate), corner_count++;
             else if (sim->x[a] - p.walls.upstream_x_m > 10 * dp && sim->x[a] < p.fluid.x1_m - 10 * dp)
-                bulk = fmax(bulk, rate);
+                bulk = fmax(bulk, rate), bulk_count++;
         }
+        expect_below("corner_continuity: no fluid in the corner or the bulk (1 = none)",
+                     corner_count == 0 || bulk_count == 0, 0);
+        expect_below("corner_continuity: bulk rate / (u_b/dp)", bulk, 0.01);
         printf("corner_continuity (%s): max |drho/dt| / (rho u_b / dp) = %.2e within 3 dp of the corner, "
                "%.2e in the bulk\n", renormalised ? "renormalised" : "plain", corner, bulk);
         expect_below(renormalised ? "corner_continuity: renormalised, corner rate / (u_b/dp)"

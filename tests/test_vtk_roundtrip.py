@@ -84,10 +84,21 @@ def main():
         failures.append("keys: got %s, expected %s" % (sorted(d), sorted(expected_keys)))
 
     pvd_path = os.path.join(os.path.dirname(path), "synthetic.pvd")
-    if os.path.exists(pvd_path):
+    try:
         entries = vtp.read_pvd(pvd_path)
         if entries != EXPECTED_PVD:
             failures.append("read_pvd: got %r, expected %r" % (entries, EXPECTED_PVD))
+    except vtp.VtpError as e:  # missing or malformed: the C test writes it
+        failures.append("read_pvd: %s" % e)
+
+    empty_path = os.path.join(os.path.dirname(path), "empty.vtp")  # a snapshot with no particles
+    try:
+        e = vtp.read_vtp(empty_path)
+        if e["points"].shape[0] != 0 or set(e) != expected_keys or any(len(e[k]) for k in expected_keys
+                                                                         if k not in ("time_s", "step")):
+            failures.append("empty.vtp: got %s" % {k: getattr(v, "shape", v) for k, v in e.items()})
+    except vtp.VtpError as err:
+        failures.append("empty.vtp: %s" % err)
 
     for failure in failures:
         print("FAIL " + failure, file=sys.stderr)
