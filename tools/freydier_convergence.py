@@ -212,7 +212,8 @@ def main():
         return 0
     if args.command == "unpark":
         if not study.unpark("freydier_convergence", args.parked_dir, args.runs_dir):
-            print("freydier_convergence: no parked run to restore from %s" % args.parked_dir)
+            print("freydier_convergence: nothing restored from %s (no parked run there, or each one's folder "
+                  "in %s already holds a run)" % (args.parked_dir, args.runs_dir))
         return 0
     return command_chart(args)
 
