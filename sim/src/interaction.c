@@ -1,5 +1,6 @@
-/* Rates of change of the fluid particles: continuity with Fourtakas density diffusion (GMD eq. 6), momentum
- * with pressure, laminar viscosity and body force (eq. 7), plus what the time step and shifting need. */
+/* Rates of change of the fluid particles: continuity with density diffusion (GMD eq. 6; Fourtakas' form or
+ * Antuono's), momentum with pressure, laminar viscosity and body force (eq. 7), plus what the time step and
+ * shifting need. */
 #include <math.h>
 
 #include "sim_internal.h"
@@ -14,9 +15,54 @@ static void compute_pressure(surge_sim *sim)
     }
 }
 
+/* Antuono et al. (2010) renormalised density gradient over the fluid neighbours,
+ * <grad rho>_a = M_a^-1 sum_b (rho_b - rho_a) grad_a W_ab V_b, exact for a linear density field even where the
+ * kernel is truncated. Where M is nearly singular (an isolated particle) the gradient is taken as zero. */
+static void compute_density_gradient(surge_sim *sim)
+{
+    const cell_grid *g = &sim->grid;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
+    const real support2 = sim->kernel.support2;
+    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho;
+    #pragma omp parallel for schedule(static)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double xa = x[a], ya = y[a];
+        const real rhoa = rho[a];
+        real m_xx = 0, m_xy = 0, m_yy = 0, sum_x = 0, sum_y = 0;
+        const int cx = grid_cell_x(g, xa), cy = grid_cell_y(g, ya);
+        cell_span spans[2];
+        const int nspans = grid_row_spans(g, cx, spans);
+        for (int row = cy - 1; row <= cy + 1; row++) {
+            if (row < 0 || row >= g->ncy)
+                continue;
+            for (int s = 0; s < nspans; s++) {
+                const double xa_shifted = xa - spans[s].shift_x;
+                const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
+                for (int b = g->fluid_start[c0]; b < g->fluid_start[c1]; b++) {
+                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                    const real r2 = dx * dx + dy * dy;
+                    if (r2 >= support2 || r2 == 0)
+                        continue;
+                    const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                    sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
+                }
+            }
+        }
+        const real det = m_xx * m_yy - m_xy * m_xy;
+        const real inv_det = det > (real)0.25 ? (real)1 / det : 0;
+        sim->grad_rho_x[a] = inv_det * (m_yy * sum_x - m_xy * sum_y);
+        sim->grad_rho_y[a] = inv_det * (m_xx * sum_y - m_xy * sum_x);
+    }
+}
+
 void interaction_compute(surge_sim *sim, int corrector)
 {
     compute_pressure(sim);
+    const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
+    if (antuono)
+        compute_density_gradient(sim);
     const cell_grid *g = &sim->grid;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
     const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = sim->kernel.h;
@@ -29,6 +75,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
     const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
     const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
+    const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
     const uint8_t *restrict surface = sim->surface;
 
     /* Each particle gathers over its neighbours in a fixed order, so results do not depend on the thread count.
@@ -68,7 +115,12 @@ void interaction_compute(surge_sim *sim, int corrector)
                     const real vf = vol * f;
                     m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
                     g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
-                    diffusion -= (rho[b] - rhoa - rho_h_per_m * dy) * f * vol;                    /* Fourtakas */
+                    /* rho_b - rho_a less what a linear field gives: its hydrostatic part (Fourtakas) or the
+                     * renormalised gradient's (Antuono) */
+                    const real linear_part = antuono ? (real)-0.5 * ((grad_rho_x[a] + grad_rho_x[b]) * dx +
+                                                                     (grad_rho_y[a] + grad_rho_y[b]) * dy)
+                                                     : rho_h_per_m * dy;
+                    diffusion -= (rho[b] - rhoa - linear_part) * f * vol;
                     const real speed = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
                     visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
                     grad_c_x += vol * f * dx;

@@ -83,8 +83,14 @@ static const surge_param_info registry[] = {
      "c0 / largest expected speed when c0 is derived (10 keeps density errors near 1 %).",
      OFF(numerics.c0_factor)},
     {"numerics", "density_diffusion", SURGE_PARAM_REAL, "-", 0.1, 0, 1, false, NULL,
-     "Fourtakas density-diffusion coefficient delta (0: off); fluid-fluid pairs only.",
+     "Density-diffusion coefficient delta (0: off); fluid-fluid pairs only.",
      OFF(numerics.density_diffusion)},
+    {"numerics", "density_diffusion_form", SURGE_PARAM_ENUM, "-", SURGE_DIFFUSION_FOURTAKAS, 0, 1, true,
+     "fourtakas|antuono",
+     "Density-diffusion term: fourtakas (the paper's; density differences less their hydrostatic part) or "
+     "antuono (delta-SPH; less the renormalised density gradient, so that no linear density field diffuses, "
+     "also where the kernel is truncated at the free surface). docs/method.md.",
+     OFF(numerics.density_diffusion_form)},
     {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",

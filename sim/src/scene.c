@@ -185,7 +185,7 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
     ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
     ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->visc_speed_mps, n);
-    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n);
+    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);
     ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
     ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);
     ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);

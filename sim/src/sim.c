@@ -68,7 +68,8 @@ void surge_sim_destroy(surge_sim *sim)
         return;
     void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
                       sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->visc_speed_mps,
-                      sim->grad_c_x, sim->grad_c_y, sim->div_r, sim->surface, sim->near_surface, sim->kind,
+                      sim->grad_c_x, sim->grad_c_y, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
+                      sim->near_surface, sim->kind,
                       sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy,
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)

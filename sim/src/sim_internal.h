@@ -60,6 +60,7 @@ struct surge_sim {
     real *ax, *ay, *drho, *pressure, *inv_rho;
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
+    real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
     real *div_r;
     uint8_t *surface;          /* free-surface flag from the last predictor pass */
     uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */

@@ -14,6 +14,11 @@ typedef enum surge_shifting_form {
     SURGE_SHIFT_LIND = 2,     /* Lind et al. 2012: dr = -(A/2) h c0 dt grad C, none in the surface layer */
 } surge_shifting_form;
 
+typedef enum surge_diffusion_form {
+    SURGE_DIFFUSION_FOURTAKAS = 0, /* Fourtakas et al. 2019: density differences less their hydrostatic part */
+    SURGE_DIFFUSION_ANTUONO = 1,   /* Antuono et al. 2010 (delta-SPH): less the renormalised density gradient */
+} surge_diffusion_form;
+
 typedef enum surge_fluid_shape {
     SURGE_SHAPE_BLOCK = 0,       /* rectangle [x0, x1] x [0, depth] */
     SURGE_SHAPE_LUBRICATION = 1, /* steady lubrication front with the block's volume, from x0 downstream */
@@ -81,7 +86,8 @@ typedef struct surge_params {
         double cfl;
         double c0_mps;            /* 0: derived from the scene's scales */
         double c0_factor;         /* c0 = c0_factor * largest expected speed when derived */
-        double density_diffusion; /* Fourtakas delta */
+        double density_diffusion; /* delta of the density-diffusion term */
+        int density_diffusion_form; /* surge_diffusion_form */
         bool continuity_correction; /* velocity divergence renormalised by the kernel moment matrix */
         bool viscous_dt_limit;
         double dt_fixed_s;        /* 0: variable time step */
