@@ -30,24 +30,18 @@ static void compute_density_gradient(surge_sim *sim)
         const double xa = x[a], ya = y[a];
         const real rhoa = rho[a];
         real m_xx = 0, m_xy = 0, m_yy = 0, sum_x = 0, sum_y = 0;
-        const int cx = grid_cell_x(g, xa), cy = grid_cell_y(g, ya);
-        cell_span spans[2];
-        const int nspans = grid_row_spans(g, cx, spans);
-        for (int row = cy - 1; row <= cy + 1; row++) {
-            if (row < 0 || row >= g->ncy)
-                continue;
-            for (int s = 0; s < nspans; s++) {
-                const double xa_shifted = xa - spans[s].shift_x;
-                const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
-                for (int b = g->fluid_start[c0]; b < g->fluid_start[c1]; b++) {
-                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                    const real r2 = dx * dx + dy * dy;
-                    if (r2 >= support2 || r2 == 0)
-                        continue;
-                    const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                    sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
-                }
+        neighbour_ranges fluid;
+        grid_neighbour_ranges(g, g->fluid_start, xa, ya, &fluid);
+        for (int k = 0; k < fluid.count; k++) {
+            const double xa_shifted = xa - fluid.shift_x[k];
+            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
+                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2 || r2 == 0)
+                    continue;
+                const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
             }
         }
         const real det = m_xx * m_yy - m_xy * m_xy;
@@ -88,71 +82,64 @@ void interaction_compute(surge_sim *sim, int corrector)
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
         int near_surface = surface[a];
-        const int cx = grid_cell_x(g, xa), cy = grid_cell_y(g, ya);
-        cell_span spans[2];
-        const int nspans = grid_row_spans(g, cx, spans);
-        for (int row = cy - 1; row <= cy + 1; row++) {
-            if (row < 0 || row >= g->ncy)
-                continue;
-            for (int s = 0; s < nspans; s++) {
-                const double xa_shifted = xa - spans[s].shift_x;
-                const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
-                /* fluid neighbours */
-                const int fluid_begin = g->fluid_start[c0], fluid_end = g->fluid_start[c1];
-                for (int b = fluid_begin; b < fluid_end; b++) {
-                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                    const real r2 = dx * dx + dy * dy;
-                    if (r2 >= support2 || r2 == 0)
-                        continue;
-                    const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
-                    const real vol = mass * inv_rho[b];
-                    const real dvx = vxa - vx[b], dvy = vya - vy[b];
-                    const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];           /* eq. 7 */
-                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2)); /* eq. 7 */
-                    acc_x += pressure_term * f * dx + viscous_term * dvx;
-                    acc_y += pressure_term * f * dy + viscous_term * dvy;
-                    div_v += vol * f * (dvx * dx + dvy * dy);                                      /* eq. 6 */
-                    const real vf = vol * f;
-                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                    g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
-                    /* rho_b - rho_a less what a linear field gives: its hydrostatic part (Fourtakas) or the
-                     * renormalised gradient's (Antuono) */
-                    const real linear_part = antuono ? (real)-0.5 * ((grad_rho_x[a] + grad_rho_x[b]) * dx +
-                                                                     (grad_rho_y[a] + grad_rho_y[b]) * dy)
-                                                     : rho_h_per_m * dy;
-                    diffusion -= (rho[b] - rhoa - linear_part) * f * vol;
-                    const real speed = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
-                    visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                    grad_c_x += vol * f * dx;
-                    grad_c_y += vol * f * dy;
-                    div_r -= vol * f * r2;
-                    near_surface |= surface[b];
-                }
-                /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
-                 * continuity; no density diffusion across the wall */
-                const int wall_begin = g->wall_start[c0], wall_end = g->wall_start[c1];
-                for (int b = wall_begin; b < wall_end; b++) {
-                    const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                    const real r2 = dx * dx + dy * dy;
-                    if (r2 >= support2)
-                        continue;
-                    const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                    const real vol = mass * inv_rho[b];
-                    const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];
-                    const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2));
-                    const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
-                    acc_x += pressure_term * f * dx + viscous_term * nsx;
-                    acc_y += pressure_term * f * dy + viscous_term * nsy;
-                    div_v += vol * f * ((vxa - vx[b]) * dx + (vya - vy[b]) * dy);
-                    const real vf = vol * f, wdx = vxa - vx[b], wdy = vya - vy[b];
-                    m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                    g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
-                    const real speed = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
-                    visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                    grad_c_x += vol * f * dx;
-                    grad_c_y += vol * f * dy;
-                    div_r -= vol * f * r2;
-                }
+        /* the fluid and wall ranges visit the same cells in the same order */
+        neighbour_ranges fluid, walls;
+        grid_neighbour_ranges(g, g->fluid_start, xa, ya, &fluid);
+        grid_neighbour_ranges(g, g->wall_start, xa, ya, &walls);
+        for (int k = 0; k < fluid.count; k++) {
+            const double xa_shifted = xa - fluid.shift_x[k];
+            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
+                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2 || r2 == 0)
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
+                const real vol = mass * inv_rho[b];
+                const real dvx = vxa - vx[b], dvy = vya - vy[b];
+                const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];           /* eq. 7 */
+                const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2)); /* eq. 7 */
+                acc_x += pressure_term * f * dx + viscous_term * dvx;
+                acc_y += pressure_term * f * dy + viscous_term * dvy;
+                div_v += vol * f * (dvx * dx + dvy * dy);                                      /* eq. 6 */
+                const real vf = vol * f;
+                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
+                /* rho_b - rho_a less what a linear field gives: its hydrostatic part (Fourtakas) or the
+                 * renormalised gradient's (Antuono) */
+                const real linear_part = antuono ? (real)-0.5 * ((grad_rho_x[a] + grad_rho_x[b]) * dx +
+                                                                 (grad_rho_y[a] + grad_rho_y[b]) * dy)
+                                                 : rho_h_per_m * dy;
+                diffusion -= (rho[b] - rhoa - linear_part) * f * vol;
+                const real speed = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
+                visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+                grad_c_x += vol * f * dx;
+                grad_c_y += vol * f * dy;
+                div_r -= vol * f * r2;
+                near_surface |= surface[b];
+            }
+            /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
+             * continuity; no density diffusion across the wall */
+            for (int b = walls.begin[k]; b < walls.end[k]; b++) {
+                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2)
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                const real vol = mass * inv_rho[b];
+                const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];
+                const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2));
+                const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+                acc_x += pressure_term * f * dx + viscous_term * nsx;
+                acc_y += pressure_term * f * dy + viscous_term * nsy;
+                div_v += vol * f * ((vxa - vx[b]) * dx + (vya - vy[b]) * dy);
+                const real vf = vol * f, wdx = vxa - vx[b], wdy = vya - vy[b];
+                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+                g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
+                const real speed = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
+                visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+                grad_c_x += vol * f * dx;
+                grad_c_y += vol * f * dy;
+                div_r -= vol * f * r2;
             }
         }
         sim->ax[a] = acc_x + gx;
