@@ -84,13 +84,18 @@ def wait_for(predicate, timeout_s, poll_s=0.02):
     return None
 
 
-def collect_until_final(sub, timeout_s):
-    """Every message until the stats message with status "final"; [(topic, header, arrays)]."""
-    messages, deadline = [], time.time() + timeout_s
-    while time.time() < deadline:
+def collect_until_final(sub, run, quiet_s=10, limit_s=600):
+    """Every message until the stats message with status "final"; [(topic, header, arrays)], found. Gives up once
+    the run has exited and nothing has arrived for quiet_s (a starved client is slow, not stuck), or after
+    limit_s whatever happens (a hang is a failure)."""
+    messages, start, last_message = [], time.time(), time.time()
+    while time.time() - start < limit_s:
         m = surge_client.receive(sub, 200)
         if m is None:
+            if run.proc.poll() is not None and time.time() - last_message > quiet_s:
+                break
             continue
+        last_message = time.time()
         messages.append(m)
         if m[0] == "stats" and m[1]["status"] == "final":
             return messages, True
@@ -99,8 +104,11 @@ def collect_until_final(sub, timeout_s):
 
 # ---------------------------------------------------------------------------------------------------------------
 def group_state():
-    run = Surge("state", ["-s", "time.end_s=0.2", "-s", "output.snapshot_interval_s=0.05", "--publish-hz", "0"],
-                paused=True)
+    # every message kept: this group compares chosen steps (the first, the snapshots', the final stats) with the
+    # run's own files, and a starved client that falls 4 messages behind would lose them (group stalled covers
+    # the default queue's dropping)
+    run = Surge("state", ["-s", "time.end_s=0.2", "-s", "output.snapshot_interval_s=0.05", "--publish-hz", "0",
+                          "--publish-hwm", "1000000"], paused=True)
     ctx = zmq.Context.instance()
     subset_topic = "state/x_m,vx_mps"
     sub = surge_client.subscribe(run.pub, ["state", "bodies", "stats"], ctx, latest_only=False)
@@ -113,9 +121,9 @@ def group_state():
     time.sleep(0.3)  # the subset subscription reaches the publisher thread
     reply = ctl.request({"cmd": "resume"})
     check("state: resume after the first state", first is not None and reply.get("ok"), str(reply))
-    messages, finished = collect_until_final(sub, 120)
+    messages, finished = collect_until_final(sub, run)
     messages = ([first] if first else []) + messages
-    subset_messages, _ = collect_until_final(subset, 5) if finished else ([], False)
+    subset_messages, _ = collect_until_final(subset, run, quiet_s=5) if finished else ([], False)
     rc = run.wait()
     check("state: run finishes with exit 0 and a final stats message", rc == 0 and finished, run.describe())
 
@@ -226,7 +234,7 @@ def group_control():
     check("control: while paused, the change is published at once with the step it applied at",
           published_at_once, "messages: %s" % [(t, h["step"]) for t, h, a in before_resume][-5:])
     ctl.request({"cmd": "resume"})
-    messages, finished = collect_until_final(sub, 120)
+    messages, finished = collect_until_final(sub, run)
     messages = before_resume + messages
     rc = run.wait()
     check("control: run finishes", rc == 0 and finished, run.describe())
