@@ -7,9 +7,11 @@
 failures = []
 
 
-def check(name, ok, detail=""):
-    """Prints the check's line (and on failure the detail, indented); records a failure; gives ok back."""
-    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "" if ok else "\n    " + str(detail).replace("\n", "\n    ")))
+def check(name, ok, detail="", show_detail=False):
+    """Prints the check's line (and on failure, or always with show_detail, the detail, indented); records a
+    failure; gives ok back."""
+    shown = detail and (show_detail or not ok)
+    print("%s: %s%s" % (name, "ok" if ok else "FAILED", "\n    " + str(detail).replace("\n", "\n    ") if shown else ""))
     if not ok:
         failures.append(name)
     return bool(ok)
