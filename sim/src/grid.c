@@ -80,7 +80,9 @@ int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2])
     return 1;
 }
 
-void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, double y, neighbour_ranges *r)
+/* Fills r from start and, where other is not NULL, other_r from other_start: the same cells in the same order. */
+static void fill_neighbour_ranges(const cell_grid *g, const int *start, const int *other_start, double x, double y,
+                                  neighbour_ranges *r, neighbour_ranges *other_r)
 {
     const int cx = grid_cell_x(g, x), cy = grid_cell_y(g, y);
     cell_span spans[2];
@@ -90,12 +92,31 @@ void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, doubl
         if (row < 0 || row >= g->ncy)
             continue;
         for (int s = 0; s < nspans; s++) {
-            r->begin[r->count] = start[row * g->ncx + spans[s].first_cell];
-            r->end[r->count] = start[row * g->ncx + spans[s].last_cell + 1];
+            const int c0 = row * g->ncx + spans[s].first_cell, c1 = row * g->ncx + spans[s].last_cell + 1;
+            r->begin[r->count] = start[c0];
+            r->end[r->count] = start[c1];
             r->shift_x[r->count] = spans[s].shift_x;
+            if (other_r) {
+                other_r->begin[r->count] = other_start[c0];
+                other_r->end[r->count] = other_start[c1];
+                other_r->shift_x[r->count] = spans[s].shift_x;
+            }
             r->count++;
         }
     }
+    if (other_r)
+        other_r->count = r->count;
+}
+
+void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, double y, neighbour_ranges *r)
+{
+    fill_neighbour_ranges(g, start, NULL, x, y, r, NULL);
+}
+
+void grid_fluid_and_wall_ranges(const cell_grid *g, double x, double y, neighbour_ranges *fluid,
+                                neighbour_ranges *walls)
+{
+    fill_neighbour_ranges(g, g->fluid_start, g->wall_start, x, y, fluid, walls);
 }
 
 /* Stable counting sort of particles [first, first+n) by cell, visited in the order visit gives (NULL: index

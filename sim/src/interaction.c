@@ -82,10 +82,8 @@ void interaction_compute(surge_sim *sim, int corrector)
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
         int near_surface = surface[a];
-        /* the fluid and wall ranges visit the same cells in the same order */
-        neighbour_ranges fluid, walls;
-        grid_neighbour_ranges(g, g->fluid_start, xa, ya, &fluid);
-        grid_neighbour_ranges(g, g->wall_start, xa, ya, &walls);
+        neighbour_ranges fluid, walls; /* the same cells in the same order */
+        grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
         for (int k = 0; k < fluid.count; k++) {
             const double xa_shifted = xa - fluid.shift_x[k];
             for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {

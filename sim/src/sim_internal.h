@@ -96,6 +96,9 @@ int grid_cell_y(const cell_grid *g, double y);
 int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2]);
 /* start: the grid's fluid_start or wall_start; x inside the domain (wrapped when periodic). */
 void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, double y, neighbour_ranges *r);
+/* Both kinds at once, for a loop over fluid and wall neighbours cell by cell. */
+void grid_fluid_and_wall_ranges(const cell_grid *g, double x, double y, neighbour_ranges *fluid,
+                                neighbour_ranges *walls);
 /* Walls in cell order, within a cell by id: the same order whatever the order before (restarts). */
 void grid_sort_walls(surge_sim *sim);
 void grid_sort_fluid(surge_sim *sim);
