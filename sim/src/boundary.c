@@ -114,5 +114,21 @@ void boundary_update(surge_sim *sim)
         sim->ghost_fluid_sum[b] = (real)a00;
         sim->wall_vx[b] = (real)(2.0 * wall_vx - vgx);
         sim->wall_vy[b] = (real)(2.0 * wall_vy - vgy);
+        /* no penetration: where the fluid at the ghost node approaches a fixed wall or a belt, the wall particle
+         * meets it with the mirrored normal velocity in the continuity equation, so the approach compresses the
+         * fluid as a mirror image would (fluid moving away sees the wall's own velocity). Not on boulders: a disc
+         * driven into the fluid would compress it twice over (docs/method.md). */
+        double cont_vx = vx[b], cont_vy = vy[b];
+        if (sim->params.walls.no_penetration && sim->wall_of[b] != WALL_BOULDER) {
+            const double glen = sqrt((double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b]);
+            const double nx = sim->ghost_dx[b] / glen, ny = sim->ghost_dy[b] / glen; /* into the fluid */
+            const double approach = -((vgx - wall_vx) * nx + (vgy - wall_vy) * ny);
+            if (approach > 0) {
+                cont_vx += approach * nx;
+                cont_vy += approach * ny;
+            }
+        }
+        sim->wall_cont_vx[b] = (real)cont_vx;
+        sim->wall_cont_vy[b] = (real)cont_vy;
     }
 }

@@ -69,6 +69,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
     const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
     const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
+    const real *restrict cont_vx = sim->wall_cont_vx, *restrict cont_vy = sim->wall_cont_vy;
     const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
     const uint8_t *restrict surface = sim->surface;
 
@@ -129,8 +130,8 @@ void interaction_compute(surge_sim *sim, int corrector)
                 const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
                 acc_x += pressure_term * f * dx + viscous_term * nsx;
                 acc_y += pressure_term * f * dy + viscous_term * nsy;
-                div_v += vol * f * ((vxa - vx[b]) * dx + (vya - vy[b]) * dy);
-                const real vf = vol * f, wdx = vxa - vx[b], wdy = vya - vy[b];
+                const real vf = vol * f, wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+                div_v += vf * (wdx * dx + wdy * dy);
                 m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
                 g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
                 const real speed = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));

@@ -49,6 +49,10 @@ static const surge_param_info registry[] = {
     {"walls", "upstream", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
      "Fixed vertical wall at upstream_x_m inside a periodic domain, fluid on its downstream (+x) side.",
      OFF(walls.upstream)},
+    {"walls", "no_penetration", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
+     "Where fluid approaches a wall or the belt (not a boulder), the wall particle meets it with the mirrored normal "
+     "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
+     OFF(walls.no_penetration)},
     {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,
      "Position of the upstream wall's fluid face.", OFF(walls.upstream_x_m)},
     {"walls", "upstream_height_m", SURGE_PARAM_REAL, "m", 0.06, 1e-6, 1e4, false, NULL,
@@ -157,6 +161,9 @@ static const surge_param_info registry[] = {
      OFF(shifting.surface_threshold)},
     {"shifting", "max_shift_dp", SURGE_PARAM_REAL, "dp", 0.1, 0, 1, true, NULL,
      "Largest shift of a particle in one step, in units of dp.", OFF(shifting.max_shift_dp)},
+    {"shifting", "consistent_density", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+     "The density also takes on the divergence of each shift, so that densities follow the particles' spacing "
+     "(mass moves with the particles; opt-in, docs/method.md).", OFF(shifting.consistent_density)},
 
     {"time", "end_s", SURGE_PARAM_REAL, "s", 6, 0, 1e7, true, NULL, "Simulated time at which the run ends.",
      OFF(time.end_s)},

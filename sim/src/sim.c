@@ -68,9 +68,9 @@ void surge_sim_destroy(surge_sim *sim)
         return;
     void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
                       sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->visc_speed_mps,
-                      sim->grad_c_x, sim->grad_c_y, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
+                      sim->grad_c_x, sim->grad_c_y, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
                       sim->near_surface, sim->kind,
-                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy,
+                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy, sim->wall_cont_vx, sim->wall_cont_vy,
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -110,37 +110,6 @@ static inline double wrap_x(double x, double period)
             x += period;
     }
     return x;
-}
-
-/* Particle shifting, applied with the corrector (workshop paper Sect. II-D, V-B). */
-static void shift_displacement(const surge_sim *sim, int a, double dt, double *sx, double *sy)
-{
-    const surge_params *p = &sim->params;
-    *sx = *sy = 0;
-    double coef;
-    switch (p->shifting.form) {
-    case SURGE_SHIFT_VELOCITY: /* dr = -A h |u| dt grad C, none on the free surface */
-        if (sim->div_r[a] < p->shifting.surface_threshold)
-            return;
-        coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
-               sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
-        break;
-    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
-        if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
-            return;
-        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
-        break;
-    default: return;
-    }
-    double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
-    const double max_shift = p->shifting.max_shift_dp * p->numerics.dp_m;
-    const double len = sqrt(dx * dx + dy * dy);
-    if (len > max_shift) {
-        dx *= max_shift / len;
-        dy *= max_shift / len;
-    }
-    *sx = dx;
-    *sy = dy;
 }
 
 static void restore_step_start(surge_sim *sim)
@@ -205,12 +174,13 @@ int surge_sim_step(surge_sim *sim)
         boulders_restore(sim);
         return -1;
     }
+    shifting_compute(sim, dt);
     #pragma omp parallel for schedule(static)
     for (int a = first; a < n; a++) {
         const double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
-        const double eps = -(double)sim->drho[a] / sim->rho[a] * dt;
-        double sx, sy;
-        shift_displacement(sim, a, dt, &sx, &sy);
+        /* eps = div(v) dt (+ div(dr) of the shift) */
+        const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
+        const double sx = sim->shift_x[a], sy = sim->shift_y[a];
         sim->vx[a] = (real)vx1;
         sim->vy[a] = (real)vy1;
         sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));

@@ -62,6 +62,8 @@ struct surge_sim {
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
     real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
     real *div_r;
+    real *shift_x, *shift_y;   /* this step's shifting displacement (m) */
+    real *shift_div;           /* its divergence div(dr), the relative volume change it makes */
     uint8_t *surface;          /* free-surface flag from the last predictor pass */
     uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */
     /* wall particles only */
@@ -69,6 +71,7 @@ struct surge_sim {
     real *ghost_dx, *ghost_dy; /* offset from wall particle to its mDBC ghost node */
     real *ghost_fluid_sum;     /* sum of W V_j of the fluid at the ghost node: ~1 wetted, 0 dry (boundary_update) */
     real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
+    real *wall_cont_vx, *wall_cont_vy; /* velocity in the continuity equation: the wall's, plus no penetration */
     double wall_speed[WALL_COUNT];
     uint8_t *kind;             /* surge_particle_kind, by id */
 
@@ -124,6 +127,9 @@ void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step 
 int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
 void boulders_free(boulder_set *b);
+
+/* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass) */
+void shifting_compute(surge_sim *sim, double dt_s);
 
 /* health.c */
 int health_check(surge_sim *sim);

@@ -69,6 +69,7 @@ typedef struct surge_params {
         int layers;
         bool bottom, top, left, right;
         bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
+        bool no_penetration;      /* continuity sees approaching fluid met by the mirrored normal velocity */
         double upstream_x_m;
         double upstream_height_m;
         double bottom_speed_mps;  /* target x velocity of the bottom wall (the belt; negative = upstream) */
@@ -117,6 +118,7 @@ typedef struct surge_params {
         double lind_coefficient;     /* A_L of Lind's form */
         double surface_threshold;    /* div r below this marks a free-surface particle (2D bulk: 2) */
         double max_shift_dp;         /* largest shift in one step, in units of dp */
+        bool consistent_density;     /* the shift's divergence changes the density too (volume follows spacing) */
     } shifting;
     struct {
         double end_s;

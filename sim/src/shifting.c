@@ -1,0 +1,92 @@
+/* Particle shifting (workshop paper Sect. II-D, V-B), applied with the corrector, and the density change that
+ * keeps each particle's density consistent with the spacing the shift leaves (docs/method.md, "Particle
+ * shifting"). */
+#include <math.h>
+
+#include "sim_internal.h"
+
+/* The displacement of fluid particle a, from the concentration gradient of the corrector's pass. */
+static void shift_displacement(const surge_sim *sim, int a, double dt, double *sx, double *sy)
+{
+    const surge_params *p = &sim->params;
+    *sx = *sy = 0;
+    double coef;
+    switch (p->shifting.form) {
+    case SURGE_SHIFT_VELOCITY: /* dr = -A h |u| dt grad C, none on the free surface */
+        if (sim->div_r[a] < p->shifting.surface_threshold)
+            return;
+        coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
+               sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
+        break;
+    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
+        if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
+            return;
+        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
+        break;
+    default: return;
+    }
+    double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
+    const double max_shift = p->shifting.max_shift_dp * p->numerics.dp_m;
+    const double len = sqrt(dx * dx + dy * dy);
+    if (len > max_shift) {
+        dx *= max_shift / len;
+        dy *= max_shift / len;
+    }
+    *sx = dx;
+    *sy = dy;
+}
+
+/* The relative volume change each shift causes, div(dr)_a = -sum_b V_b (dr_a - dr_b).grad_a W_ab over fluid and
+ * wall neighbours (walls do not shift): the same sum by which the shift changes the particle's kernel sum
+ * sum_b m W_ab, so a density that takes it on follows the spacing (mass is carried with the particles). */
+static void shift_divergence(surge_sim *sim)
+{
+    const cell_grid *g = &sim->grid;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
+    const real support2 = sim->kernel.support2;
+    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict inv_rho = sim->inv_rho, *restrict sx = sim->shift_x, *restrict sy = sim->shift_y;
+    #pragma omp parallel for schedule(static)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double xa = x[a], ya = y[a];
+        const real sxa = sx[a], sya = sy[a];
+        real sum = 0;
+        neighbour_ranges fluid, walls;
+        grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
+        for (int k = 0; k < fluid.count; k++) {
+            const double xa_shifted = xa - fluid.shift_x[k];
+            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
+                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2 || r2 == 0)
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                sum += mass * inv_rho[b] * f * ((sxa - sx[b]) * dx + (sya - sy[b]) * dy);
+            }
+            for (int b = walls.begin[k]; b < walls.end[k]; b++) {
+                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
+                const real r2 = dx * dx + dy * dy;
+                if (r2 >= support2)
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                sum += mass * inv_rho[b] * f * (sxa * dx + sya * dy);
+            }
+        }
+        sim->shift_div[a] = -sum;
+    }
+}
+
+void shifting_compute(surge_sim *sim, double dt_s)
+{
+    const int first = sim->wall_count, n = sim->count;
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        double sx, sy;
+        shift_displacement(sim, a, dt_s, &sx, &sy);
+        sim->shift_x[a] = (real)sx;
+        sim->shift_y[a] = (real)sy;
+        sim->shift_div[a] = 0;
+    }
+    if (sim->params.shifting.form != SURGE_SHIFT_NONE && sim->params.shifting.consistent_density)
+        shift_divergence(sim);
+}
