@@ -118,10 +118,13 @@ void boundary_update(surge_sim *sim)
          * meets it with the mirrored normal velocity in the continuity equation, so the approach compresses the
          * fluid as a mirror image would (fluid moving away sees the wall's own velocity). Not on boulders: a disc
          * driven into the fluid would compress it twice over (docs/method.md). */
+        const double glen = sqrt((double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b]);
+        const double nx = sim->ghost_dx[b] / glen, ny = sim->ghost_dy[b] / glen; /* into the fluid */
+        sim->wall_nx[b] = (real)nx;
+        sim->wall_ny[b] = (real)ny;
+        sim->wall_depth_m[b] = (real)(0.5 * glen);
         double cont_vx = vx[b], cont_vy = vy[b];
         if (sim->params.walls.no_penetration && sim->wall_of[b] != WALL_BOULDER) {
-            const double glen = sqrt((double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b]);
-            const double nx = sim->ghost_dx[b] / glen, ny = sim->ghost_dy[b] / glen; /* into the fluid */
             const double approach = -((vgx - wall_vx) * nx + (vgy - wall_vy) * ny);
             if (approach > 0) {
                 cont_vx += approach * nx;

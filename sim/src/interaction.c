@@ -71,7 +71,16 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
     const real *restrict cont_vx = sim->wall_cont_vx, *restrict cont_vy = sim->wall_cont_vy;
     const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
-    const uint8_t *restrict surface = sim->surface;
+    const uint8_t *restrict surface = sim->surface, *restrict wall_of = sim->wall_of;
+    /* relaxation of the density toward the kernel sum in the bulk: kappa per unit strain (corrector pass only) */
+    const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
+    const real alpha = sim->kernel.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
+    /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
+    const real half_dp = (real)(0.5 * sim->params.numerics.dp_m);
+    const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
+    const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
+    const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
+    const real *restrict wall_nx = sim->wall_nx, *restrict wall_ny = sim->wall_ny, *restrict wall_depth_m = sim->wall_depth_m;
 
     /* Each particle gathers over its neighbours in a fixed order, so results do not depend on the thread count.
      * (A branch-free, vectorised form of these loops measured 2x slower: most candidates lie beyond 2h.) */
@@ -80,9 +89,12 @@ void interaction_compute(surge_sim *sim, int corrector)
         const double xa = x[a], ya = y[a];
         const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a], inv_rhoa = inv_rho[a];
         real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_speed_mps = 0;
+        real kernel_sum = mass * alpha; /* sum_b m W_ab, the particle itself included */
+        real face_m = face_search_m, face_nx = 0, face_ny = 0; /* the nearest wall face straight below, its normal */
+        int face_b = -1;
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
-        int near_surface = surface[a];
+        int near_surface = surface[a], near_boulder = 0;
         neighbour_ranges fluid, walls; /* the same cells in the same order */
         grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
         for (int k = 0; k < fluid.count; k++) {
@@ -115,6 +127,8 @@ void interaction_compute(surge_sim *sim, int corrector)
                 grad_c_y += vol * f * dy;
                 div_r -= vol * f * r2;
                 near_surface |= surface[b];
+                if (relax_per_strain > 0)
+                    kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
             }
             /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
              * continuity; no density diffusion across the wall */
@@ -130,6 +144,14 @@ void interaction_compute(surge_sim *sim, int corrector)
                 const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
                 acc_x += pressure_term * f * dx + viscous_term * nsx;
                 acc_y += pressure_term * f * dy + viscous_term * nsy;
+                /* distance to the face of the wall particle straight below (within dp/2 of its normal line); not
+                 * a boulder's, whose disc would have to take the reaction */
+                const real along = dx * wall_nx[b] + dy * wall_ny[b];
+                if (face_search_m > 0 && r2 - along * along < half_dp * half_dp && along - wall_depth_m[b] < face_m &&
+                    wall_of[b] != WALL_BOULDER) {
+                    face_m = along - wall_depth_m[b];
+                    face_nx = wall_nx[b], face_ny = wall_ny[b], face_b = b;
+                }
                 const real vf = vol * f, wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
                 div_v += vf * (wdx * dx + wdy * dy);
                 m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
@@ -139,7 +161,20 @@ void interaction_compute(surge_sim *sim, int corrector)
                 grad_c_x += vol * f * dx;
                 grad_c_y += vol * f * dy;
                 div_r -= vol * f * r2;
+                near_boulder |= wall_of[b] == WALL_BOULDER;
+                if (relax_per_strain > 0)
+                    kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
             }
+        }
+        if (face_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along its
+                                      * normal; the step's update takes away any velocity toward it (sim.c) */
+            const real depth = (face_reach_m - face_m) / face_reach_m;
+            acc_x += face_stiffness * depth * depth * face_nx;
+            acc_y += face_stiffness * depth * depth * face_ny;
+        }
+        if (corrector) {
+            sim->face_nx[a] = face_nx, sim->face_ny[a] = face_ny, sim->face_gap_m[a] = face_m;
+            sim->face_vn_mps[a] = face_b >= 0 ? vx[face_b] * face_nx + vy[face_b] * face_ny : 0;
         }
         sim->ax[a] = acc_x + gx;
         sim->ay[a] = acc_y + gy;
@@ -150,6 +185,15 @@ void interaction_compute(surge_sim *sim, int corrector)
             div_v = -inv * (g_xx * m_yy - g_xy * m_xy - g_yx * m_xy + g_yy * m_xx);
         }
         sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
+        /* full kernel support, and no boulder's particles (their spacing along a curved surface is not the fluid's):
+         * the kernel sum is the density the spacing says */
+        if (relax_per_strain > 0 && !near_surface && !near_boulder) {
+            /* at the rate kappa |2D|, D = sym(G) the strain rate (M = I in the bulk): where the fluid deforms, since
+             * deformation is what moves spacing and density apart; a fluid at rest keeps its densities */
+            const real shear = g_xy + g_yx;
+            const real strain_rate = REAL_SQRT((real)2 * (g_xx * g_xx + g_yy * g_yy) + shear * shear);
+            sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
+        }
         sim->visc_speed_mps[a] = visc_speed_mps;
         sim->div_r[a] = div_r;
         sim->grad_c_x[a] = grad_c_x;

@@ -39,6 +39,15 @@ static inline real kernel2d_w(const kernel2d *k, real r)
     return k->alpha * t2 * t2 * ((real)2 * q + (real)1);
 }
 
+/* W for r already known to lie within 2h, from the kernel's constants (hot loops). */
+static inline real kernel2d_w_inside(real alpha, real inv_h, real r)
+{
+    const real q = r * inv_h;
+    const real t = (real)1 - (real)0.5 * q;
+    const real t2 = t * t;
+    return alpha * t2 * t2 * ((real)2 * q + (real)1);
+}
+
 /* F such that grad_a W_ab = F r_ab, r_ab = r_a - r_b: F = -5 alpha (1 - q/2)^3 / h^2 (zero beyond 2h). */
 static inline real kernel2d_grad_factor(const kernel2d *k, real r)
 {

@@ -53,6 +53,10 @@ static const surge_param_info registry[] = {
      "Where fluid approaches a wall or the belt (not a boulder), the wall particle meets it with the mirrored normal "
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
+    {"walls", "face_repulsion_reach_dp", SURGE_PARAM_REAL, "dp", 0.25, 0, 0.5, true, NULL,
+     "A fluid particle closer than this to the face of the wall particle straight below it (not a boulder's) is "
+     "pushed back along the wall normal, 0.1 c0^2/dp (1 - d/reach)^2, and loses its velocity toward the face; no "
+     "shift brings a particle closer than this (0: off; docs/method.md).", OFF(walls.face_repulsion_reach_dp)},
     {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,
      "Position of the upstream wall's fluid face.", OFF(walls.upstream_x_m)},
     {"walls", "upstream_height_m", SURGE_PARAM_REAL, "m", 0.06, 1e-6, 1e4, false, NULL,
@@ -95,7 +99,11 @@ static const surge_param_info registry[] = {
      "antuono (delta-SPH; less the renormalised density gradient, so that no linear density field diffuses, "
      "also where the kernel is truncated at the free surface). docs/method.md.",
      OFF(numerics.density_diffusion_form)},
-    {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+    {"numerics", "density_relaxation", SURGE_PARAM_REAL, "-", 1.0, 0, 10, true, NULL,
+     "kappa: where the kernel is full (no free-surface or boulder particle within 2h), each density relaxes "
+     "toward the particles' kernel sum sum_b m W_ab at kappa times the local strain rate, so that spacing and "
+     "density cannot part where the fluid deforms (0: off; docs/method.md).", OFF(numerics.density_relaxation)},
+    {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",
      OFF(numerics.continuity_correction)},

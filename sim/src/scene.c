@@ -185,6 +185,7 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
     ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
     ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->visc_speed_mps, n);
+    ALLOC(s->face_nx, n); ALLOC(s->face_ny, n); ALLOC(s->face_gap_m, n); ALLOC(s->face_vn_mps, n);
     ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);
     ALLOC(s->shift_x, n); ALLOC(s->shift_y, n); ALLOC(s->shift_div, n);
     ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
@@ -192,10 +193,28 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);
     ALLOC(s->boulders.local_y, s->wall_count); ALLOC(s->boulders.spin_coupling, s->wall_count);
     ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count);
-    ALLOC(s->wall_cont_vx, s->wall_count); ALLOC(s->wall_cont_vy, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
+    ALLOC(s->wall_cont_vx, s->wall_count); ALLOC(s->wall_cont_vy, s->wall_count);
+    ALLOC(s->wall_nx, s->wall_count); ALLOC(s->wall_ny, s->wall_count); ALLOC(s->wall_depth_m, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
     ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
 #undef ALLOC
     return ok ? 0 : -1;
+}
+
+/* Row r (from the bed) of a fluid column of `rows` particles at rest: returns its hydrostatic density, the weight
+ * of the rows above (rho0 g_n dp per row, half for its own) through the Tait inverse, and moves *y from row
+ * r - 1's height (0 before row 0) to row r's. Rows sit dp rho0 / rho apart, so that each particle's area m / rho
+ * is the area the lattice gives it and the kernel sum starts consistent with the density (docs/method.md). */
+static double fluid_row(const surge_sim *s, long rows, long r, double g_normal, double *y)
+{
+    const double dp = s->params.numerics.dp_m;
+    const double rho = tait_density(s->rho0 * g_normal * dp * (double)(rows - r - 0.5), s->rho0, s->b_pa);
+    if (r == 0) {
+        *y = 0.5 * dp * s->rho0 / rho;
+    } else {
+        const double rho_below = tait_density(s->rho0 * g_normal * dp * (double)(rows - r + 0.5), s->rho0, s->b_pa);
+        *y += 0.5 * dp * (s->rho0 / rho_below + s->rho0 / rho);
+    }
+    return rho;
 }
 
 int scene_build(surge_sim *s, char *err, size_t err_len)
@@ -229,10 +248,16 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         goto fail;
     }
     fluid_columns(p, rows, cols, err, err_len);
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    const double g_normal = p->body.gravity_mps2 * cos(theta);
     long fluid_count = 0;
-    for (long c = 0; c < cols; c++)
-        for (long r = 0; r < rows[c]; r++)
-            fluid_count += !boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, (r + 0.5) * dp);
+    for (long c = 0; c < cols; c++) {
+        double y = 0;
+        for (long r = 0; r < rows[c]; r++) {
+            fluid_row(s, rows[c], r, g_normal, &y);
+            fluid_count += !boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, y);
+        }
+    }
     const int boulder_particles = boulders_particle_count(s);
     s->wall_count = walls.n + boulder_particles;
     if (allocate_state(s, s->wall_count + (int)fluid_count) != 0) {
@@ -254,18 +279,18 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         s->id[i] = i;
         s->kind[i] = SURGE_KIND_WALL; /* boundary_wall_speeds marks the moving ones, following live speeds */
     }
-    /* fluid on a square lattice, density in hydrostatic balance with the bed-normal gravity */
-    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
-    const double g_normal = p->body.gravity_mps2 * cos(theta);
+    /* fluid in columns dp apart, density in hydrostatic balance with the bed-normal gravity, rows as far apart
+     * as that density says */
     int32_t i = s->wall_count;
     for (long c = 0; c < cols; c++) {
+        double y = 0;
         for (long r = 0; r < rows[c]; r++) {
-            if (boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, (r + 0.5) * dp))
+            const double rho = fluid_row(s, rows[c], r, g_normal, &y);
+            if (boulders_cover(s, p->fluid.x0_m + (c + 0.5) * dp, y))
                 continue;
             s->x[i] = p->fluid.x0_m + (c + 0.5) * dp;
-            s->y[i] = (r + 0.5) * dp;
-            double p_hydro = s->rho0 * g_normal * (rows[c] * dp - s->y[i]);
-            s->rho[i] = (real)tait_density(p_hydro, s->rho0, s->b_pa);
+            s->y[i] = y;
+            s->rho[i] = (real)rho;
             s->id[i] = i;
             s->kind[i] = SURGE_KIND_FLUID;
             i++;

@@ -6,6 +6,18 @@
 
 #include "sim_internal.h"
 
+/* sum_b dp^2 W(r_ab) over a square lattice of spacing dp, the particle itself included: the kernel sum of a fluid
+ * at rest on the initial lattice is rho0 times this (0.993 at C_h 1.5), not rho0 */
+static double lattice_kernel_sum(const kernel2d *k, double dp)
+{
+    const int reach = (int)ceil(2.0 * k->h / dp);
+    double sum = 0;
+    for (int i = -reach; i <= reach; i++)
+        for (int j = -reach; j <= reach; j++)
+            sum += dp * dp * kernel2d_w(k, (real)(dp * sqrt((double)(i * i + j * j))));
+    return sum;
+}
+
 static void update_body_force(surge_sim *sim)
 {
     const surge_params *p = &sim->params;
@@ -45,6 +57,7 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->derived.particle_mass_kg = sim->mass;
     sim->eta2 = 0.01 * sim->derived.h_m * sim->derived.h_m;
     sim->kernel = kernel2d_make(sim->derived.h_m);
+    sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp);
     update_body_force(sim);
     if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0) {
         surge_sim_destroy(sim);
@@ -68,9 +81,10 @@ void surge_sim_destroy(surge_sim *sim)
         return;
     void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
                       sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->visc_speed_mps,
+                      sim->face_nx, sim->face_ny, sim->face_gap_m, sim->face_vn_mps,
                       sim->grad_c_x, sim->grad_c_y, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
                       sim->near_surface, sim->kind,
-                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy, sim->wall_cont_vx, sim->wall_cont_vy,
+                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy, sim->wall_cont_vx, sim->wall_cont_vy, sim->wall_nx, sim->wall_ny, sim->wall_depth_m,
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -175,9 +189,16 @@ int surge_sim_step(surge_sim *sim)
         return -1;
     }
     shifting_compute(sim, dt);
+    const double face_reach_m = sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m;
     #pragma omp parallel for schedule(static)
     for (int a = first; a < n; a++) {
-        const double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
+        double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
+        /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md) */
+        const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
+        if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0) {
+            vx1 -= approach_mps * sim->face_nx[a];
+            vy1 -= approach_mps * sim->face_ny[a];
+        }
         /* eps = div(v) dt (+ div(dr) of the shift) */
         const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
         const double sx = sim->shift_x[a], sy = sim->shift_y[a];

@@ -45,6 +45,7 @@ struct surge_sim {
     surge_derived derived;
     kernel2d kernel;
     double rho0, b_pa, eta2, mass;
+    double lattice_kernel_sum; /* sum_b dp^2 W_ab over a square lattice at rest: the kernel sum's own bias */
     double gx, gy;             /* body acceleration (tilted gravity + body force) */
     double rho_h_per_m;        /* hydrostatic density gradient rho0 g_n / c0^2 (density diffusion) */
 
@@ -59,6 +60,9 @@ struct surge_sim {
     /* per-particle rates and scratch */
     real *ax, *ay, *drho, *pressure, *inv_rho;
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
+    real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
+    real *face_gap_m;          /* the particle's distance from that face (negative past it) */
+    real *face_vn_mps;         /* that wall's velocity along the normal */
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
     real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
     real *div_r;
@@ -72,6 +76,8 @@ struct surge_sim {
     real *ghost_fluid_sum;     /* sum of W V_j of the fluid at the ghost node: ~1 wetted, 0 dry (boundary_update) */
     real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
     real *wall_cont_vx, *wall_cont_vy; /* velocity in the continuity equation: the wall's, plus no penetration */
+    real *wall_nx, *wall_ny;   /* unit normal from the wall particle toward its ghost (into the fluid) */
+    real *wall_depth_m;        /* the wall particle's distance below the wall face (half its ghost offset) */
     double wall_speed[WALL_COUNT];
     uint8_t *kind;             /* surge_particle_kind, by id */
 

@@ -70,6 +70,7 @@ typedef struct surge_params {
         bool bottom, top, left, right;
         bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
         bool no_penetration;      /* continuity sees approaching fluid met by the mirrored normal velocity */
+        double face_repulsion_reach_dp; /* fluid closer than this to a wall face is pushed back (dp; 0: off) */
         double upstream_x_m;
         double upstream_height_m;
         double bottom_speed_mps;  /* target x velocity of the bottom wall (the belt; negative = upstream) */
@@ -89,6 +90,7 @@ typedef struct surge_params {
         double c0_factor;         /* c0 = c0_factor * largest expected speed when derived */
         double density_diffusion; /* delta of the density-diffusion term */
         int density_diffusion_form; /* surge_diffusion_form */
+        double density_relaxation;  /* kappa: bulk densities relax toward the kernel sum at kappa c0 / h (0: off) */
         bool continuity_correction; /* velocity divergence renormalised by the kernel moment matrix */
         bool viscous_dt_limit;
         double dt_fixed_s;        /* 0: variable time step */
