@@ -1,4 +1,4 @@
-/* Physics tests against analytic references (physics.md). Each runs a shipped case, made cheaper through
+/* Physics tests against analytic references (docs/references.md). Each runs a shipped case, made cheaper through
  * overrides where that keeps the check meaningful, and prints the measured errors next to their bounds.
  * usage: test_physics NAME [profile.csv]   NAME: hydrostatic | poiseuille | couette | film | restart */
 #define _POSIX_C_SOURCE 200809L
@@ -192,7 +192,7 @@ static int test_hydrostatic(void)
     return failures;
 }
 
-/* Uniform film on an incline (physics.md eq. 12): u(y) = g sin(theta) (2 H y - y^2) / (2 nu). */
+/* Uniform film on an incline (GMD 2025 eq. 12): u(y) = g sin(theta) (2 H y - y^2) / (2 nu). */
 static double film_g_sin, film_h, film_nu;
 static double film(double y, double t)
 {

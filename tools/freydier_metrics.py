@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Validation metrics of a steady viscous front held on a conveyor belt (GMD paper Sect. 3.1,
-eqs. 15-18; docs/validation/freydier_metrics.md describes the method, ../shared/physics.md sections 3-5
+eqs. 15-18; docs/validation/freydier_metrics.md describes the method, docs/references.md sections 2, 5 and 6
 the physics).
 
 Usage:
@@ -43,7 +43,7 @@ class MetricsError(Exception):
 
 
 # ------------------------------------------------------------------------------------------------
-# References (physics.md section 3)
+# References (docs/references.md section 2)
 # ------------------------------------------------------------------------------------------------
 
 def h_ref_star(xstar, tan_theta):

@@ -11,7 +11,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   tools/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png] [--dp DP] [--c0 C0]
         [--diffusion DELTA]
 
-Measurement (physics.md section 3, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
+Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
 body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc area over L B.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,

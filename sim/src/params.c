@@ -33,7 +33,7 @@ static const surge_param_info registry[] = {
     {"fluid", "depth_m", SURGE_PARAM_REAL, "m", 0.018, 1e-6, 1e4, false, NULL,
      "Depth of the initial fluid block above the bed (y = 0).", OFF(fluid.depth_m)},
     {"fluid", "shape", SURGE_PARAM_ENUM, "-", SURGE_SHAPE_BLOCK, 0, 1, false, "block|lubrication",
-     "Initial fluid: the block, or the steady lubrication front (GMD 2025 Sect. 3.1; physics.md 3) holding the "
+     "Initial fluid: the block, or the steady lubrication front (GMD 2025 Sect. 3.1; docs/references.md) holding the "
      "block's volume, starting at x0_m (needs a belt speed and a slope).", OFF(fluid.shape)},
 
     {"walls", "layers", SURGE_PARAM_INT, "-", 0, 0, 16, false, NULL,

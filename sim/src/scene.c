@@ -6,7 +6,7 @@
 
 #include "sim_internal.h"
 
-/* The largest speed the scene can be expected to reach, from its own scales (physics.md section 1). */
+/* The largest speed the scene can be expected to reach, from its own scales (docs/method.md). */
 double scene_expected_speed(const surge_params *p)
 {
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
@@ -104,7 +104,7 @@ static double uniform_depth(const surge_params *p)
     return sqrt(3.0 * p->fluid.viscosity_m2ps * fabs(p->walls.bottom_speed_mps) / g_along);
 }
 
-/* Lubrication front (physics.md 3): xi tan(theta) / h_n = artanh(h/h_n) - h/h_n, xi upstream of the tip. */
+/* Lubrication front (docs/references.md §2): xi tan(theta) / h_n = artanh(h/h_n) - h/h_n, xi upstream of the tip. */
 static double lubrication_depth(double xi, double h_n, double tan_theta)
 {
     const double target = xi * tan_theta / h_n;
