@@ -28,24 +28,20 @@ static inline kernel2d kernel2d_make(double h)
     return k;
 }
 
-/* W(q) = alpha (1 - q/2)^4 (2q + 1), q = r/h in [0, 2]  (eq. 9) */
-static inline real kernel2d_w(const kernel2d *k, real r)
-{
-    real q = r * k->inv_h;
-    if (q >= (real)2)
-        return 0;
-    real t = (real)1 - (real)0.5 * q;
-    real t2 = t * t;
-    return k->alpha * t2 * t2 * ((real)2 * q + (real)1);
-}
-
-/* W for r already known to lie within 2h, from the kernel's constants (hot loops). */
+/* W(q) = alpha (1 - q/2)^4 (2q + 1), q = r/h in [0, 2]  (eq. 9), for r already known to lie within 2h, from the
+ * kernel's constants (hot loops) */
 static inline real kernel2d_w_inside(real alpha, real inv_h, real r)
 {
     const real q = r * inv_h;
     const real t = (real)1 - (real)0.5 * q;
     const real t2 = t * t;
     return alpha * t2 * t2 * ((real)2 * q + (real)1);
+}
+
+/* W at any distance (zero beyond 2h) */
+static inline real kernel2d_w(const kernel2d *k, real r)
+{
+    return r * k->inv_h >= (real)2 ? 0 : kernel2d_w_inside(k->alpha, k->inv_h, r);
 }
 
 /* F such that grad_a W_ab = F r_ab, r_ab = r_a - r_b: F = -5 alpha (1 - q/2)^3 / h^2 (zero beyond 2h). */
