@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "eos.h"
 #include "sim_internal.h"
 
 static int failures = 0;

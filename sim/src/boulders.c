@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "pair_terms.h"
 #include "sim_internal.h"
 
 enum { MAX_PLACEMENT_TRIES = 2000000, MAX_RANDOM_DISCS = 20000 };
@@ -390,11 +391,12 @@ void boulders_fluid_forces(surge_sim *sim)
                 if (r2 >= support2)
                     continue;
                 const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                const real pressure_term = -mass * (pres[a] + pres[k]) * inv_rho[a] * inv_rho[k];
-                const real viscous_term = mass * four_nu * f * r2 / ((rho[a] + rho[k]) * (r2 + eta2));
-                sum_x += pressure_term * f * dx + viscous_term * (vx[a] - sim->wall_vx[k]);
-                sum_y += pressure_term * f * dy + viscous_term * (vy[a] - sim->wall_vy[k]);
-                sum_viscous += viscous_term;
+                /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop) */
+                const real pressure_coef = pair_pressure_coef(mass, pres[a], pres[k], inv_rho[a], inv_rho[k]);
+                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rho[a], rho[k], eta2);
+                sum_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, vx[a] - sim->wall_vx[k]);
+                sum_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, vy[a] - sim->wall_vy[k]);
+                sum_viscous += viscous_coef;
             }
         }
         fx[k] = -mass * sum_x;

@@ -3,6 +3,8 @@
  * shifting need. */
 #include <math.h>
 
+#include "eos.h"
+#include "pair_terms.h"
 #include "sim_internal.h"
 
 static void compute_pressure(surge_sim *sim)
@@ -93,7 +95,7 @@ void interaction_compute(surge_sim *sim, int corrector)
         real face_m = face_search_m, face_nx = 0, face_ny = 0; /* the nearest wall face straight below, its normal */
         int face_b = -1;
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
-        real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0; /* moment, velocity gradient */
+        pair_moments moments = {0};
         int near_surface = surface[a], near_boulder = 0;
         neighbour_ranges fluid, walls; /* the same cells in the same order */
         grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
@@ -105,27 +107,23 @@ void interaction_compute(surge_sim *sim, int corrector)
                 if (r2 >= support2 || r2 == 0)
                     continue;
                 const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
-                const real vol = mass * inv_rho[b];
+                const real vol = mass * inv_rho[b], vf = vol * f;
                 const real dvx = vxa - vx[b], dvy = vya - vy[b];
-                const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];           /* eq. 7 */
-                const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2)); /* eq. 7 */
-                acc_x += pressure_term * f * dx + viscous_term * dvx;
-                acc_y += pressure_term * f * dy + viscous_term * dvy;
-                div_v += vol * f * (dvx * dx + dvy * dy);                                      /* eq. 6 */
-                const real vf = vol * f;
-                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                g_xx -= vf * dvx * dx, g_xy -= vf * dvx * dy, g_yx -= vf * dvy * dx, g_yy -= vf * dvy * dy;
-                /* rho_b - rho_a less what a linear field gives: its hydrostatic part (Fourtakas) or the
-                 * renormalised gradient's (Antuono) */
-                const real linear_part = antuono ? (real)-0.5 * ((grad_rho_x[a] + grad_rho_x[b]) * dx +
-                                                                 (grad_rho_y[a] + grad_rho_y[b]) * dy)
-                                                 : rho_h_per_m * dy;
-                diffusion -= (rho[b] - rhoa - linear_part) * f * vol;
-                const real speed = REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
+                const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+                acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
+                acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
+                div_v += pair_divergence(vf, dvx, dvy, dx, dy);
+                pair_add_moments(&moments, vf, dx, dy, dvx, dvy);
+                const real linear_part = antuono ? pair_gradient_part(grad_rho_x[a], grad_rho_y[a], grad_rho_x[b],
+                                                                      grad_rho_y[b], dx, dy)
+                                                 : pair_hydrostatic_part(rho_h_per_m, dy);
+                diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
+                const real speed = pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2);
                 visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                grad_c_x += vol * f * dx;
-                grad_c_y += vol * f * dy;
-                div_r -= vol * f * r2;
+                grad_c_x += vf * dx;
+                grad_c_y += vf * dy;
+                div_r -= vf * r2;
                 near_surface |= surface[b];
                 if (relax_per_strain > 0)
                     kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
@@ -138,12 +136,12 @@ void interaction_compute(surge_sim *sim, int corrector)
                 if (r2 >= support2)
                     continue;
                 const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                const real vol = mass * inv_rho[b];
-                const real pressure_term = -mass * (pa + pres[b]) * inv_rhoa * inv_rho[b];
-                const real viscous_term = mass * four_nu * f * r2 / ((rhoa + rho[b]) * (r2 + eta2));
+                const real vol = mass * inv_rho[b], vf = vol * f;
+                const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
                 const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
-                acc_x += pressure_term * f * dx + viscous_term * nsx;
-                acc_y += pressure_term * f * dy + viscous_term * nsy;
+                acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
+                acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
                 /* distance to the face of the wall particle straight below (within dp/2 of its normal line); not
                  * a boulder's, whose disc would have to take the reaction */
                 const real along = dx * wall_nx[b] + dy * wall_ny[b];
@@ -152,15 +150,14 @@ void interaction_compute(surge_sim *sim, int corrector)
                     face_m = along - wall_depth_m[b];
                     face_nx = wall_nx[b], face_ny = wall_ny[b], face_b = b;
                 }
-                const real vf = vol * f, wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-                div_v += vf * (wdx * dx + wdy * dy);
-                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                g_xx -= vf * wdx * dx, g_xy -= vf * wdx * dy, g_yx -= vf * wdy * dx, g_yy -= vf * wdy * dy;
-                const real speed = REAL_FABS(h * (nsx * dx + nsy * dy) / (r2 + eta2));
+                const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+                div_v += pair_divergence(vf, wdx, wdy, dx, dy);
+                pair_add_moments(&moments, vf, dx, dy, wdx, wdy);
+                const real speed = pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2);
                 visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                grad_c_x += vol * f * dx;
-                grad_c_y += vol * f * dy;
-                div_r -= vol * f * r2;
+                grad_c_x += vf * dx;
+                grad_c_y += vf * dy;
+                div_r -= vf * r2;
                 near_boulder |= wall_of[b] == WALL_BOULDER;
                 if (relax_per_strain > 0)
                     kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
@@ -178,11 +175,12 @@ void interaction_compute(surge_sim *sim, int corrector)
         }
         sim->ax[a] = acc_x + gx;
         sim->ay[a] = acc_y + gy;
-        const real det = m_xx * m_yy - m_xy * m_xy;
+        const pair_moments *mo = &moments;
+        const real det = mo->m_xx * mo->m_yy - mo->m_xy * mo->m_xy;
         if (sim->params.numerics.continuity_correction && det > (real)0.25) {
             /* div v = tr(G M^-1): exact for linear velocity fields even with a truncated kernel */
             const real inv = (real)1 / det;
-            div_v = -inv * (g_xx * m_yy - g_xy * m_xy - g_yx * m_xy + g_yy * m_xx);
+            div_v = -inv * (mo->g_xx * mo->m_yy - mo->g_xy * mo->m_xy - mo->g_yx * mo->m_xy + mo->g_yy * mo->m_xx);
         }
         sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
         /* full kernel support, and no boulder's particles (their spacing along a curved surface is not the fluid's):
@@ -190,8 +188,8 @@ void interaction_compute(surge_sim *sim, int corrector)
         if (relax_per_strain > 0 && !near_surface && !near_boulder) {
             /* at the rate kappa |2D|, D = sym(G) the strain rate (M = I in the bulk): where the fluid deforms, since
              * deformation is what moves spacing and density apart; a fluid at rest keeps its densities */
-            const real shear = g_xy + g_yx;
-            const real strain_rate = REAL_SQRT((real)2 * (g_xx * g_xx + g_yy * g_yy) + shear * shear);
+            const real shear = mo->g_xy + mo->g_yx;
+            const real strain_rate = REAL_SQRT((real)2 * (mo->g_xx * mo->g_xx + mo->g_yy * mo->g_yy) + shear * shear);
             sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
         }
         sim->visc_speed_mps[a] = visc_speed_mps;

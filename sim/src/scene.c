@@ -4,6 +4,7 @@
 #include <math.h>
 #include <stdlib.h>
 
+#include "eos.h"
 #include "sim_internal.h"
 
 /* The largest speed the scene can be expected to reach, from its own scales (docs/method.md). */

@@ -3,6 +3,7 @@
  * shifting"). */
 #include <math.h>
 
+#include "pair_terms.h"
 #include "sim_internal.h"
 
 /* The displacement of fluid particle a, from the concentration gradient of the corrector's pass. */
@@ -68,7 +69,7 @@ static void shift_divergence(surge_sim *sim)
                 if (r2 >= support2 || r2 == 0)
                     continue;
                 const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                sum += mass * inv_rho[b] * f * ((sxa - sx[b]) * dx + (sya - sy[b]) * dy);
+                sum += pair_divergence(mass * inv_rho[b] * f, sxa - sx[b], sya - sy[b], dx, dy);
             }
             for (int b = walls.begin[k]; b < walls.end[k]; b++) {
                 const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
@@ -76,7 +77,7 @@ static void shift_divergence(surge_sim *sim)
                 if (r2 >= support2)
                     continue;
                 const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                sum += mass * inv_rho[b] * f * (sxa * dx + sya * dy);
+                sum += pair_divergence(mass * inv_rho[b] * f, sxa, sya, dx, dy);
             }
         }
         sim->shift_div[a] = -sum;

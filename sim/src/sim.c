@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "eos.h"
 #include "sim_internal.h"
 
 /* sum_b dp^2 W(r_ab) over a square lattice of spacing dp, the particle itself included: the kernel sum of an
