@@ -357,6 +357,27 @@ calls = open(path("surge_calls.txt")).read().count("call") if os.path.exists(pat
 check("stream_bench: surge exiting at startup stops the benchmark after that one run", calls == 1,
       "%d runs started" % calls)
 expect("render_bench --surge a folder", tool("render_bench.py", "--surge", WORK), "--surge")
+BUILD = os.path.dirname(SURGE)
+expect("ab_bench --base not a commit", tool("ab_bench.py", "--new", BUILD, "--base", "no-such-commit"),
+       "--base", "no-such-commit")
+expect("ab_bench --new without surge-bench", tool("ab_bench.py", "--new", WORK), "surge-bench")
+expect("ab_bench --ch 0", tool("ab_bench.py", "--new", BUILD, "--ch", "1.0,0"), "--ch")
+expect("ab_bench --threads x", tool("ab_bench.py", "--new", BUILD, "--threads", "x"), "--threads")
+expect("ab_bench --pairs 0", tool("ab_bench.py", "--pairs", "0"), "--pairs")
+
+
+def bench(*args):
+    """Runs build/surge-bench with args (bad ones: it must refuse before it runs anything)."""
+    return subprocess.run([os.path.join(BUILD, "surge-bench")] + list(args), capture_output=True, text=True,
+                          timeout=60, stdin=subprocess.DEVNULL)
+
+
+expect("surge-bench --threads 0", bench("--threads", "0"), "--threads")
+expect("surge-bench --end-s nan", bench("--end-s", "nan"), "--end-s")
+expect("surge-bench --ch 0", bench("--ch", "0"), "numerics.ch")
+expect("surge-bench -s an unknown parameter", bench("--ch", "1.8", "-s", "numerics.no_such=1"), "numerics.no_such")
+expect("surge-bench --layers without a value", bench("--layers"), "--layers")
+expect("surge-bench a case that does not exist", bench(path("no_case.ini"), "--ch", "1.8"), "no_case.ini")
 
 # ---- 11. surgectl ----
 ctl = "ipc://" + path("ctl.sock")

@@ -1,8 +1,10 @@
 /* Benchmark: particle-steps per second on the incline-film scene (cases/incline_film.ini), 0.1 s of flow from
- * rest, at C_h = 1.0 and 1.8 on 1 and 2 threads. Prints one line per configuration containing
- * "particle-steps/s", the ratio of each to the first, and the accuracy reached: the RMS error of the fluid's x
- * velocity against the analytic start-up of the film, relative to the steady surface speed.
- * Usage: surge-bench [CASE] [--end-s T] */
+ * rest. With no configuration option it runs its sweep, C_h = 1.0 (4 wall layers) and 1.8 (automatic layers) on 1
+ * and 2 threads; with --ch, --threads or --layers it runs that one configuration, so that an outside harness
+ * (tools/ab_bench.py) can time it. Prints one line per configuration containing "particle-steps/s", the ratio
+ * of each to the first, and the accuracy reached: the RMS error of the fluid's x velocity against the analytic
+ * start-up of the film, relative to the steady surface speed.
+ * Usage: surge-bench [CASE] [--end-s T] [--ch C] [--threads N] [--layers L] [-s NAME=VALUE]... */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <omp.h>
@@ -12,6 +14,8 @@
 #include <time.h>
 
 #include "surge/sim.h"
+
+#define MAX_OVERRIDES 32
 
 /* Start-up of a film from rest under g sin(theta), no-slip bed at y = 0, free surface at y = H:
  * u = (G/nu)(H y - y^2/2) - sum 16 G H^2 / (nu pi^3 k^3) sin(k pi y / 2H) exp(-k^2 pi^2 nu t / 4H^2), k = 2n+1. */
@@ -55,77 +59,137 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int main(int argc, char **argv)
+typedef struct bench_config {
+    const char *case_path;
+    double end_s;
+    const char *ch, *layers;  /* parameter values as text */
+    int threads;
+    const char *overrides[MAX_OVERRIDES];
+    int override_count;
+} bench_config;
+
+static int set_param(surge_params *p, const char *name, const char *value)
 {
-    const char *case_path = SURGE_SOURCE_DIR "/cases/incline_film.ini";
-    double end_s = 0.1;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--end-s") && i + 1 < argc) {
-            char *end = NULL;
-            end_s = strtod(argv[++i], &end);
-            if (end == argv[i] || *end != '\0' || !(end_s > 0) || !isfinite(end_s)) {
-                fprintf(stderr, "surge-bench: --end-s needs a positive time in seconds\n");
-                return 2;
-            }
-        } else if (!strcmp(argv[i], "--help")) {
-            printf("usage: surge-bench [CASE] [--end-s T]\n(default CASE: cases/incline_film.ini, T = 0.1 s)\n");
-            return 0;
-        } else if (argv[i][0] != '-') {
-            case_path = argv[i];
-        } else {
-            fprintf(stderr, "surge-bench: unknown option '%s'\n", argv[i]);
+    char assignment[256], err[1024];
+    snprintf(assignment, sizeof assignment, "%s=%s", name, value);
+    if (surge_params_override(p, assignment, false, err, sizeof err) != 0) {
+        fprintf(stderr, "surge-bench: %s\n", err);
+        return -1;
+    }
+    return 0;
+}
+
+/* Runs one configuration and prints its line; first_rate (0 on the first call) is the sweep's reference. */
+static int run_one(const bench_config *c, double *first_rate)
+{
+    char err[1024];
+    surge_params p = surge_default_params();
+    if (surge_params_load(&p, c->case_path, err, sizeof err) != 0) {
+        fprintf(stderr, "surge-bench: %s\n", err);
+        return 2;
+    }
+    if (set_param(&p, "numerics.ch", c->ch) != 0 || set_param(&p, "walls.layers", c->layers) != 0)
+        return 2;
+    for (int i = 0; i < c->override_count; i++) {
+        if (surge_params_override(&p, c->overrides[i], false, err, sizeof err) != 0) {
+            fprintf(stderr, "surge-bench: -s %s: %s\n", c->overrides[i], err);
             return 2;
         }
+    }
+    p.time.end_s = c->end_s;
+    omp_set_num_threads(c->threads);
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "surge-bench: %s\n", err);
+        return 2;
+    }
+    const surge_derived *d = surge_sim_derived(sim);
+    const double start = now_s();
+    while (surge_sim_time(sim) < c->end_s) {
+        if (surge_sim_step(sim) != 0) {
+            fprintf(stderr, "surge-bench: %s\n", surge_sim_health(sim)->message);
+            surge_sim_destroy(sim);
+            return 1;
+        }
+    }
+    const double wall = now_s() - start;
+    const double steps = (double)surge_sim_step_count(sim);
+    const double rate = steps * d->fluid_count / wall;
+    if (*first_rate == 0)
+        *first_rate = rate;
+    printf("C_h = %s, %d thread%s: %d fluid + %d wall particles, %.0f steps in %.2f s: %.3f million "
+           "particle-steps/s (fluid particles; %.3f million counting walls), ratio %.2f; "
+           "velocity error vs analytic start-up %.4f; state hash %016llx\n",
+           c->ch, c->threads, c->threads > 1 ? "s" : "", d->fluid_count, d->wall_count, steps, wall, rate / 1e6,
+           steps * (d->fluid_count + d->wall_count) / wall / 1e6, rate / *first_rate, film_error(sim),
+           (unsigned long long)surge_sim_state_hash(sim));
+    fflush(stdout);
+    surge_sim_destroy(sim);
+    return 0;
+}
+
+static int usage_error(const char *what)
+{
+    fprintf(stderr, "surge-bench: %s (surge-bench --help)\n", what);
+    return 2;
+}
+
+int main(int argc, char **argv)
+{
+    bench_config c = {.case_path = SURGE_SOURCE_DIR "/cases/incline_film.ini", .end_s = 0.1};
+    const char *ch = NULL, *layers = NULL;
+    int threads = 0;
+    for (int i = 1; i < argc; i++) {
+        const int has_value = i + 1 < argc;
+        if (!strcmp(argv[i], "--end-s") && has_value) {
+            char *end = NULL;
+            c.end_s = strtod(argv[++i], &end);
+            if (end == argv[i] || *end != '\0' || !(c.end_s > 0) || !isfinite(c.end_s))
+                return usage_error("--end-s needs a positive time in seconds");
+        } else if (!strcmp(argv[i], "--threads") && has_value) {
+            char *end = NULL;
+            const long n = strtol(argv[++i], &end, 10);
+            if (end == argv[i] || *end != '\0' || n < 1 || n > 1024)
+                return usage_error("--threads needs a whole number from 1 to 1024");
+            threads = (int)n;
+        } else if (!strcmp(argv[i], "--ch") && has_value) {
+            ch = argv[++i];
+        } else if (!strcmp(argv[i], "--layers") && has_value) {
+            layers = argv[++i];
+        } else if (!strcmp(argv[i], "-s") && has_value) {
+            if (c.override_count == MAX_OVERRIDES)
+                return usage_error("too many -s options");
+            c.overrides[c.override_count++] = argv[++i];
+        } else if (!strcmp(argv[i], "--help")) {
+            printf("usage: surge-bench [CASE] [--end-s T] [--ch C] [--threads N] [--layers L] [-s NAME=VALUE]...\n"
+                   "(default CASE: cases/incline_film.ini, T = 0.1 s; with none of --ch, --threads, --layers the\n"
+                   "sweep C_h 1.0 with 4 wall layers and 1.8 with the automatic number, on 1 and 2 threads)\n");
+            return 0;
+        } else if (argv[i][0] != '-') {
+            c.case_path = argv[i];
+        } else {
+            char what[300];
+            snprintf(what, sizeof what, "unknown option or missing value: '%s'", argv[i]);
+            return usage_error(what);
+        }
+    }
+    double first_rate = 0;
+    printf("# surge-bench: %s, %.3g s of flow from rest\n", c.case_path, c.end_s);
+    if (ch || threads || layers) {
+        c.ch = ch ? ch : "1.8";
+        c.layers = layers ? layers : (!strcmp(c.ch, "1.0") ? "4" : "0");
+        c.threads = threads ? threads : 1;
+        return run_one(&c, &first_rate);
     }
     const char *ch_values[] = {"1.0", "1.8"};
     const char *layer_values[] = {"4", "0"}; /* 4 layers as specified at C_h = 1.0; automatic (6) at 1.8 */
     const int thread_values[] = {1, 2};
-    double first_rate = 0;
-    printf("# surge-bench: %s, %.3g s of flow from rest\n", case_path, end_s);
-    for (int c = 0; c < 2; c++) {
+    for (int k = 0; k < 2; k++) {
         for (int t = 0; t < 2; t++) {
-            char err[1024];
-            surge_params p = surge_default_params();
-            if (surge_params_load(&p, case_path, err, sizeof err) != 0) {
-                fprintf(stderr, "surge-bench: %s\n", err);
-                return 2;
-            }
-            char ch[64], layers[64];
-            snprintf(ch, sizeof ch, "numerics.ch=%s", ch_values[c]);
-            snprintf(layers, sizeof layers, "walls.layers=%s", layer_values[c]);
-            if (surge_params_override(&p, ch, false, err, sizeof err) != 0 ||
-                surge_params_override(&p, layers, false, err, sizeof err) != 0) {
-                fprintf(stderr, "surge-bench: %s\n", err);
-                return 2;
-            }
-            p.time.end_s = end_s;
-            omp_set_num_threads(thread_values[t]);
-            surge_sim *sim = surge_sim_create(&p, err, sizeof err);
-            if (!sim) {
-                fprintf(stderr, "surge-bench: %s\n", err);
-                return 2;
-            }
-            const surge_derived *d = surge_sim_derived(sim);
-            const double start = now_s();
-            while (surge_sim_time(sim) < end_s) {
-                if (surge_sim_step(sim) != 0) {
-                    fprintf(stderr, "surge-bench: %s\n", surge_sim_health(sim)->message);
-                    return 1;
-                }
-            }
-            const double wall = now_s() - start;
-            const double steps = (double)surge_sim_step_count(sim);
-            const double rate = steps * d->fluid_count / wall;
-            if (first_rate == 0)
-                first_rate = rate;
-            printf("C_h = %s, %d thread%s: %d fluid + %d wall particles, %.0f steps in %.2f s: %.3f million "
-                   "particle-steps/s (fluid particles; %.3f million counting walls), ratio %.2f; "
-                   "velocity error vs analytic start-up %.4f\n",
-                   ch_values[c], thread_values[t], thread_values[t] > 1 ? "s" : "", d->fluid_count, d->wall_count,
-                   steps, wall, rate / 1e6, steps * (d->fluid_count + d->wall_count) / wall / 1e6, rate / first_rate,
-                   film_error(sim));
-            fflush(stdout);
-            surge_sim_destroy(sim);
+            c.ch = ch_values[k], c.layers = layer_values[k], c.threads = thread_values[t];
+            const int status = run_one(&c, &first_rate);
+            if (status != 0)
+                return status;
         }
     }
     return 0;
