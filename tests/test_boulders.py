@@ -128,8 +128,8 @@ def group_momentum():
           % (p0[0], p0[1], p1[0], p1[1], moved))
     check("momentum: the discs exchanged momentum with the fluid (speeds changed by > 10 %)", moved > 0.001,
           str(moved))
-    # measured 2026-11-22: 4.3e-5 of it (the pair forces are summed in float; 0 to print precision when no disc
-    # crosses the periodic boundary)
+    # measured 2026-11-25 with the neighbour lists: 3.5e-9 of it (2026-11-22, before them: 4.3e-5, and 0 to print
+    # precision when no disc crossed the periodic boundary; the crossing disc's particles were wrapped mid-step)
     print("momentum: largest change %.3g of the discs' initial momentum" % (np.abs(p1 - p0).max() / scale))
     check("momentum: total momentum kept to 1e-3 of the discs' initial momentum",
           np.abs(p1 - p0).max() < 1e-3 * scale, "change %s, scale %g" % (p1 - p0, scale))

@@ -1,6 +1,6 @@
 /* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
- * periodic wrap, live parameter changes, the continuity rate at the belt-wall corner, density diffusion of a
- * linear field. usage: test_unit kernel|eos|neighbours|set_param|corner_continuity|diffusion_linear */
+ * periodic wrap, the neighbour lists against brute force over many steps of reuse, live parameter changes, the continuity rate at the belt-wall corner, density diffusion of a
+ * linear field. usage: test_unit kernel|eos|neighbours|neighbour_lists|set_param|corner_continuity|diffusion_linear */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -86,6 +86,7 @@ static int test_neighbours(void)
     for (int a = sim->wall_count; a < sim->count; a++) { /* scatter fluid at random, some right at x = 0 and L */
         sim->x[a] = (a % 17 == 0) ? (a % 2 ? 0.0 : nextafter(0.1, 0)) : 0.1 * rand() / ((double)RAND_MAX + 1);
         sim->y[a] = 0.045 * rand() / ((double)RAND_MAX + 1);
+        sim->neighbours.x_build[a] = sim->x[a], sim->neighbours.y_build[a] = sim->y[a];
     }
     grid_sort_fluid(sim);
     const double support2 = 4 * sim->derived.h_m * sim->derived.h_m, L = p.domain.length_m;
@@ -127,6 +128,101 @@ static int test_neighbours(void)
            sim->count - sim->wall_count);
     expect_below("neighbours: particles whose neighbour count differs", (double)mismatches, 0);
     expect_below("neighbours: enough pairs to mean something (1 = too few)", found < 1000, 0);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
+/* Pairs within 2h of fluid particle a (at positions px, py) that its neighbour lists lack; mark is scratch of
+ * sim->count zeros. */
+static long missing_pairs(const surge_sim *sim, int a, const double *px, const double *py, int8_t *mark)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int i = a - sim->wall_count;
+    const double period = sim->grid.period_m, support2 = 4 * sim->derived.h_m * sim->derived.h_m;
+    for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+        mark[nl->fluid_index[e]] = (int8_t)(nl->fluid_image[e] + 2);
+    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+        mark[nl->wall_index[e]] = (int8_t)(nl->wall_image[e] + 2);
+    long missing = 0;
+    for (int b = 0; b < sim->count; b++) {
+        const double image = period > 0 ? round((px[a] - px[b]) / period) : 0;
+        const double dx = px[a] - image * period - px[b], dy = py[a] - py[b];
+        if (b != a && dx * dx + dy * dy < support2 && mark[b] != (int8_t)(image + 2))
+            missing++;
+    }
+    for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+        mark[nl->fluid_index[e]] = 0;
+    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+        mark[nl->wall_index[e]] = 0;
+    return missing;
+}
+
+/* The neighbour lists against brute force over many steps of reuse: a periodic sheared layer with a moving,
+ * spinning boulder and randomly displaced particles; every pair within 2h at the step's start and at the
+ * corrector's positions (advanced half the largest time step) is listed; lists are reused; a fast particle forces
+ * a build. */
+static int test_neighbour_lists(void)
+{
+    surge_params p = surge_default_params();
+    p.domain.length_m = 0.2, p.domain.height_m = 0.1, p.domain.periodic_x = true;
+    p.fluid.x0_m = 0, p.fluid.x1_m = 0.2, p.fluid.depth_m = 0.1;
+    p.walls.top = true, p.walls.upstream = false, p.walls.ramp_s = 0;
+    p.walls.bottom_speed_mps = -0.5, p.walls.top_speed_mps = 0.5;
+    p.body.gravity_mps2 = 0, p.body.slope_deg = 0;
+    p.boulders.placement = SURGE_BOULDERS_LIST;
+    snprintf(p.boulders.list_m, sizeof p.boulders.list_m, "0.1 0.05 0.0125 0.3 0 20");
+    p.numerics.dp_m = 0.0025, p.numerics.ch = 1.5, p.numerics.c0_mps = 10;
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    srand(2026);
+    const double dp = p.numerics.dp_m;
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        sim->x[a] += 0.15 * dp * (2.0 * rand() / RAND_MAX - 1);
+        sim->y[a] += 0.15 * dp * (2.0 * rand() / RAND_MAX - 1);
+    }
+    const double half_dt_max = 0.5 * p.numerics.cfl * sim->derived.h_m / sim->derived.c0_mps;
+    double *cx = malloc((size_t)sim->count * sizeof *cx), *cy = malloc((size_t)sim->count * sizeof *cy);
+    int8_t *mark = calloc((size_t)sim->count, 1);
+    long missing_start = 0, missing_corrector = 0, pairs = 0;
+    const int steps = 400;
+    int healthy = 1;
+    for (int s = 0; s < steps && healthy; s++) {
+        if (neighbours_update(sim) != 0)
+            break;
+        for (int k = 0; k < sim->count; k++) { /* where the corrector can see them at most: moving particles only */
+            const int moves = k >= sim->wall_count || sim->boulders.of_wall[sim->id[k]] >= 0;
+            cx[k] = sim->x[k] + (moves ? half_dt_max * sim->vx[k] : 0);
+            cy[k] = sim->y[k] + (moves ? half_dt_max * sim->vy[k] : 0);
+        }
+        if (s % 20 == 0) {
+            for (int a = sim->wall_count; a < sim->count; a++) {
+                missing_start += missing_pairs(sim, a, sim->x, sim->y, mark);
+                missing_corrector += missing_pairs(sim, a, cx, cy, mark);
+            }
+            pairs += sim->neighbours.fluid_first[sim->count - sim->wall_count];
+        }
+        healthy = surge_sim_step(sim) == 0;
+    }
+    const int64_t builds = sim->neighbours.builds;
+    printf("neighbour_lists: %d steps, %lld builds, %ld list entries checked, boulder at x = %.4f m\n", steps,
+           (long long)builds, pairs, sim->boulders.x[0]);
+    expect_below("neighbour_lists: the run stays healthy (1 = it did not)", !healthy, 0);
+    expect_below("neighbour_lists: pairs within 2h missing at the step's start", (double)missing_start, 0);
+    expect_below("neighbour_lists: pairs within 2h missing at the corrector's positions", (double)missing_corrector, 0);
+    expect_below("neighbour_lists: builds per step (lists reused)", (double)builds / steps, 0.5);
+    expect_below("neighbour_lists: enough builds to test reuse across builds (1 = fewer than 3)", builds < 3, 0);
+    /* a particle fast enough to cross the skin in half a step forces a build at once */
+    sim->vx[sim->wall_count + 7] = (real)(sim->neighbours.skin_m / half_dt_max);
+    neighbours_update(sim);
+    expect_below("neighbour_lists: a fast particle forces a build (1 = no build)",
+                 sim->neighbours.builds != builds + 1, 0);
+    free(cx);
+    free(cy);
+    free(mark);
     surge_sim_destroy(sim);
     return failures;
 }
@@ -190,6 +286,8 @@ static int test_corner_continuity(void)
             return 1;
         }
         boundary_wall_speeds(sim, 1.0);
+        if (neighbours_update(sim) != 0)
+            return 1;
         boundary_update(sim);
         interaction_compute(sim, 0);
         const double dp = p.numerics.dp_m, strain_scale = fabs(p.walls.bottom_speed_mps) / dp;
@@ -243,6 +341,8 @@ static int test_diffusion_linear(void)
             sim->vx[a] = sim->vy[a] = 0;
             sim->rho[a] = (real)(sim->rho0 + 2 * sim->rho_h_per_m * (p.fluid.depth_m - sim->y[a]));
         }
+        if (neighbours_update(sim) != 0)
+            return 1;
         boundary_update(sim);
         interaction_compute(sim, 0);
         for (int a = sim->wall_count; a < sim->count; a++)
@@ -266,6 +366,8 @@ int main(int argc, char **argv)
         return test_eos() ? 1 : 0;
     if (!strcmp(argv[1], "neighbours"))
         return test_neighbours() ? 1 : 0;
+    if (!strcmp(argv[1], "neighbour_lists"))
+        return test_neighbour_lists() ? 1 : 0;
     if (!strcmp(argv[1], "set_param"))
         return test_set_param() ? 1 : 0;
     if (!strcmp(argv[1], "corner_continuity"))

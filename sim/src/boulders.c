@@ -331,8 +331,11 @@ void boulders_place_particles(surge_sim *sim)
         const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
         double x = b->x[i] + rx;
         if (period > 0) {
-            x -= period * floor(x / period);
-            if (x >= period)
+            /* the periodic image nearest the particle's neighbour-list build position, so that the lists' images
+             * hold (neighbours.c); before the lists exist, wrapped into the period */
+            const double *x_build = sim->neighbours.x_build;
+            x -= x_build ? period * round((x - x_build[k]) / period) : period * floor(x / period);
+            if (!x_build && x >= period)
                 x = 0;
         }
         sim->x[k] = x;

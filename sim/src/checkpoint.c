@@ -5,10 +5,13 @@
  * Layout: "SURGECK1" | u32 version | u32 sizeof(real) | u64 params length | params text |
  *         i64 step | f64 time_s | f64 dt_s | f64 first_dt_s | i32 count | i32 wall_count |
  *         fluid x[f64] y[f64] vx[real] vy[real] rho[real] id[i32] |
- *         (version 2, when the scene has boulders) boulders x y angle vx vy omega [f64 each] |
+ *         (version 3) u32 lists built | fluid x_build[f64] y_build[f64] (the neighbour lists' build positions) |
+ *         (version 2 on, when the scene has boulders) boulders x y angle vx vy omega [f64 each] |
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
+ *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         u64 state hash
- * Version 1 (no boulder block) is still read for scenes without boulders. */
+ * Versions 1 (no boulder block) and 2 are still read: the lists are then built afresh at the first step, so the
+ * restarted run agrees with the saved one to round-off, not bit for bit. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -19,10 +22,48 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 2u
+#define CHECKPOINT_VERSION 3u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len, f) == len ? 0 : -1; }
+
+/* The wall particles' build positions by id (boulder scenes: the walls' order at restart follows them). */
+static int write_wall_build_positions(FILE *f, const surge_sim *sim)
+{
+    const size_t w = (size_t)sim->wall_count;
+    if (sim->boulders.count == 0)
+        return 0;
+    double *by_id = malloc((2 * w + 1) * sizeof *by_id);
+    if (!by_id)
+        return -1;
+    for (size_t k = 0; k < w; k++) {
+        by_id[sim->id[k]] = sim->neighbours.x_build[k];
+        by_id[w + (size_t)sim->id[k]] = sim->neighbours.y_build[k];
+    }
+    const int rc = write_all(f, by_id, 2 * w * sizeof *by_id);
+    free(by_id);
+    return rc;
+}
+
+static int read_wall_build_positions(FILE *f, surge_sim *sim)
+{
+    const size_t w = (size_t)sim->wall_count;
+    if (sim->boulders.count == 0)
+        return 0;
+    double *by_id = malloc((2 * w + 1) * sizeof *by_id);
+    if (!by_id || read_all(f, by_id, 2 * w * sizeof *by_id)) {
+        free(by_id);
+        return -1;
+    }
+    int rc = 0;
+    for (size_t k = 0; k < w; k++) {
+        sim->neighbours.x_build[k] = by_id[sim->id[k]];
+        sim->neighbours.y_build[k] = by_id[w + (size_t)sim->id[k]];
+        rc |= !isfinite(sim->neighbours.x_build[k]) || !isfinite(sim->neighbours.y_build[k]);
+    }
+    free(by_id);
+    return rc ? -1 : 0;
+}
 
 static int write_boulders(FILE *f, const boulder_set *b)
 {
@@ -105,6 +146,7 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
     const uint64_t plen = params_len;
     const size_t w = (size_t)sim->wall_count, nf = (size_t)(sim->count - sim->wall_count);
     const uint64_t hash = surge_sim_state_hash(sim);
+    const uint32_t lists_built = (uint32_t)sim->neighbours.valid;
     int rc = write_all(f, CHECKPOINT_MAGIC, 8) | write_all(f, &version, 4) | write_all(f, &real_size, 4) |
              write_all(f, &plen, 8) | write_all(f, params_text, params_len) |
              write_all(f, &sim->step, 8) | write_all(f, &sim->time_s, 8) | write_all(f, &sim->dt_s, 8) |
@@ -112,7 +154,9 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->x + w, nf * sizeof(double)) | write_all(f, sim->y + w, nf * sizeof(double)) |
              write_all(f, sim->vx + w, nf * sizeof(real)) | write_all(f, sim->vy + w, nf * sizeof(real)) |
              write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
-             write_boulders(f, &sim->boulders) | write_all(f, &hash, 8);
+             write_all(f, &lists_built, 4) | write_all(f, sim->neighbours.x_build + w, nf * sizeof(double)) |
+             write_all(f, sim->neighbours.y_build + w, nf * sizeof(double)) |
+             write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) | write_all(f, &hash, 8);
     free(params_text);
     /* on disk before it replaces the previous checkpoint, so a crash leaves one of the two whole */
     rc |= fflush(f) != 0 || fsync(fileno(f)) != 0;
@@ -142,7 +186,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: not a surge checkpoint", path);
         goto done;
     }
-    if ((version != CHECKPOINT_VERSION && version != 1) || real_size != sizeof(real)) {
+    if (version < 1 || version > CHECKPOINT_VERSION || real_size != sizeof(real)) {
         snprintf(err, err_len, "%s: checkpoint version %u with %u-byte reals; this build reads version %u with "
                  "%zu-byte reals", path, version, real_size, CHECKPOINT_VERSION, sizeof(real));
         goto done;
@@ -181,12 +225,27 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: truncated checkpoint", path);
         goto fail;
     }
+    uint32_t lists_built = 0;
+    neighbour_lists *nl = &sim->neighbours;
+    if (version >= 3 && (read_all(f, &lists_built, 4) || read_all(f, nl->x_build + w, nf * sizeof(double)) ||
+                         read_all(f, nl->y_build + w, nf * sizeof(double)))) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        goto fail;
+    }
+    if (version < 3) { /* no lists saved: built at the first step */
+        memcpy(nl->x_build + w, sim->x + w, nf * sizeof(double));
+        memcpy(nl->y_build + w, sim->y + w, nf * sizeof(double));
+    }
     if (version == 1 && sim->boulders.count > 0) {
         snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
         goto fail;
     }
     if (read_boulders(f, &sim->boulders)) {
         snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
+        goto fail;
+    }
+    if (version >= 3 && read_wall_build_positions(f, sim)) {
+        snprintf(err, err_len, "%s: truncated or corrupt wall build positions", path);
         goto fail;
     }
     if (read_all(f, &hash, 8)) {
@@ -217,6 +276,20 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     free(seen);
     if (surge_sim_state_hash(sim) != hash) {
         snprintf(err, err_len, "%s: state hash mismatch (corrupt checkpoint)", path);
+        goto fail;
+    }
+    /* the build positions are outside the hash: each within reach of its particle (a step past skin/2 at most) */
+    const double allowed_m = nl->skin_m + 2.0 * sim->derived.h_m;
+    for (size_t a = w; a < (size_t)count; a++) {
+        const double dx = sim->x[a] - nl->x_build[a], dy = sim->y[a] - nl->y_build[a];
+        if (!(dx * dx + dy * dy <= allowed_m * allowed_m)) {
+            snprintf(err, err_len, "%s: corrupt neighbour-list build position of particle %d (%g m from it)", path,
+                     (int)sim->id[a], sqrt(dx * dx + dy * dy));
+            goto fail;
+        }
+    }
+    if (lists_built && neighbours_adopt_build_positions(sim) != 0) {
+        snprintf(err, err_len, "%s: out of memory for the neighbour lists", path);
         goto fail;
     }
     boundary_wall_speeds(sim, t);

@@ -1,5 +1,6 @@
-/* Cell-linked lists with particles sorted by cell: fluid particles every step, wall particles once (every step
- * when boulders move theirs). */
+/* Cell-linked lists with particles sorted by cell: fluid particles at every neighbour-list build, wall particles
+ * once (at every build when boulders move theirs). Cells are 2h + skin wide, so that a particle's 3 x 3 block holds
+ * every neighbour within 2h as long as the lists built from it hold (neighbours.c). */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,7 +11,7 @@ int grid_init(surge_sim *sim, char *err, size_t err_len)
 {
     const surge_params *p = &sim->params;
     cell_grid *g = &sim->grid;
-    const double support = 2.0 * sim->derived.h_m;
+    const double support = 2.0 * sim->derived.h_m + p->numerics.neighbour_skin_h * sim->derived.h_m;
     const double wall_depth = p->walls.layers * p->numerics.dp_m;
     if (p->domain.periodic_x) {
         g->period_m = p->domain.length_m;
@@ -119,8 +120,9 @@ void grid_fluid_and_wall_ranges(const cell_grid *g, double x, double y, neighbou
     fill_neighbour_ranges(g, g->fluid_start, g->wall_start, x, y, fluid, walls);
 }
 
-/* Stable counting sort of particles [first, first+n) by cell, visited in the order visit gives (NULL: index
- * order); fills start (ncells+1 entries, indices absolute) and writes the gather order into order[0..n). */
+/* Stable counting sort of particles [first, first+n) by the cell of their build position, visited in the order
+ * visit gives (NULL: index order); fills start (ncells+1 entries, indices absolute) and writes the gather order
+ * into order[0..n). */
 static void counting_sort(const surge_sim *sim, int first, int n, const int32_t *visit, int *start, int32_t *key,
                           int32_t *order)
 {
@@ -128,7 +130,8 @@ static void counting_sort(const surge_sim *sim, int first, int n, const int32_t 
     const int ncells = g->ncx * g->ncy;
     memset(start, 0, (size_t)(ncells + 1) * sizeof(int));
     for (int i = 0; i < n; i++) {
-        int k = grid_cell_y(g, sim->y[first + i]) * g->ncx + grid_cell_x(g, sim->x[first + i]);
+        const double *xb = sim->neighbours.x_build, *yb = sim->neighbours.y_build;
+        int k = grid_cell_y(g, yb[first + i]) * g->ncx + grid_cell_x(g, xb[first + i]);
         key[i] = k;
         start[k + 1]++;
     }
@@ -179,6 +182,8 @@ void grid_sort_walls(surge_sim *sim)
     counting_sort(sim, 0, n, by_id, sim->grid.wall_start, sim->sort_key, order);
     gather_d(sim->x, sim->sort_scratch_d, order, 0, n);
     gather_d(sim->y, sim->sort_scratch_d, order, 0, n);
+    gather_d(sim->neighbours.x_build, sim->sort_scratch_d, order, 0, n);
+    gather_d(sim->neighbours.y_build, sim->sort_scratch_d, order, 0, n);
     gather_r(sim->vx, sim->sort_scratch_r, order, 0, n);
     gather_r(sim->vy, sim->sort_scratch_r, order, 0, n);
     gather_r(sim->rho, sim->sort_scratch_r, order, 0, n);
@@ -198,6 +203,8 @@ void grid_sort_fluid(surge_sim *sim)
     counting_sort(sim, first, n, NULL, sim->grid.fluid_start, sim->sort_key, order);
     gather_d(sim->x, sim->sort_scratch_d, order, first, n);
     gather_d(sim->y, sim->sort_scratch_d, order, first, n);
+    gather_d(sim->neighbours.x_build, sim->sort_scratch_d, order, first, n);
+    gather_d(sim->neighbours.y_build, sim->sort_scratch_d, order, first, n);
     gather_r(sim->vx, sim->sort_scratch_r, order, first, n);
     gather_r(sim->vy, sim->sort_scratch_r, order, first, n);
     gather_r(sim->rho, sim->sort_scratch_r, order, first, n);

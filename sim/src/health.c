@@ -10,7 +10,7 @@ static surge_health_check check_particle(const surge_sim *sim, int a, double *va
     const surge_params *p = &sim->params;
     const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
     const double wall_depth = p->walls.layers * dp;
-    const double x = sim->x[a], y = sim->y[a];
+    const double x = surge_sim_wrapped_x(sim, sim->x[a]), y = sim->y[a];
     if (!isfinite(x) || !isfinite(y) || !isfinite(sim->vx[a]) || !isfinite(sim->vy[a]) || !isfinite(sim->rho[a])) {
         *value = !isfinite(x) ? x : !isfinite(y) ? y : !isfinite(sim->vx[a]) ? sim->vx[a]
                : !isfinite(sim->vy[a]) ? sim->vy[a] : sim->rho[a];
@@ -78,7 +78,7 @@ int health_check(surge_sim *sim)
             detail = extra;
         } else {
             snprintf(extra, sizeof extra, "x = %.6g m, y = %.6g m, v = (%.4g, %.4g) m/s, rho = %.6g kg/m3",
-                     sim->x[first_bad], sim->y[first_bad], (double)sim->vx[first_bad], (double)sim->vy[first_bad],
+                     surge_sim_wrapped_x(sim, sim->x[first_bad]), sim->y[first_bad], (double)sim->vx[first_bad], (double)sim->vy[first_bad],
                      (double)sim->rho[first_bad]);
             detail = extra;
         }

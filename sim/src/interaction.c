@@ -22,7 +22,8 @@ static void compute_pressure(surge_sim *sim)
  * kernel is truncated. Where M is nearly singular (an isolated particle) the gradient is taken as zero. */
 static void compute_density_gradient(surge_sim *sim)
 {
-    const cell_grid *g = &sim->grid;
+    const neighbour_lists *nl = &sim->neighbours;
+    const double period = sim->grid.period_m;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
     const real support2 = sim->kernel.support2;
     const double *restrict x = sim->x, *restrict y = sim->y;
@@ -32,19 +33,16 @@ static void compute_density_gradient(surge_sim *sim)
         const double xa = x[a], ya = y[a];
         const real rhoa = rho[a];
         real m_xx = 0, m_xy = 0, m_yy = 0, sum_x = 0, sum_y = 0;
-        neighbour_ranges fluid;
-        grid_neighbour_ranges(g, g->fluid_start, xa, ya, &fluid);
-        for (int k = 0; k < fluid.count; k++) {
-            const double xa_shifted = xa - fluid.shift_x[k];
-            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
-                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2 || r2 == 0)
-                    continue;
-                const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-                sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
-            }
+        const int i = a - sim->wall_count;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int b = nl->fluid_index[e];
+            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2 || r2 == 0)
+                continue;
+            const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+            m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
+            sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
         }
         const real det = m_xx * m_yy - m_xy * m_xy;
         const real inv_det = det > (real)0.25 ? (real)1 / det : 0;
@@ -59,7 +57,8 @@ void interaction_compute(surge_sim *sim, int corrector)
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
-    const cell_grid *g = &sim->grid;
+    const neighbour_lists *nl = &sim->neighbours;
+    const double period = sim->grid.period_m;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
     const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = sim->kernel.h;
     const real support2 = sim->kernel.support2;
@@ -97,71 +96,69 @@ void interaction_compute(surge_sim *sim, int corrector)
         real grad_c_x = 0, grad_c_y = 0, div_r = 0;
         pair_moments moments = {0};
         int near_surface = surface[a], near_boulder = 0;
-        neighbour_ranges fluid, walls; /* the same cells in the same order */
-        grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
-        for (int k = 0; k < fluid.count; k++) {
-            const double xa_shifted = xa - fluid.shift_x[k];
-            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
-                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2 || r2 == 0)
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
-                const real vol = mass * inv_rho[b], vf = vol * f;
-                const real dvx = vxa - vx[b], dvy = vya - vy[b];
-                const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
-                acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
-                acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
-                div_v += pair_divergence(vf, dvx, dvy, dx, dy);
-                pair_add_moments(&moments, vf, dx, dy, dvx, dvy);
-                const real linear_part = antuono ? pair_gradient_part(grad_rho_x[a], grad_rho_y[a], grad_rho_x[b],
-                                                                      grad_rho_y[b], dx, dy)
-                                                 : pair_hydrostatic_part(rho_h_per_m, dy);
-                diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
-                const real speed = pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2);
-                visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                grad_c_x += vf * dx;
-                grad_c_y += vf * dy;
-                div_r -= vf * r2;
-                near_surface |= surface[b];
-                if (relax_per_strain > 0)
-                    kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
+        const int i = a - sim->wall_count;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int b = nl->fluid_index[e];
+            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2 || r2 == 0)
+                continue;
+            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
+            const real vol = mass * inv_rho[b], vf = vol * f;
+            const real dvx = vxa - vx[b], dvy = vya - vy[b];
+            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+            acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
+            acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
+            div_v += pair_divergence(vf, dvx, dvy, dx, dy);
+            pair_add_moments(&moments, vf, dx, dy, dvx, dvy);
+            const real linear_part = antuono ? pair_gradient_part(grad_rho_x[a], grad_rho_y[a], grad_rho_x[b],
+                                                                  grad_rho_y[b], dx, dy)
+                                             : pair_hydrostatic_part(rho_h_per_m, dy);
+            diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
+            const real speed = pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2);
+            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+            grad_c_x += vf * dx;
+            grad_c_y += vf * dy;
+            div_r -= vf * r2;
+            near_surface |= surface[b];
+            if (relax_per_strain > 0)
+                kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
+        }
+        /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
+         * continuity; no density diffusion across the wall */
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int b = nl->wall_index[e];
+            const real dx = (real)(xa - nl->wall_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2)
+                continue;
+            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+            const real vol = mass * inv_rho[b], vf = vol * f;
+            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+            const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+            acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
+            acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
+            /* distance to the face of the wall particle straight below (within dp/2 of its normal line); not
+             * a boulder's, whose disc would have to take the reaction */
+            const real along = dx * wall_nx[b] + dy * wall_ny[b];
+            if (face_search_m > 0 && r2 - along * along < half_dp * half_dp && along - wall_depth_m[b] < face_m &&
+                wall_of[b] != WALL_BOULDER) {
+                face_m = along - wall_depth_m[b];
+                face_nx = wall_nx[b], face_ny = wall_ny[b], face_b = b;
             }
-            /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
-             * continuity; no density diffusion across the wall */
-            for (int b = walls.begin[k]; b < walls.end[k]; b++) {
-                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2)
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                const real vol = mass * inv_rho[b], vf = vol * f;
-                const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
-                const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
-                acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
-                acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
-                /* distance to the face of the wall particle straight below (within dp/2 of its normal line); not
-                 * a boulder's, whose disc would have to take the reaction */
-                const real along = dx * wall_nx[b] + dy * wall_ny[b];
-                if (face_search_m > 0 && r2 - along * along < half_dp * half_dp && along - wall_depth_m[b] < face_m &&
-                    wall_of[b] != WALL_BOULDER) {
-                    face_m = along - wall_depth_m[b];
-                    face_nx = wall_nx[b], face_ny = wall_ny[b], face_b = b;
-                }
-                const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-                div_v += pair_divergence(vf, wdx, wdy, dx, dy);
-                pair_add_moments(&moments, vf, dx, dy, wdx, wdy);
-                const real speed = pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2);
-                visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-                grad_c_x += vf * dx;
-                grad_c_y += vf * dy;
-                div_r -= vf * r2;
-                near_boulder |= wall_of[b] == WALL_BOULDER;
-                if (relax_per_strain > 0)
-                    kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
-            }
+            const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+            div_v += pair_divergence(vf, wdx, wdy, dx, dy);
+            pair_add_moments(&moments, vf, dx, dy, wdx, wdy);
+            const real speed = pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2);
+            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+            grad_c_x += vf * dx;
+            grad_c_y += vf * dy;
+            div_r -= vf * r2;
+            near_boulder |= wall_of[b] == WALL_BOULDER;
+            if (relax_per_strain > 0)
+                kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
         }
         if (face_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along its
                                       * normal; the step's update takes away any velocity toward it (sim.c) */

@@ -107,6 +107,10 @@ static const surge_param_info registry[] = {
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",
      OFF(numerics.continuity_correction)},
+    {"numerics", "neighbour_skin_h", SURGE_PARAM_REAL, "h", 0.3, 0, 2, false, NULL,
+     "Skin of the neighbour lists in units of h: each fluid particle lists its neighbours within 2h + skin and "
+     "the lists are reused until a particle may have moved skin/2 (0: rebuilt every step; docs/method.md).",
+     OFF(numerics.neighbour_skin_h)},
     {"numerics", "viscous_dt_limit", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
      "Include the viscous limit dt_nu = h^2/nu0 in the time step.", OFF(numerics.viscous_dt_limit)},
     {"numerics", "dt_fixed_s", SURGE_PARAM_REAL, "s", 0, 0, 1e3, false, NULL,

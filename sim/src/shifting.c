@@ -49,7 +49,8 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
  * sum_b m W_ab, so a density that takes it on follows the spacing (mass is carried with the particles). */
 static void shift_divergence(surge_sim *sim)
 {
-    const cell_grid *g = &sim->grid;
+    const neighbour_lists *nl = &sim->neighbours;
+    const double period = sim->grid.period_m;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
     const real support2 = sim->kernel.support2;
     const double *restrict x = sim->x, *restrict y = sim->y;
@@ -59,26 +60,24 @@ static void shift_divergence(surge_sim *sim)
         const double xa = x[a], ya = y[a];
         const real sxa = sx[a], sya = sy[a];
         real sum = 0;
-        neighbour_ranges fluid, walls;
-        grid_fluid_and_wall_ranges(g, xa, ya, &fluid, &walls);
-        for (int k = 0; k < fluid.count; k++) {
-            const double xa_shifted = xa - fluid.shift_x[k];
-            for (int b = fluid.begin[k]; b < fluid.end[k]; b++) {
-                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2 || r2 == 0)
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                sum += pair_divergence(mass * inv_rho[b] * f, sxa - sx[b], sya - sy[b], dx, dy);
-            }
-            for (int b = walls.begin[k]; b < walls.end[k]; b++) {
-                const real dx = (real)(xa_shifted - x[b]), dy = (real)(ya - y[b]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2)
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                sum += pair_divergence(mass * inv_rho[b] * f, sxa, sya, dx, dy);
-            }
+        const int i = a - sim->wall_count;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int b = nl->fluid_index[e];
+            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2 || r2 == 0)
+                continue;
+            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+            sum += pair_divergence(mass * inv_rho[b] * f, sxa - sx[b], sya - sy[b], dx, dy);
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int b = nl->wall_index[e];
+            const real dx = (real)(xa - nl->wall_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2)
+                continue;
+            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+            sum += pair_divergence(mass * inv_rho[b] * f, sxa, sya, dx, dy);
         }
         sim->shift_div[a] = -sum;
     }

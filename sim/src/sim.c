@@ -60,7 +60,8 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->kernel = kernel2d_make(sim->derived.h_m);
     sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp);
     update_body_force(sim);
-    if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0) {
+    if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0 ||
+        neighbours_init(sim, err, err_len) != 0) {
         surge_sim_destroy(sim);
         return NULL;
     }
@@ -90,6 +91,7 @@ void surge_sim_destroy(surge_sim *sim)
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     grid_free(&sim->grid);
+    neighbours_free(&sim->neighbours);
     boulders_free(&sim->boulders);
     free(sim);
 }
@@ -116,17 +118,6 @@ static double variable_dt(const surge_sim *sim)
     return p->numerics.cfl * dt;
 }
 
-static inline double wrap_x(double x, double period)
-{
-    if (period > 0) {
-        if (x >= period)
-            x -= period;
-        else if (x < 0)
-            x += period;
-    }
-    return x;
-}
-
 static void restore_step_start(surge_sim *sim)
 {
     const size_t nf = (size_t)(sim->count - sim->wall_count), w = (size_t)sim->wall_count;
@@ -140,13 +131,15 @@ static void restore_step_start(surge_sim *sim)
 int surge_sim_step(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count;
-    const double period = sim->grid.period_m;
     const double t_n = sim->time_s;
 
     const int boulders = sim->boulders.count > 0;
-    grid_sort_fluid(sim);
-    if (boulders)
-        grid_sort_walls(sim);
+    if (neighbours_update(sim) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the neighbour lists");
+        return -1;
+    }
     boundary_wall_speeds(sim, t_n);
     boundary_update(sim);
     interaction_compute(sim, 0);
@@ -167,14 +160,12 @@ int surge_sim_step(surge_sim *sim)
         sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
         sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
         sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
-        sim->x[a] = wrap_x(sim->x_n[a] + half * sim->vx_n[a], period);
+        sim->x[a] = sim->x_n[a] + half * sim->vx_n[a]; /* wrapped into the period at list builds */
         sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
     }
 
-    if (boulders) {
+    if (boulders)
         boulders_predict(sim, half);
-        grid_sort_walls(sim);
-    }
 
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
@@ -206,7 +197,7 @@ int surge_sim_step(surge_sim *sim)
         sim->vx[a] = (real)vx1;
         sim->vy[a] = (real)vy1;
         sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));
-        sim->x[a] = wrap_x(sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx, period);
+        sim->x[a] = sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx;
         sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
     }
     sim->time_s = t_n + dt;
@@ -264,7 +255,7 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
     const real rho0 = (real)sim->rho0, b_pa = (real)sim->b_pa;
     for (int i = 0; i < sim->count; i++) {
         const int k = sim->id[i];
-        snap->x_m[k] = sim->x[i];
+        snap->x_m[k] = surge_sim_wrapped_x(sim, sim->x[i]);
         snap->y_m[k] = sim->y[i];
         snap->vx_mps[k] = (float)sim->vx[i];
         snap->vy_mps[k] = (float)sim->vy[i];

@@ -2,6 +2,7 @@
 #ifndef SURGE_SIM_INTERNAL_H
 #define SURGE_SIM_INTERNAL_H
 
+#include <math.h>
 #include <stdint.h>
 
 #include "boulders.h"
@@ -39,6 +40,21 @@ typedef struct cell_span {
     int first_cell, last_cell; /* inclusive, within one row */
     double shift_x;            /* add to the neighbour's x */
 } cell_span;
+
+/* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
+ * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
+ * wall_index[wall_first[i] .. wall_first[i+1]), in cell order; image s means the neighbour's periodic image at
+ * x + s * period (s in -1, 0, 1). */
+typedef struct neighbour_lists {
+    double skin_m;
+    int valid;                 /* 0: build at the next step */
+    int64_t builds;
+    double *x_build, *y_build; /* every particle's position at the build (the arrays are sorted by its cells) */
+    int64_t *fluid_first, *wall_first;
+    int32_t *fluid_index, *wall_index;
+    int8_t *fluid_image, *wall_image;
+    size_t fluid_capacity, wall_capacity;
+} neighbour_lists;
 
 struct surge_sim {
     surge_params params;
@@ -84,6 +100,7 @@ struct surge_sim {
     boulder_set boulders;
 
     cell_grid grid;
+    neighbour_lists neighbours;
     int32_t *sort_key, *sort_scratch_i;
     double *sort_scratch_d;
     real *sort_scratch_r;
@@ -92,6 +109,15 @@ struct surge_sim {
     int64_t step;
     surge_health health;
 };
+
+/* x wrapped into [0, period) in a periodic domain (positions are wrapped only at neighbour-list builds) */
+static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
+{
+    const double period = sim->grid.period_m;
+    if (period > 0)
+        x -= period * floor(x / period);
+    return x;
+}
 
 /* scene.c */
 int scene_build(surge_sim *sim, char *err, size_t err_len);
@@ -108,9 +134,19 @@ void grid_neighbour_ranges(const cell_grid *g, const int *start, double x, doubl
 /* Both kinds at once, for a loop over fluid and wall neighbours cell by cell. */
 void grid_fluid_and_wall_ranges(const cell_grid *g, double x, double y, neighbour_ranges *fluid,
                                 neighbour_ranges *walls);
-/* Walls in cell order, within a cell by id: the same order whatever the order before (restarts). */
+/* Walls in cell order of their build positions, within a cell by id: the same order whatever the order before
+ * (restarts). Fluid in cell order of the build positions, stable. */
 void grid_sort_walls(surge_sim *sim);
 void grid_sort_fluid(surge_sim *sim);
+
+/* neighbours.c */
+int neighbours_init(surge_sim *sim, char *err, size_t err_len); /* build positions = positions; no lists yet */
+void neighbours_free(neighbour_lists *nl);
+/* At the start of a step: rebuilds (wraps positions into the period, sorts, lists) when a particle may come
+ * within skin/2 of leaving its list's reach by the corrector's evaluation; -1 when out of memory. */
+int neighbours_update(surge_sim *sim);
+/* Sorts by the build positions as they are and builds the lists (restarts: the same lists as the saved run). */
+int neighbours_adopt_build_positions(surge_sim *sim);
 
 /* boundary.c: mDBC density and no-slip velocity of wall particles */
 void boundary_update(surge_sim *sim);

@@ -90,8 +90,9 @@ typedef struct surge_params {
         double c0_factor;         /* c0 = c0_factor * largest expected speed when derived */
         double density_diffusion; /* delta of the density-diffusion term */
         int density_diffusion_form; /* surge_diffusion_form */
-        double density_relaxation;  /* kappa: bulk densities relax toward the kernel sum at kappa c0 / h (0: off) */
+        double density_relaxation;  /* kappa: bulk densities relax toward the kernel sum at kappa |2D| (0: off) */
         bool continuity_correction; /* velocity divergence renormalised by the kernel moment matrix */
+        double neighbour_skin_h;    /* neighbour-list skin in units of h (0: rebuilt every step) */
         bool viscous_dt_limit;
         double dt_fixed_s;        /* 0: variable time step */
     } numerics;

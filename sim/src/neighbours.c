@@ -1,0 +1,179 @@
+/* Neighbour lists with a skin (Verlet lists): each fluid particle's fluid and wall neighbours within 2h + skin,
+ * built from the cell grid and reused while no particle can have moved more than skin/2 since the build, so that
+ * every pair within 2h at either force evaluation of a step is in the list (docs/method.md, "Neighbour lists").
+ * Between builds the particles keep their order and positions are not wrapped into the period (the lists hold
+ * each pair's periodic image); a build wraps them, sorts by cell and records the build positions. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sim_internal.h"
+
+int neighbours_init(surge_sim *sim, char *err, size_t err_len)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    nl->skin_m = sim->params.numerics.neighbour_skin_h * sim->derived.h_m;
+    const size_t n = (size_t)sim->count, nf = (size_t)(sim->count - sim->wall_count);
+    nl->x_build = malloc((n + 1) * sizeof *nl->x_build);
+    nl->y_build = malloc((n + 1) * sizeof *nl->y_build);
+    nl->fluid_first = calloc(nf + 1, sizeof *nl->fluid_first);
+    nl->wall_first = calloc(nf + 1, sizeof *nl->wall_first);
+    if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first) {
+        snprintf(err, err_len, "out of memory for the neighbour lists of %zu particles", n);
+        return -1;
+    }
+    memcpy(nl->x_build, sim->x, n * sizeof *nl->x_build);
+    memcpy(nl->y_build, sim->y, n * sizeof *nl->y_build);
+    nl->valid = 0;
+    return 0;
+}
+
+void neighbours_free(neighbour_lists *nl)
+{
+    void *arrays[] = {nl->x_build, nl->y_build, nl->fluid_first, nl->fluid_index, nl->fluid_image, nl->wall_first,
+                      nl->wall_index, nl->wall_image};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
+    memset(nl, 0, sizeof *nl);
+}
+
+/* Grows a list's arrays to hold at least need entries (by half again, so that growth is rare). */
+static int reserve(int32_t **index, int8_t **image, size_t *capacity, size_t need)
+{
+    if (need <= *capacity)
+        return 0;
+    const size_t grown = need + need / 2 + 64;
+    int32_t *i = realloc(*index, grown * sizeof *i);
+    if (!i)
+        return -1;
+    *index = i;
+    int8_t *m = realloc(*image, grown * sizeof *m);
+    if (!m)
+        return -1;
+    *image = m;
+    *capacity = grown;
+    return 0;
+}
+
+/* Counts (fill = 0) or writes (fill = 1) particle a's neighbours of one kind within reach2 of its build position,
+ * cell by cell in the grid's order; returns the count. */
+static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int a, double reach2,
+                int32_t *index, int8_t *image)
+{
+    const double *restrict xb = sim->neighbours.x_build, *restrict yb = sim->neighbours.y_build;
+    int count = 0;
+    for (int k = 0; k < r->count; k++) {
+        const double xa_shifted = xa - r->shift_x[k];
+        const int8_t code = r->shift_x[k] == 0 ? 0 : (r->shift_x[k] > 0 ? 1 : -1);
+        for (int b = r->begin[k]; b < r->end[k]; b++) {
+            const double dx = xa_shifted - xb[b], dy = ya - yb[b];
+            if (dx * dx + dy * dy >= reach2 || (b == a && code == 0))
+                continue;
+            if (index) {
+                index[count] = b;
+                image[count] = code;
+            }
+            count++;
+        }
+    }
+    return count;
+}
+
+/* The lists from the build positions, which the arrays are sorted by (grid_sort_*). */
+static int build_lists(surge_sim *sim)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    const cell_grid *g = &sim->grid;
+    const int first = sim->wall_count, nf = sim->count - sim->wall_count;
+    const double reach = 2.0 * sim->derived.h_m + nl->skin_m, reach2 = reach * reach;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        neighbour_ranges fluid, walls;
+        grid_fluid_and_wall_ranges(g, nl->x_build[a], nl->y_build[a], &fluid, &walls);
+        nl->fluid_first[i + 1] = scan(sim, &fluid, nl->x_build[a], nl->y_build[a], a, reach2, NULL, NULL);
+        nl->wall_first[i + 1] = scan(sim, &walls, nl->x_build[a], nl->y_build[a], -1, reach2, NULL, NULL);
+    }
+    nl->fluid_first[0] = nl->wall_first[0] = 0;
+    for (int i = 0; i < nf; i++) {
+        nl->fluid_first[i + 1] += nl->fluid_first[i];
+        nl->wall_first[i + 1] += nl->wall_first[i];
+    }
+    if (reserve(&nl->fluid_index, &nl->fluid_image, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) != 0 ||
+        reserve(&nl->wall_index, &nl->wall_image, &nl->wall_capacity, (size_t)nl->wall_first[nf]) != 0)
+        return -1;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        neighbour_ranges fluid, walls;
+        grid_fluid_and_wall_ranges(g, nl->x_build[a], nl->y_build[a], &fluid, &walls);
+        scan(sim, &fluid, nl->x_build[a], nl->y_build[a], a, reach2, nl->fluid_index + nl->fluid_first[i],
+             nl->fluid_image + nl->fluid_first[i]);
+        scan(sim, &walls, nl->x_build[a], nl->y_build[a], -1, reach2, nl->wall_index + nl->wall_first[i],
+             nl->wall_image + nl->wall_first[i]);
+    }
+    nl->valid = 1;
+    nl->builds++;
+    return 0;
+}
+
+int neighbours_adopt_build_positions(surge_sim *sim)
+{
+    grid_sort_fluid(sim);
+    if (sim->boulders.count > 0)
+        grid_sort_walls(sim);
+    return build_lists(sim);
+}
+
+/* The farthest any particle can be from its build position at the corrector's evaluation of the coming step:
+ * its distance now plus half the largest time step (dt <= C_CFL h / c0) at its speed (a boulder's particles: the
+ * disc's speed plus omega times its radius). */
+static double largest_excursion(const surge_sim *sim)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const surge_params *p = &sim->params;
+    const double half_dt = 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
+                                                            : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
+    double largest = 0;
+    #pragma omp parallel for schedule(static) reduction(max : largest)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double dx = sim->x[a] - nl->x_build[a], dy = sim->y[a] - nl->y_build[a];
+        const double speed = sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
+        const double excursion = sqrt(dx * dx + dy * dy) + half_dt * speed;
+        largest = excursion > largest ? excursion : largest;
+    }
+    const boulder_set *b = &sim->boulders;
+    if (b->count > 0) {
+        for (int k = 0; k < sim->wall_count; k++) {
+            const int i = b->of_wall[sim->id[k]];
+            if (i < 0)
+                continue;
+            const double dx = sim->x[k] - nl->x_build[k], dy = sim->y[k] - nl->y_build[k];
+            const double speed = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
+            largest = fmax(largest, sqrt(dx * dx + dy * dy) + half_dt * speed);
+        }
+    }
+    return largest;
+}
+
+int neighbours_update(surge_sim *sim)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    if (nl->valid && nl->skin_m > 0 && !(largest_excursion(sim) >= 0.5 * nl->skin_m))
+        return 0;
+    const double period = sim->grid.period_m;
+    const int moving_walls = sim->boulders.count > 0;
+    const int from = moving_walls ? 0 : sim->wall_count;
+    if (period > 0) { /* the particles have moved less than a period since the last build */
+        #pragma omp parallel for schedule(static)
+        for (int a = sim->wall_count; a < sim->count; a++) {
+            if (sim->x[a] >= period)
+                sim->x[a] -= period;
+            else if (sim->x[a] < 0)
+                sim->x[a] += period;
+        }
+    }
+    memcpy(nl->x_build + from, sim->x + from, (size_t)(sim->count - from) * sizeof *sim->x);
+    memcpy(nl->y_build + from, sim->y + from, (size_t)(sim->count - from) * sizeof *sim->y);
+    return neighbours_adopt_build_positions(sim);
+}
