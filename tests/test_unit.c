@@ -139,10 +139,16 @@ static long missing_pairs(const surge_sim *sim, int a, const double *px, const d
     const neighbour_lists *nl = &sim->neighbours;
     const int i = a - sim->wall_count;
     const double period = sim->grid.period_m, support2 = 4 * sim->derived.h_m * sim->derived.h_m;
-    for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-        mark[nl->fluid_index[e]] = (int8_t)(nl->fluid_image[e] + 2);
-    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
-        mark[nl->wall_index[e]] = (int8_t)(nl->wall_image[e] + 2);
+    /* the periodic image each entry was listed at, from its offset at the build */
+    const double *xb = nl->x_build;
+    for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+        const int b = nl->fluid_index[e];
+        mark[b] = (int8_t)((period > 0 ? round((xb[a] - xb[b] - nl->fluid_dx0[e]) / period) : 0) + 2);
+    }
+    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+        const int b = nl->wall_index[e];
+        mark[b] = (int8_t)((period > 0 ? round((xb[a] - xb[b] - nl->wall_dx0[e]) / period) : 0) + 2);
+    }
     long missing = 0;
     for (int b = 0; b < sim->count; b++) {
         const double image = period > 0 ? round((px[a] - px[b]) / period) : 0;
@@ -288,6 +294,7 @@ static int test_corner_continuity(void)
         boundary_wall_speeds(sim, 1.0);
         if (neighbours_update(sim) != 0)
             return 1;
+        neighbours_track(sim);
         boundary_update(sim);
         interaction_compute(sim, 0);
         const double dp = p.numerics.dp_m, strain_scale = fabs(p.walls.bottom_speed_mps) / dp;
@@ -343,6 +350,7 @@ static int test_diffusion_linear(void)
         }
         if (neighbours_update(sim) != 0)
             return 1;
+        neighbours_track(sim);
         boundary_update(sim);
         interaction_compute(sim, 0);
         for (int a = sim->wall_count; a < sim->count; a++)

@@ -39,9 +39,42 @@ void boundary_wall_speeds(surge_sim *sim, double time_s)
 #define MIN_DETERMINANT 1e-3
 #define MIN_SHEPARD_SUM 0.1
 
+/* The sums of the first-order interpolation at a ghost node: the correction matrix a and the right-hand sides of
+ * density, vx and vy */
+typedef struct ghost_sums {
+    double a[3][3];
+    double rhs[3][3];
+} ghost_sums;
+
+/* Fluid particle j at r_ghost - r_j = (dx, dy) in the ghost's sums (nothing beyond 2h) */
+static inline void add_fluid_neighbour(ghost_sums *s, const kernel2d *k, double mass, real dx, real dy, real rho_j,
+                                       real vx_j, real vy_j)
+{
+    const real r2 = dx * dx + dy * dy;
+    if (r2 >= k->support2)
+        return;
+    const real r = REAL_SQRT(r2);
+    const double w = kernel2d_w_inside(k->alpha, k->inv_h, r);
+    const double f = kernel2d_grad_factor_inside(k->grad_coef, k->inv_h, r);
+    const double vol = mass / rho_j;
+    const double wx = f * dx, wy = f * dy; /* gradient at the ghost node */
+    const double rx = -(double)dx, ry = -(double)dy; /* r_j - r_ghost */
+    const double basis[3] = {w * vol, wx * vol, wy * vol};
+    const double fields[3] = {rho_j, vx_j, vy_j};
+    for (int row = 0; row < 3; row++) {
+        s->a[row][0] += basis[row];
+        s->a[row][1] += rx * basis[row];
+        s->a[row][2] += ry * basis[row];
+    }
+    for (int q = 0; q < 3; q++)
+        for (int row = 0; row < 3; row++)
+            s->rhs[q][row] += fields[q] * basis[row];
+}
+
 void boundary_update(surge_sim *sim)
 {
     const cell_grid *g = &sim->grid;
+    const neighbour_lists *nl = &sim->neighbours;
     const kernel2d *k = &sim->kernel;
     const double rho0 = sim->rho0, mass = sim->mass;
     const double *restrict x = sim->x, *restrict y = sim->y;
@@ -49,37 +82,29 @@ void boundary_update(surge_sim *sim)
 
     #pragma omp parallel for schedule(static)
     for (int b = 0; b < sim->wall_count; b++) {
-        const double xg = x[b] + sim->ghost_dx[b], yg = y[b] + sim->ghost_dy[b];
         /* A s = rhs for s = (value, d/dx, d/dy) of density, vx, vy at the ghost node */
-        double a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
-        double rhs_rho[3] = {0, 0, 0}, rhs_vx[3] = {0, 0, 0}, rhs_vy[3] = {0, 0, 0};
-        const double xg_wrapped = g->period_m > 0 ? xg - g->period_m * floor(xg / g->period_m) : xg;
-        neighbour_ranges nr;
-        grid_neighbour_ranges(g, g->fluid_start, xg_wrapped, yg, &nr);
-        for (int s = 0; s < nr.count; s++) {
-            for (int j = nr.begin[s]; j < nr.end[s]; j++) {
-                const double dx = xg_wrapped - (x[j] + nr.shift_x[s]), dy = yg - y[j];
-                const double r2 = dx * dx + dy * dy;
-                if (r2 >= k->support2)
-                    continue;
-                const double r = sqrt(r2);
-                const double w = kernel2d_w(k, (real)r);
-                const double f = kernel2d_grad_factor(k, (real)r);
-                const double vol = mass / rho[j];
-                const double wx = f * dx, wy = f * dy; /* gradient at the ghost node */
-                const double rx = -dx, ry = -dy;       /* r_j - r_ghost */
-                a00 += w * vol;  a01 += rx * w * vol;  a02 += ry * w * vol;
-                a10 += wx * vol; a11 += rx * wx * vol; a12 += ry * wx * vol;
-                a20 += wy * vol; a21 += rx * wy * vol; a22 += ry * wy * vol;
-                const double fields[3] = {rho[j], vx[j], vy[j]};
-                double *rhs[3] = {rhs_rho, rhs_vx, rhs_vy};
-                for (int q = 0; q < 3; q++) {
-                    rhs[q][0] += fields[q] * w * vol;
-                    rhs[q][1] += fields[q] * wx * vol;
-                    rhs[q][2] += fields[q] * wy * vol;
-                }
+        ghost_sums sums = {0};
+        if (sim->wall_of[b] != WALL_BOULDER) {
+            /* the ghost does not move: r_ghost - r_j = its offset at the build less j's displacement since */
+            for (int64_t e = nl->ghost_first[b]; e < nl->ghost_first[b + 1]; e++) {
+                const int j = nl->ghost_index[e];
+                add_fluid_neighbour(&sums, k, mass, nl->ghost_dx0[e] - nl->moved_x[j], nl->ghost_dy0[e] - nl->moved_y[j],
+                                    rho[j], vx[j], vy[j]);
             }
+        } else {
+            /* a boulder's ghost turns with the disc: the fluid in the cells around it */
+            const double xg = surge_sim_wrapped_x(sim, x[b] + sim->ghost_dx[b]), yg = y[b] + sim->ghost_dy[b];
+            neighbour_ranges nr;
+            grid_neighbour_ranges(g, g->fluid_start, xg, yg, &nr);
+            for (int s = 0; s < nr.count; s++)
+                for (int j = nr.begin[s]; j < nr.end[s]; j++)
+                    add_fluid_neighbour(&sums, k, mass, (real)(xg - (x[j] + nr.shift_x[s])), (real)(yg - y[j]),
+                                        rho[j], vx[j], vy[j]);
         }
+        const double a00 = sums.a[0][0], a01 = sums.a[0][1], a02 = sums.a[0][2], a10 = sums.a[1][0],
+                     a11 = sums.a[1][1], a12 = sums.a[1][2], a20 = sums.a[2][0], a21 = sums.a[2][1],
+                     a22 = sums.a[2][2];
+        const double *rhs_rho = sums.rhs[0], *rhs_vx = sums.rhs[1], *rhs_vy = sums.rhs[2];
         /* no-slip: mirrored about the wall's velocity where the wall face lies between particle and ghost; the
          * belt-wall corner mirrors about the fixed upstream wall */
         double wall_vx = sim->wall_of[b] == WALL_CORNER ? 0.0 : vx[b], wall_vy = vy[b];
@@ -91,7 +116,7 @@ void boundary_update(surge_sim *sim)
         if (fabs(det) >= MIN_DETERMINANT) {
             /* Cramer's rule; density extrapolated from the ghost node back to the particle */
             double sol[3][3];
-            double *rhs[3] = {rhs_rho, rhs_vx, rhs_vy};
+            const double *rhs[3] = {rhs_rho, rhs_vx, rhs_vy};
             for (int q = 0; q < 3; q++) {
                 const double *c = rhs[q];
                 sol[q][0] = (c[0] * (a11 * a22 - a12 * a21) - a01 * (c[1] * a22 - a12 * c[2]) +

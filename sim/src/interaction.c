@@ -23,26 +23,24 @@ static void compute_pressure(surge_sim *sim)
 static void compute_density_gradient(surge_sim *sim)
 {
     const neighbour_lists *nl = &sim->neighbours;
-    const double period = sim->grid.period_m;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
     const real support2 = sim->kernel.support2;
-    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho;
     #pragma omp parallel for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
-        const double xa = x[a], ya = y[a];
-        const real rhoa = rho[a];
+        const real rhoa = rho[a], mxa = moved_x[a], mya = moved_y[a];
         real m_xx = 0, m_xy = 0, m_yy = 0, sum_x = 0, sum_y = 0;
         const int i = a - sim->wall_count;
+        #pragma omp simd reduction(+ : m_xx, m_xy, m_yy, sum_x, sum_y)
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
             const int b = nl->fluid_index[e];
-            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real dx = nl->fluid_dx0[e] + (mxa - moved_x[b]), dy = nl->fluid_dy0[e] + (mya - moved_y[b]);
             const real r2 = dx * dx + dy * dy;
-            if (r2 >= support2 || r2 == 0)
-                continue;
-            const real vf = mass * inv_rho[b] * kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-            m_xx -= vf * dx * dx, m_xy -= vf * dx * dy, m_yy -= vf * dy * dy;
-            sum_x += (rho[b] - rhoa) * vf * dx, sum_y += (rho[b] - rhoa) * vf * dy;
+            const real f = r2 < support2 && r2 > 0 ? kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)) : 0;
+            const real vf = mass * inv_rho[b] * f;
+            m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
+            sum_x -= pair_moment(vf, rho[b] - rhoa, dx), sum_y -= pair_moment(vf, rho[b] - rhoa, dy);
         }
         const real det = m_xx * m_yy - m_xy * m_xy;
         const real inv_det = det > (real)0.25 ? (real)1 / det : 0;
@@ -51,150 +49,230 @@ static void compute_density_gradient(surge_sim *sim)
     }
 }
 
+/* What one evaluation's pair loops take from the scene, constant over the particles */
+typedef struct pair_constants {
+    real grad_coef, inv_h, alpha, mass, eta2, h, support2, four_nu, rho_h_per_m;
+} pair_constants;
+
+/* The sums a fluid particle gathers over its neighbours (eq. 6, 7 and what the time step, shifting, the
+ * renormalisation and the relaxation need) */
+typedef struct particle_sums {
+    real acc_x, acc_y, div_v, diffusion, visc_speed_mps, kernel_w; /* kernel_w: sum_b W_ab, not the particle itself */
+    real grad_c_x, grad_c_y, div_r;
+    real m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy; /* kernel moment M and velocity gradient G (pair_moment) */
+    int near_surface, near_boulder;
+} particle_sums;
+
+/* Fluid particle a's fluid neighbours: pressure, viscosity, continuity, density diffusion (Antuono's form when
+ * antuono, a constant the compiler specialises on), moments. Pairs beyond 2h (the skin) are masked, not skipped,
+ * so that the loop vectorises; each particle sums its own pairs in list order, whatever the thread count. */
+static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *sim, const pair_constants *c, int a,
+                                                              int antuono, particle_sums *out)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int32_t *restrict index = nl->fluid_index;
+    const real *restrict dx0 = nl->fluid_dx0, *restrict dy0 = nl->fluid_dy0;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
+    const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
+    const int32_t *restrict surface = sim->surface;
+    const real grad_coef = c->grad_coef, inv_h = c->inv_h, alpha = c->alpha, mass = c->mass, eta2 = c->eta2;
+    const real h = c->h, support2 = c->support2, four_nu = c->four_nu, rho_h_per_m = c->rho_h_per_m;
+    const real mxa = moved_x[a], mya = moved_y[a], vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a];
+    const real inv_rhoa = inv_rho[a], grad_xa = grad_rho_x[a], grad_ya = grad_rho_y[a];
+    real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_speed_mps = 0, kernel_w = 0;
+    real grad_c_x = 0, grad_c_y = 0, div_r = 0, m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
+    int near_surface = 0;
+    const int i = a - sim->wall_count;
+    const int64_t first = nl->fluid_first[i], last = nl->fluid_first[i + 1];
+    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, div_v, diffusion, kernel_w, grad_c_x, grad_c_y, div_r, m_xx, m_xy, \
+                               m_yy, g_xx, g_xy, g_yx, g_yy) reduction(max : visc_speed_mps) reduction(| : near_surface)
+    for (int64_t e = first; e < last; e++) {
+        const int b = index[e];
+        const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]); /* r_ab */
+        const real r2 = dx * dx + dy * dy;
+        const int inside = r2 < support2 && r2 > 0;
+        const real r = REAL_SQRT(r2);
+        const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0; /* grad_a W = f r_ab */
+        const real vol = mass * inv_rho[b], vf = vol * f;
+        const real dvx = vxa - vx[b], dvy = vya - vy[b];
+        const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+        acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
+        acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
+        div_v += pair_divergence(vf, dvx, dvy, dx, dy);
+        m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
+        g_xx += pair_moment(vf, dvx, dx), g_xy += pair_moment(vf, dvx, dy);
+        g_yx += pair_moment(vf, dvy, dx), g_yy += pair_moment(vf, dvy, dy);
+        const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
+                                         : pair_hydrostatic_part(rho_h_per_m, dy);
+        diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
+        const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2) : 0;
+        visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+        grad_c_x += vf * dx;
+        grad_c_y += vf * dy;
+        div_r -= vf * r2;
+        near_surface |= inside & surface[b];
+        kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+    }
+    *out = (particle_sums){acc_x, acc_y, div_v, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y, div_r,
+                           m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0};
+}
+
+/* Fluid particle a's wall neighbours, added to s: mDBC pressure; the no-slip velocity in the viscous term, the
+ * wall's (with no penetration) in continuity; no density diffusion across the wall. */
+static inline void wall_pairs(const surge_sim *sim, const pair_constants *c, int a, particle_sums *s)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int32_t *restrict index = nl->wall_index;
+    const real *restrict dx0 = nl->wall_dx0, *restrict dy0 = nl->wall_dy0;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
+    const real *restrict cont_vx = sim->wall_cont_vx, *restrict cont_vy = sim->wall_cont_vy;
+    const real grad_coef = c->grad_coef, inv_h = c->inv_h, alpha = c->alpha, mass = c->mass, eta2 = c->eta2;
+    const real h = c->h, support2 = c->support2, four_nu = c->four_nu;
+    const real mxa = moved_x[a], mya = moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
+    const real pa = pres[a], inv_rhoa = inv_rho[a];
+    real acc_x = 0, acc_y = 0, div_v = 0, visc_speed_mps = 0, kernel_w = 0, grad_c_x = 0, grad_c_y = 0, div_r = 0;
+    real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
+    const int i = a - sim->wall_count;
+    const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
+    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, div_v, kernel_w, grad_c_x, grad_c_y, div_r, m_xx, m_xy, m_yy, g_xx, \
+                               g_xy, g_yx, g_yy) reduction(max : visc_speed_mps)
+    for (int64_t e = first; e < last; e++) {
+        const int b = index[e];
+        const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
+        const real r2 = dx * dx + dy * dy;
+        const int inside = r2 < support2;
+        const real r = REAL_SQRT(r2);
+        const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
+        const real vf = mass * inv_rho[b] * f;
+        const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+        const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+        acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
+        acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
+        const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+        div_v += pair_divergence(vf, wdx, wdy, dx, dy);
+        m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
+        g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
+        g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
+        const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2) : 0;
+        visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+        grad_c_x += vf * dx;
+        grad_c_y += vf * dy;
+        div_r -= vf * r2;
+        kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+    }
+    s->acc_x += acc_x, s->acc_y += acc_y, s->div_v += div_v, s->kernel_w += kernel_w;
+    s->visc_speed_mps = visc_speed_mps > s->visc_speed_mps ? visc_speed_mps : s->visc_speed_mps;
+    s->grad_c_x += grad_c_x, s->grad_c_y += grad_c_y, s->div_r += div_r;
+    s->m_xx += m_xx, s->m_xy += m_xy, s->m_yy += m_yy, s->g_xx += g_xx, s->g_xy += g_xy, s->g_yx += g_yx;
+    s->g_yy += g_yy;
+}
+
+/* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
+ * nearest wall face within search_m straight below the particle (the wall particle within dp/2 of its normal line),
+ * not a boulder's, whose disc would have to take the reaction: its distance (search_m when none), normal and wall
+ * particle (-1: none). */
+typedef struct wall_face {
+    real gap_m, nx, ny;
+    int wall;
+} wall_face;
+
+static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *near_boulder)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
+    wall_face face = {search_m, 0, 0, -1};
+    const int i = a - sim->wall_count;
+    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+        const int b = nl->wall_index[e];
+        const real dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[b]);
+        const real dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
+        const real r2 = dx * dx + dy * dy;
+        if (r2 >= support2)
+            continue;
+        if (sim->wall_of[b] == WALL_BOULDER) {
+            *near_boulder = 1;
+            continue;
+        }
+        const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
+        if (search_m > 0 && r2 - along * along < half_dp * half_dp && along - sim->wall_depth_m[b] < face.gap_m)
+            face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b], b};
+    }
+    return face;
+}
+
 void interaction_compute(surge_sim *sim, int corrector)
 {
     compute_pressure(sim);
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
-    const neighbour_lists *nl = &sim->neighbours;
-    const double period = sim->grid.period_m;
-    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
-    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, h = sim->kernel.h;
-    const real support2 = sim->kernel.support2;
-    const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
+    const pair_constants c = {
+        .grad_coef = sim->kernel.grad_coef, .inv_h = sim->kernel.inv_h, .alpha = sim->kernel.alpha,
+        .mass = (real)sim->mass, .eta2 = (real)sim->eta2, .h = sim->kernel.h, .support2 = sim->kernel.support2,
+        .four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps), .rho_h_per_m = (real)sim->rho_h_per_m};
     const real ddt_coef = (real)(2.0 * sim->params.numerics.density_diffusion * sim->derived.h_m * sim->derived.c0_mps);
-    const real rho_h_per_m = (real)sim->rho_h_per_m;
     const real gx = (real)sim->gx, gy = (real)sim->gy;
-    const double *restrict x = sim->x, *restrict y = sim->y;
-    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
-    const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
-    const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
-    const real *restrict cont_vx = sim->wall_cont_vx, *restrict cont_vy = sim->wall_cont_vy;
-    const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
-    const uint8_t *restrict surface = sim->surface, *restrict wall_of = sim->wall_of;
     /* relaxation of the density toward the kernel sum in the bulk: kappa per unit strain (corrector pass only) */
     const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
-    const real alpha = sim->kernel.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
+    const real mass = c.mass, alpha = c.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
     /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
-    const real half_dp = (real)(0.5 * sim->params.numerics.dp_m);
     const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
     const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
-    const real *restrict wall_nx = sim->wall_nx, *restrict wall_ny = sim->wall_ny, *restrict wall_depth_m = sim->wall_depth_m;
 
-    /* Each particle gathers over its neighbours in a fixed order, so results do not depend on the thread count.
-     * (A branch-free, vectorised form of these loops measured 2x slower: most candidates lie beyond 2h.) */
     #pragma omp parallel for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
-        const double xa = x[a], ya = y[a];
-        const real vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a], inv_rhoa = inv_rho[a];
-        real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_speed_mps = 0;
-        real kernel_sum = mass * alpha; /* sum_b m W_ab, the particle itself included */
-        real face_m = face_search_m, face_nx = 0, face_ny = 0; /* the nearest wall face straight below, its normal */
-        int face_b = -1;
-        real grad_c_x = 0, grad_c_y = 0, div_r = 0;
-        pair_moments moments = {0};
-        int near_surface = surface[a], near_boulder = 0;
-        const int i = a - sim->wall_count;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int b = nl->fluid_index[e];
-            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
-            const real r2 = dx * dx + dy * dy;
-            if (r2 >= support2 || r2 == 0)
-                continue;
-            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)); /* grad_a W = f r_ab */
-            const real vol = mass * inv_rho[b], vf = vol * f;
-            const real dvx = vxa - vx[b], dvy = vya - vy[b];
-            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
-            acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
-            acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
-            div_v += pair_divergence(vf, dvx, dvy, dx, dy);
-            pair_add_moments(&moments, vf, dx, dy, dvx, dvy);
-            const real linear_part = antuono ? pair_gradient_part(grad_rho_x[a], grad_rho_y[a], grad_rho_x[b],
-                                                                  grad_rho_y[b], dx, dy)
-                                             : pair_hydrostatic_part(rho_h_per_m, dy);
-            diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
-            const real speed = pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2);
-            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-            grad_c_x += vf * dx;
-            grad_c_y += vf * dy;
-            div_r -= vf * r2;
-            near_surface |= surface[b];
-            if (relax_per_strain > 0)
-                kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
-        }
-        /* wall neighbours: mDBC pressure; no-slip velocity in the viscous term, wall velocity in
-         * continuity; no density diffusion across the wall */
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const int b = nl->wall_index[e];
-            const real dx = (real)(xa - nl->wall_image[e] * period - x[b]), dy = (real)(ya - y[b]);
-            const real r2 = dx * dx + dy * dy;
-            if (r2 >= support2)
-                continue;
-            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-            const real vol = mass * inv_rho[b], vf = vol * f;
-            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
-            const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
-            acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
-            acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
-            /* distance to the face of the wall particle straight below (within dp/2 of its normal line); not
-             * a boulder's, whose disc would have to take the reaction */
-            const real along = dx * wall_nx[b] + dy * wall_ny[b];
-            if (face_search_m > 0 && r2 - along * along < half_dp * half_dp && along - wall_depth_m[b] < face_m &&
-                wall_of[b] != WALL_BOULDER) {
-                face_m = along - wall_depth_m[b];
-                face_nx = wall_nx[b], face_ny = wall_ny[b], face_b = b;
-            }
-            const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-            div_v += pair_divergence(vf, wdx, wdy, dx, dy);
-            pair_add_moments(&moments, vf, dx, dy, wdx, wdy);
-            const real speed = pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2);
-            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-            grad_c_x += vf * dx;
-            grad_c_y += vf * dy;
-            div_r -= vf * r2;
-            near_boulder |= wall_of[b] == WALL_BOULDER;
-            if (relax_per_strain > 0)
-                kernel_sum += mass * kernel2d_w_inside(alpha, inv_h, REAL_SQRT(r2));
-        }
-        if (face_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along its
-                                      * normal; the step's update takes away any velocity toward it (sim.c) */
-            const real depth = (face_reach_m - face_m) / face_reach_m;
-            acc_x += face_stiffness * depth * depth * face_nx;
-            acc_y += face_stiffness * depth * depth * face_ny;
+        particle_sums s;
+        if (antuono)
+            fluid_pairs(sim, &c, a, 1, &s);
+        else
+            fluid_pairs(sim, &c, a, 0, &s);
+        s.near_surface |= sim->surface[a];
+        wall_pairs(sim, &c, a, &s);
+        const wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
+        if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
+                                          * its normal; the step's update takes away any velocity toward it (sim.c) */
+            const real depth = (face_reach_m - face.gap_m) / face_reach_m;
+            s.acc_x += face_stiffness * depth * depth * face.nx;
+            s.acc_y += face_stiffness * depth * depth * face.ny;
         }
         if (corrector) {
-            sim->face_nx[a] = face_nx, sim->face_ny[a] = face_ny, sim->face_gap_m[a] = face_m;
-            sim->face_vn_mps[a] = face_b >= 0 ? vx[face_b] * face_nx + vy[face_b] * face_ny : 0;
+            sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
+            sim->face_vn_mps[a] = face.wall >= 0 ? sim->vx[face.wall] * face.nx + sim->vy[face.wall] * face.ny : 0;
         }
-        sim->ax[a] = acc_x + gx;
-        sim->ay[a] = acc_y + gy;
-        const pair_moments *mo = &moments;
-        const real det = mo->m_xx * mo->m_yy - mo->m_xy * mo->m_xy;
+        sim->ax[a] = s.acc_x + gx;
+        sim->ay[a] = s.acc_y + gy;
+        const real rhoa = sim->rho[a];
+        real div_v = s.div_v;
+        const real det = s.m_xx * s.m_yy - s.m_xy * s.m_xy;
         if (sim->params.numerics.continuity_correction && det > (real)0.25) {
             /* div v = tr(G M^-1): exact for linear velocity fields even with a truncated kernel */
             const real inv = (real)1 / det;
-            div_v = -inv * (mo->g_xx * mo->m_yy - mo->g_xy * mo->m_xy - mo->g_yx * mo->m_xy + mo->g_yy * mo->m_xx);
+            div_v = -inv * (s.g_xx * s.m_yy - s.g_xy * s.m_xy - s.g_yx * s.m_xy + s.g_yy * s.m_xx);
         }
-        sim->drho[a] = rhoa * div_v + ddt_coef * diffusion;
+        sim->drho[a] = rhoa * div_v + ddt_coef * s.diffusion;
         /* full kernel support, and no boulder's particles (their spacing along a curved surface is not the fluid's):
          * the kernel sum is the density the spacing says */
-        if (relax_per_strain > 0 && !near_surface && !near_boulder) {
+        if (relax_per_strain > 0 && !s.near_surface && !s.near_boulder) {
             /* at the rate kappa |2D|, D = sym(G) the strain rate (M = I in the bulk): where the fluid deforms, since
              * deformation is what moves spacing and density apart; a fluid at rest keeps its densities */
-            const real shear = mo->g_xy + mo->g_yx;
-            const real strain_rate = REAL_SQRT((real)2 * (mo->g_xx * mo->g_xx + mo->g_yy * mo->g_yy) + shear * shear);
+            const real shear = s.g_xy + s.g_yx;
+            const real strain_rate = REAL_SQRT((real)2 * (s.g_xx * s.g_xx + s.g_yy * s.g_yy) + shear * shear);
+            const real kernel_sum = mass * (alpha + s.kernel_w); /* sum_b m W_ab, the particle itself included */
             sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
         }
-        sim->visc_speed_mps[a] = visc_speed_mps;
-        sim->div_r[a] = div_r;
-        sim->grad_c_x[a] = grad_c_x;
-        sim->grad_c_y[a] = grad_c_y;
+        sim->visc_speed_mps[a] = s.visc_speed_mps;
+        sim->div_r[a] = s.div_r;
+        sim->grad_c_x[a] = s.grad_c_x;
+        sim->grad_c_y[a] = s.grad_c_y;
         if (corrector) /* surface[] is set at the end of the predictor pass, after this step's sort */
-            sim->near_surface[a] = (uint8_t)near_surface;
+            sim->near_surface[a] = (uint8_t)s.near_surface;
     }
     if (!corrector) {
         const real threshold = (real)sim->params.shifting.surface_threshold;

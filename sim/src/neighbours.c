@@ -18,7 +18,11 @@ int neighbours_init(surge_sim *sim, char *err, size_t err_len)
     nl->y_build = malloc((n + 1) * sizeof *nl->y_build);
     nl->fluid_first = calloc(nf + 1, sizeof *nl->fluid_first);
     nl->wall_first = calloc(nf + 1, sizeof *nl->wall_first);
-    if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first) {
+    nl->ghost_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_first);
+    nl->moved_x = calloc(n + 1, sizeof *nl->moved_x);
+    nl->moved_y = calloc(n + 1, sizeof *nl->moved_y);
+    if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first || !nl->ghost_first || !nl->moved_x ||
+        !nl->moved_y) {
         snprintf(err, err_len, "out of memory for the neighbour lists of %zu particles", n);
         return -1;
     }
@@ -30,15 +34,16 @@ int neighbours_init(surge_sim *sim, char *err, size_t err_len)
 
 void neighbours_free(neighbour_lists *nl)
 {
-    void *arrays[] = {nl->x_build, nl->y_build, nl->fluid_first, nl->fluid_index, nl->fluid_image, nl->wall_first,
-                      nl->wall_index, nl->wall_image};
+    void *arrays[] = {nl->x_build, nl->y_build, nl->moved_x, nl->moved_y, nl->fluid_first, nl->fluid_index,
+                      nl->fluid_dx0, nl->fluid_dy0, nl->wall_first, nl->wall_index, nl->wall_dx0, nl->wall_dy0,
+                      nl->ghost_first, nl->ghost_index, nl->ghost_dx0, nl->ghost_dy0};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     memset(nl, 0, sizeof *nl);
 }
 
 /* Grows a list's arrays to hold at least need entries (by half again, so that growth is rare). */
-static int reserve(int32_t **index, int8_t **image, size_t *capacity, size_t need)
+static int reserve(int32_t **index, real **dx0, real **dy0, size_t *capacity, size_t need)
 {
     if (need <= *capacity)
         return 0;
@@ -47,31 +52,35 @@ static int reserve(int32_t **index, int8_t **image, size_t *capacity, size_t nee
     if (!i)
         return -1;
     *index = i;
-    int8_t *m = realloc(*image, grown * sizeof *m);
-    if (!m)
+    real *x = realloc(*dx0, grown * sizeof *x);
+    if (!x)
         return -1;
-    *image = m;
+    *dx0 = x;
+    real *y = realloc(*dy0, grown * sizeof *y);
+    if (!y)
+        return -1;
+    *dy0 = y;
     *capacity = grown;
     return 0;
 }
 
-/* Counts (fill = 0) or writes (fill = 1) particle a's neighbours of one kind within reach2 of its build position,
- * cell by cell in the grid's order; returns the count. */
-static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int a, double reach2,
-                int32_t *index, int8_t *image)
+/* Counts (index NULL) or writes the neighbours of one kind within reach2 of the point (xa, ya), build positions,
+ * cell by cell in the grid's order, skipping particle self; returns the count. */
+static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int self, double reach2,
+                int32_t *index, real *dx0, real *dy0)
 {
     const double *restrict xb = sim->neighbours.x_build, *restrict yb = sim->neighbours.y_build;
     int count = 0;
     for (int k = 0; k < r->count; k++) {
         const double xa_shifted = xa - r->shift_x[k];
-        const int8_t code = r->shift_x[k] == 0 ? 0 : (r->shift_x[k] > 0 ? 1 : -1);
         for (int b = r->begin[k]; b < r->end[k]; b++) {
             const double dx = xa_shifted - xb[b], dy = ya - yb[b];
-            if (dx * dx + dy * dy >= reach2 || (b == a && code == 0))
+            if (dx * dx + dy * dy >= reach2 || (b == self && r->shift_x[k] == 0))
                 continue;
             if (index) {
                 index[count] = b;
-                image[count] = code;
+                dx0[count] = (real)dx;
+                dy0[count] = (real)dy;
             }
             count++;
         }
@@ -79,42 +88,96 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
     return count;
 }
 
+/* Where a list's searches start: fluid particle a's build position, or the ghost node of wall particle k = a
+ * (wrapped into the period); 0 for a wall particle without a ghost list (a boulder's). */
+static int search_point(const surge_sim *sim, int a, double *xs, double *ys)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    if (a >= sim->wall_count) {
+        *xs = nl->x_build[a], *ys = nl->y_build[a];
+        return 1;
+    }
+    if (sim->wall_of[a] == WALL_BOULDER)
+        return 0;
+    *xs = surge_sim_wrapped_x(sim, nl->x_build[a] + sim->ghost_dx[a]);
+    *ys = nl->y_build[a] + sim->ghost_dy[a];
+    return 1;
+}
+
+/* Counts (fill = 0) or writes (fill = 1) the lists of particle a (a fluid particle's fluid and wall lists, or a
+ * wall particle's ghost list). */
+static void list_particle(surge_sim *sim, int a, double reach2, int fill)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    const cell_grid *g = &sim->grid;
+    double xs, ys;
+    if (a < sim->wall_count) {
+        neighbour_ranges fluid;
+        const int listed = search_point(sim, a, &xs, &ys);
+        if (listed)
+            grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
+        if (!fill)
+            nl->ghost_first[a + 1] = listed ? scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL) : 0;
+        else if (listed) {
+            const int64_t e = nl->ghost_first[a];
+            scan(sim, &fluid, xs, ys, -1, reach2, nl->ghost_index + e, nl->ghost_dx0 + e, nl->ghost_dy0 + e);
+        }
+        return;
+    }
+    const int i = a - sim->wall_count;
+    neighbour_ranges fluid, walls;
+    search_point(sim, a, &xs, &ys);
+    grid_fluid_and_wall_ranges(g, xs, ys, &fluid, &walls);
+    if (!fill) {
+        nl->fluid_first[i + 1] = scan(sim, &fluid, xs, ys, a, reach2, NULL, NULL, NULL);
+        nl->wall_first[i + 1] = scan(sim, &walls, xs, ys, -1, reach2, NULL, NULL, NULL);
+        return;
+    }
+    const int64_t ef = nl->fluid_first[i], ew = nl->wall_first[i];
+    scan(sim, &fluid, xs, ys, a, reach2, nl->fluid_index + ef, nl->fluid_dx0 + ef, nl->fluid_dy0 + ef);
+    scan(sim, &walls, xs, ys, -1, reach2, nl->wall_index + ew, nl->wall_dx0 + ew, nl->wall_dy0 + ew);
+}
+
+static void prefix_sum(int64_t *first, int n)
+{
+    first[0] = 0;
+    for (int i = 0; i < n; i++)
+        first[i + 1] += first[i];
+}
+
 /* The lists from the build positions, which the arrays are sorted by (grid_sort_*). */
 static int build_lists(surge_sim *sim)
 {
     neighbour_lists *nl = &sim->neighbours;
-    const cell_grid *g = &sim->grid;
-    const int first = sim->wall_count, nf = sim->count - sim->wall_count;
+    const int nf = sim->count - sim->wall_count, nw = sim->wall_count;
     const double reach = 2.0 * sim->derived.h_m + nl->skin_m, reach2 = reach * reach;
     #pragma omp parallel for schedule(static)
-    for (int i = 0; i < nf; i++) {
-        const int a = first + i;
-        neighbour_ranges fluid, walls;
-        grid_fluid_and_wall_ranges(g, nl->x_build[a], nl->y_build[a], &fluid, &walls);
-        nl->fluid_first[i + 1] = scan(sim, &fluid, nl->x_build[a], nl->y_build[a], a, reach2, NULL, NULL);
-        nl->wall_first[i + 1] = scan(sim, &walls, nl->x_build[a], nl->y_build[a], -1, reach2, NULL, NULL);
-    }
-    nl->fluid_first[0] = nl->wall_first[0] = 0;
-    for (int i = 0; i < nf; i++) {
-        nl->fluid_first[i + 1] += nl->fluid_first[i];
-        nl->wall_first[i + 1] += nl->wall_first[i];
-    }
-    if (reserve(&nl->fluid_index, &nl->fluid_image, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) != 0 ||
-        reserve(&nl->wall_index, &nl->wall_image, &nl->wall_capacity, (size_t)nl->wall_first[nf]) != 0)
+    for (int a = 0; a < sim->count; a++)
+        list_particle(sim, a, reach2, 0);
+    prefix_sum(nl->fluid_first, nf);
+    prefix_sum(nl->wall_first, nf);
+    prefix_sum(nl->ghost_first, nw);
+    if (reserve(&nl->fluid_index, &nl->fluid_dx0, &nl->fluid_dy0, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) ||
+        reserve(&nl->wall_index, &nl->wall_dx0, &nl->wall_dy0, &nl->wall_capacity, (size_t)nl->wall_first[nf]) ||
+        reserve(&nl->ghost_index, &nl->ghost_dx0, &nl->ghost_dy0, &nl->ghost_capacity, (size_t)nl->ghost_first[nw]))
         return -1;
     #pragma omp parallel for schedule(static)
-    for (int i = 0; i < nf; i++) {
-        const int a = first + i;
-        neighbour_ranges fluid, walls;
-        grid_fluid_and_wall_ranges(g, nl->x_build[a], nl->y_build[a], &fluid, &walls);
-        scan(sim, &fluid, nl->x_build[a], nl->y_build[a], a, reach2, nl->fluid_index + nl->fluid_first[i],
-             nl->fluid_image + nl->fluid_first[i]);
-        scan(sim, &walls, nl->x_build[a], nl->y_build[a], -1, reach2, nl->wall_index + nl->wall_first[i],
-             nl->wall_image + nl->wall_first[i]);
-    }
+    for (int a = 0; a < sim->count; a++)
+        list_particle(sim, a, reach2, 1);
     nl->valid = 1;
     nl->builds++;
     return 0;
+}
+
+void neighbours_track(surge_sim *sim)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    const int from = sim->boulders.count > 0 ? 0 : sim->wall_count; /* other walls never move */
+    #pragma omp parallel for schedule(static)
+    for (int a = from; a < sim->count; a++) {
+        nl->moved_x[a] = (real)(sim->x[a] - nl->x_build[a]);
+        nl->moved_y[a] = (real)(sim->y[a] - nl->y_build[a]);
+    }
 }
 
 int neighbours_adopt_build_positions(surge_sim *sim)

@@ -60,17 +60,12 @@ static inline real pair_viscous_speed(real h, real dvx, real dvy, real dx, real 
     return REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
 }
 
-/* Kernel moment M = -sum V_b f r_ab (x) r_ab and velocity gradient G = -sum V_b f v_ab (x) r_ab: M^-1 renormalises
- * div v = tr(G M^-1) (docs/method.md), and sym(G) is the strain rate of the density relaxation */
-typedef struct pair_moments {
-    real m_xx, m_xy, m_yy;
-    real g_xx, g_xy, g_yx, g_yy;
-} pair_moments;
-
-static inline void pair_add_moments(pair_moments *s, real vol_f, real dx, real dy, real dvx, real dvy)
+/* One entry of the kernel moment M = -sum V_b f r_ab (x) r_ab (u = r_ab) or of the velocity gradient
+ * G = -sum V_b f v_ab (x) r_ab (u = v_ab): -V_b f u_i r_j. M^-1 renormalises div v = tr(G M^-1) (docs/method.md),
+ * and sym(G) is the strain rate of the density relaxation. */
+static inline real pair_moment(real vol_f, real u_i, real r_j)
 {
-    s->m_xx -= vol_f * dx * dx, s->m_xy -= vol_f * dx * dy, s->m_yy -= vol_f * dy * dy;
-    s->g_xx -= vol_f * dvx * dx, s->g_xy -= vol_f * dvx * dy, s->g_yx -= vol_f * dvy * dx, s->g_yy -= vol_f * dvy * dy;
+    return -vol_f * u_i * r_j;
 }
 
 #endif

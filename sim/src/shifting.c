@@ -49,21 +49,20 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
  * sum_b m W_ab, so a density that takes it on follows the spacing (mass is carried with the particles). */
 static void shift_divergence(surge_sim *sim)
 {
+    neighbours_track(sim); /* the discs have moved to the end of the step */
     const neighbour_lists *nl = &sim->neighbours;
-    const double period = sim->grid.period_m;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, mass = (real)sim->mass;
     const real support2 = sim->kernel.support2;
-    const double *restrict x = sim->x, *restrict y = sim->y;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict inv_rho = sim->inv_rho, *restrict sx = sim->shift_x, *restrict sy = sim->shift_y;
     #pragma omp parallel for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
-        const double xa = x[a], ya = y[a];
-        const real sxa = sx[a], sya = sy[a];
+        const real sxa = sx[a], sya = sy[a], mxa = moved_x[a], mya = moved_y[a];
         real sum = 0;
         const int i = a - sim->wall_count;
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
             const int b = nl->fluid_index[e];
-            const real dx = (real)(xa - nl->fluid_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real dx = nl->fluid_dx0[e] + (mxa - moved_x[b]), dy = nl->fluid_dy0[e] + (mya - moved_y[b]);
             const real r2 = dx * dx + dy * dy;
             if (r2 >= support2 || r2 == 0)
                 continue;
@@ -72,7 +71,7 @@ static void shift_divergence(surge_sim *sim)
         }
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
             const int b = nl->wall_index[e];
-            const real dx = (real)(xa - nl->wall_image[e] * period - x[b]), dy = (real)(ya - y[b]);
+            const real dx = nl->wall_dx0[e] + (mxa - moved_x[b]), dy = nl->wall_dy0[e] + (mya - moved_y[b]);
             const real r2 = dx * dx + dy * dy;
             if (r2 >= support2)
                 continue;

@@ -141,6 +141,7 @@ int surge_sim_step(surge_sim *sim)
         return -1;
     }
     boundary_wall_speeds(sim, t_n);
+    neighbours_track(sim);
     boundary_update(sim);
     interaction_compute(sim, 0);
     boulders_fluid_forces(sim);
@@ -169,6 +170,7 @@ int surge_sim_step(surge_sim *sim)
 
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
+    neighbours_track(sim);
     boundary_update(sim);
     interaction_compute(sim, 1);
     boulders_fluid_forces(sim);

@@ -43,17 +43,22 @@ typedef struct cell_span {
 
 /* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
- * wall_index[wall_first[i] .. wall_first[i+1]), in cell order; image s means the neighbour's periodic image at
- * x + s * period (s in -1, 0, 1). */
+ * wall_index[wall_first[i] .. wall_first[i+1]), in cell order, each with r_a - r_b at the build (periodic image
+ * included) in *_dx0, *_dy0. Between builds r_a - r_b = dx0 + (moved_a - moved_b), all in pair precision: no
+ * periodic images, no large coordinates. Wall particle k that does not move (not a boulder's) has the fluid
+ * neighbours of its mDBC ghost node in ghost_index[ghost_first[k] .. ghost_first[k+1]), with r_ghost - r_j at the
+ * build in ghost_dx0, ghost_dy0; a boulder's particles have none (their ghosts turn with the disc; boundary.c
+ * searches the cells). */
 typedef struct neighbour_lists {
     double skin_m;
     int valid;                 /* 0: build at the next step */
     int64_t builds;
     double *x_build, *y_build; /* every particle's position at the build (the arrays are sorted by its cells) */
-    int64_t *fluid_first, *wall_first;
-    int32_t *fluid_index, *wall_index;
-    int8_t *fluid_image, *wall_image;
-    size_t fluid_capacity, wall_capacity;
+    real *moved_x, *moved_y;   /* every particle's displacement since the build (neighbours_track) */
+    int64_t *fluid_first, *wall_first, *ghost_first;
+    int32_t *fluid_index, *wall_index, *ghost_index;
+    real *fluid_dx0, *fluid_dy0, *wall_dx0, *wall_dy0, *ghost_dx0, *ghost_dy0;
+    size_t fluid_capacity, wall_capacity, ghost_capacity;
 } neighbour_lists;
 
 struct surge_sim {
@@ -84,7 +89,7 @@ struct surge_sim {
     real *div_r;
     real *shift_x, *shift_y;   /* this step's shifting displacement (m) */
     real *shift_div;           /* its divergence div(dr), the relative volume change it makes */
-    uint8_t *surface;          /* free-surface flag from the last predictor pass */
+    int32_t *surface;          /* free-surface flag from the last predictor pass (int32: the pair loop gathers it) */
     uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */
     /* wall particles only */
     uint8_t *wall_of;          /* WALL_*; the velocity of a wall particle is in vx, vy */
@@ -147,6 +152,8 @@ void neighbours_free(neighbour_lists *nl);
 int neighbours_update(surge_sim *sim);
 /* Sorts by the build positions as they are and builds the lists (restarts: the same lists as the saved run). */
 int neighbours_adopt_build_positions(surge_sim *sim);
+/* Every particle's displacement since the build: before each force evaluation (positions changed). */
+void neighbours_track(surge_sim *sim);
 
 /* boundary.c: mDBC density and no-slip velocity of wall particles */
 void boundary_update(surge_sim *sim);
