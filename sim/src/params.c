@@ -107,7 +107,7 @@ static const surge_param_info registry[] = {
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",
      OFF(numerics.continuity_correction)},
-    {"numerics", "neighbour_skin_h", SURGE_PARAM_REAL, "h", 0.3, 0, 2, false, NULL,
+    {"numerics", "neighbour_skin_h", SURGE_PARAM_REAL, "h", 0.2, 0, 2, false, NULL,
      "Skin of the neighbour lists in units of h: each fluid particle lists its neighbours within 2h + skin and "
      "the lists are reused until a particle may have moved skin/2 (0: rebuilt every step; docs/method.md).",
      OFF(numerics.neighbour_skin_h)},
@@ -321,10 +321,20 @@ static int enum_name(const char *names, int n, char *buf, size_t len)
     return 1;
 }
 
+/* The shortest %g form that reads back as the same double (0.6, not 0.59999999999999998). */
+static void format_real(double value, char *buf, size_t len)
+{
+    for (int digits = 1; digits <= 17; digits++) {
+        snprintf(buf, len, "%.*g", digits, value);
+        if (strtod(buf, NULL) == value)
+            return;
+    }
+}
+
 void surge_param_format(const surge_params *p, const surge_param_info *info, char *buf, size_t len)
 {
     switch (info->type) {
-    case SURGE_PARAM_REAL: snprintf(buf, len, "%.17g", *(const double *)cfield(p, info)); break;
+    case SURGE_PARAM_REAL: format_real(*(const double *)cfield(p, info), buf, len); break;
     case SURGE_PARAM_INT: snprintf(buf, len, "%d", *(const int *)cfield(p, info)); break;
     case SURGE_PARAM_BOOL: snprintf(buf, len, "%s", *(const bool *)cfield(p, info) ? "true" : "false"); break;
     case SURGE_PARAM_ENUM:
