@@ -64,10 +64,12 @@ typedef struct particle_sums {
 } particle_sums;
 
 /* Fluid particle a's fluid neighbours: pressure, viscosity, continuity, density diffusion (Antuono's form when
- * antuono, a constant the compiler specialises on), moments. Pairs beyond 2h (the skin) are masked, not skipped,
- * so that the loop vectorises; each particle sums its own pairs in list order, whatever the thread count. */
+ * antuono), moments; in the predictor's pass the viscous speed (the time step), in the corrector's what shifting and
+ * the relaxation need. antuono and corrector are constants the compiler specialises on. Pairs beyond 2h (the skin)
+ * are masked, not skipped, so that the loop vectorises; each particle sums its own pairs in list order, whatever
+ * the thread count. */
 static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *sim, const pair_constants *c, int a,
-                                                              int antuono, particle_sums *out)
+                                                              int antuono, int corrector, particle_sums *out)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const int32_t *restrict index = nl->fluid_index;
@@ -108,21 +110,25 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
         const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
                                          : pair_hydrostatic_part(rho_h_per_m, dy);
         diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
-        const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2) : 0;
-        visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-        grad_c_x += vf * dx;
-        grad_c_y += vf * dy;
         div_r -= vf * r2;
-        near_surface |= inside & surface[b];
-        kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+        if (!corrector) {
+            const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2) : 0;
+            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+        } else {
+            grad_c_x += vf * dx;
+            grad_c_y += vf * dy;
+            near_surface |= inside & surface[b];
+            kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+        }
     }
     *out = (particle_sums){acc_x, acc_y, div_v, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y, div_r,
                            m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0};
 }
 
 /* Fluid particle a's wall neighbours, added to s: mDBC pressure; the no-slip velocity in the viscous term, the
- * wall's (with no penetration) in continuity; no density diffusion across the wall. */
-static inline void wall_pairs(const surge_sim *sim, const pair_constants *c, int a, particle_sums *s)
+ * wall's (with no penetration) in continuity; no density diffusion across the wall (passes as in fluid_pairs). */
+static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *sim, const pair_constants *c, int a,
+                                                             int corrector, particle_sums *s)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const int32_t *restrict index = nl->wall_index;
@@ -159,12 +165,15 @@ static inline void wall_pairs(const surge_sim *sim, const pair_constants *c, int
         m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
         g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
         g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
-        const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2) : 0;
-        visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-        grad_c_x += vf * dx;
-        grad_c_y += vf * dy;
         div_r -= vf * r2;
-        kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+        if (!corrector) {
+            const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2) : 0;
+            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
+        } else {
+            grad_c_x += vf * dx;
+            grad_c_y += vf * dy;
+            kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+        }
     }
     s->acc_x += acc_x, s->acc_y += acc_y, s->div_v += div_v, s->kernel_w += kernel_w;
     s->visc_speed_mps = visc_speed_mps > s->visc_speed_mps ? visc_speed_mps : s->visc_speed_mps;
@@ -229,12 +238,20 @@ void interaction_compute(surge_sim *sim, int corrector)
     #pragma omp parallel for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
         particle_sums s;
-        if (antuono)
-            fluid_pairs(sim, &c, a, 1, &s);
-        else
-            fluid_pairs(sim, &c, a, 0, &s);
+        if (corrector) {
+            if (antuono)
+                fluid_pairs(sim, &c, a, 1, 1, &s);
+            else
+                fluid_pairs(sim, &c, a, 0, 1, &s);
+            wall_pairs(sim, &c, a, 1, &s);
+        } else {
+            if (antuono)
+                fluid_pairs(sim, &c, a, 1, 0, &s);
+            else
+                fluid_pairs(sim, &c, a, 0, 0, &s);
+            wall_pairs(sim, &c, a, 0, &s);
+        }
         s.near_surface |= sim->surface[a];
-        wall_pairs(sim, &c, a, &s);
         const wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
         if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
                                           * its normal; the step's update takes away any velocity toward it (sim.c) */
@@ -267,12 +284,14 @@ void interaction_compute(surge_sim *sim, int corrector)
             const real kernel_sum = mass * (alpha + s.kernel_w); /* sum_b m W_ab, the particle itself included */
             sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
         }
-        sim->visc_speed_mps[a] = s.visc_speed_mps;
         sim->div_r[a] = s.div_r;
-        sim->grad_c_x[a] = s.grad_c_x;
-        sim->grad_c_y[a] = s.grad_c_y;
-        if (corrector) /* surface[] is set at the end of the predictor pass, after this step's sort */
+        if (!corrector) /* the time step follows the predictor's pass */
+            sim->visc_speed_mps[a] = s.visc_speed_mps;
+        else { /* surface[] is set at the end of the predictor pass, after this step's sort */
+            sim->grad_c_x[a] = s.grad_c_x;
+            sim->grad_c_y[a] = s.grad_c_y;
             sim->near_surface[a] = (uint8_t)s.near_surface;
+        }
     }
     if (!corrector) {
         const real threshold = (real)sim->params.shifting.surface_threshold;
