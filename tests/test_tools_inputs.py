@@ -364,6 +364,7 @@ expect("ab_bench --new without surge-bench", tool("ab_bench.py", "--new", WORK),
 expect("ab_bench --ch 0", tool("ab_bench.py", "--new", BUILD, "--ch", "1.0,0"), "--ch")
 expect("ab_bench --threads x", tool("ab_bench.py", "--new", BUILD, "--threads", "x"), "--threads")
 expect("ab_bench --pairs 0", tool("ab_bench.py", "--pairs", "0"), "--pairs")
+expect("ab_bench --set-b without =", tool("ab_bench.py", "--new", BUILD, "--set-b", "numerics.cfl"), "--set-b")
 
 
 def bench(*args):

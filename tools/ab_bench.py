@@ -2,13 +2,15 @@
 """ab_bench: the solver's throughput at an earlier commit (A) against the current build (B), interleaved.
 
   tools/ab_bench.py [--base f50cf94] [--pairs 3] [--ch 1.0,1.8] [--threads 1,2] [--end-s 0.1] [--new build]
+                    [--set-b NAME=VALUE ...]
 
 A is the commit --base, exported with `git archive` into build/ab/<commit>/ and built there in Release with the
 current tools/bench.c (the public API it uses has not changed since f50cf94), so that A and B run the same driver
 on the same case file (this checkout's cases/incline_film.ini). For each configuration (C_h, threads) it runs
 surge-bench A B A B ... --pairs times, one at a time, with OMP_WAIT_POLICY=PASSIVE, and prints each run's
 particle-steps/s, the medians, each pair's ratio B/A, and the velocity error of both (which must agree). At
-C_h 1.0 both run 4 wall layers, at other C_h the automatic number. Run it on an otherwise idle machine.
+C_h 1.0 both run 4 wall layers, at other C_h the automatic number. --set-b passes parameters to B only (e.g. the
+numerics of A's defaults, to time the same equations). Run it on an otherwise idle machine.
 """
 import argparse
 import os
@@ -54,10 +56,12 @@ def build_base(revision):
     return bench, sha[:12]
 
 
-def run_bench(bench, case, ch, threads, end_s):
+def run_bench(bench, case, ch, threads, end_s, settings=()):
     """particle-steps/s (millions) and velocity error of one run."""
     layers = "4" if float(ch) == 1.0 else "0"
     cmd = [bench, case, "--ch", ch, "--threads", str(threads), "--layers", layers, "--end-s", str(end_s)]
+    for setting in settings:
+        cmd += ["-s", setting]
     env = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
     proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
     match = LINE.search(proc.stdout)
@@ -75,6 +79,8 @@ def main():
     parser.add_argument("--ch", default="1.0,1.8", help="comma-separated C_h values")
     parser.add_argument("--threads", default="1,2", help="comma-separated thread counts")
     parser.add_argument("--end-s", type=cli_checks.positive, default=0.1)
+    parser.add_argument("--set-b", action="append", default=[], metavar="NAME=VALUE",
+                        help="a parameter for B's runs only (repeatable)")
     args = parser.parse_args()
     try:
         ch_values = args.ch.split(",")
@@ -84,13 +90,16 @@ def main():
     except ValueError:
         fail("--ch and --threads take comma-separated positive numbers (got --ch %s --threads %s)"
              % (args.ch, args.threads))
+    for setting in args.set_b:
+        if "=" not in setting:
+            fail("--set-b %s: expected NAME=VALUE" % setting)
     new_bench = os.path.join(args.new, "surge-bench")
     if not os.access(new_bench, os.X_OK):
         fail("%s: no surge-bench there (build first)" % args.new)
     base_bench, sha = build_base(args.base)
     case = os.path.join(ROOT, "cases", "incline_film.ini")
-    print("# ab_bench: A = %s, B = %s; %s, %g s of flow; %d pairs, A B A B ..." %
-          (sha, args.new, case, args.end_s, args.pairs))
+    print("# ab_bench: A = %s, B = %s%s; %s, %g s of flow; %d pairs, A B A B ..." %
+          (sha, args.new, "".join(" -s " + s for s in args.set_b), case, args.end_s, args.pairs))
     print("# C_h threads | A runs (million particle-steps/s) | B runs | median A | median B | ratios B/A | "
           "median ratio | velocity error A, B")
     for ch in ch_values:
@@ -98,7 +107,7 @@ def main():
             a_runs, b_runs = [], []
             for _ in range(args.pairs):
                 a_runs.append(run_bench(base_bench, case, ch, threads, args.end_s))
-                b_runs.append(run_bench(new_bench, case, ch, threads, args.end_s))
+                b_runs.append(run_bench(new_bench, case, ch, threads, args.end_s, args.set_b))
             ratios = [b[0] / a[0] for a, b in zip(a_runs, b_runs)]
             print("%s %d | %s | %s | %.3f | %.3f | %s | %.2f | %.4f, %.4f" % (
                 ch, threads, " ".join("%.3f" % r[0] for r in a_runs), " ".join("%.3f" % r[0] for r in b_runs),
