@@ -41,7 +41,7 @@ def surge(name, args, timeout_s=300):
     shutil.rmtree(out, ignore_errors=True)
     cmd = [SURGE] + args[:1] + [os.path.join(SOURCE, "cases", args[1]) if args[1].endswith(".ini") else args[1]]
     if args[0] == "run":
-        cmd += ["-o", out, "--threads", "1", "-s", "output.progress_interval_s=0"]
+        cmd += ["-o", out, "--overwrite", "--threads", "1", "-s", "output.progress_interval_s=0"]
     cmd += args[2:]
     p = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout_s, env=ENV)
     return out, p, " ".join(cmd)
@@ -176,7 +176,7 @@ def group_stream():
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(out)
     pub, ctl = "ipc://" + os.path.join(out, "pub.sock"), "ipc://" + os.path.join(out, "ctl.sock")
-    args = [SURGE, "run", os.path.join(SOURCE, "cases", "boulder_settling.ini"), "-o", os.path.join(out, "run"),
+    args = [SURGE, "run", os.path.join(SOURCE, "cases", "boulder_settling.ini"), "-o", os.path.join(out, "run"), "--overwrite",
             "--threads", "1", "-s", "output.progress_interval_s=0", "-s", "time.end_s=0.05", "--publish", pub,
             "--control", ctl, "--paused", "--publish-hz", "0", "--publish-hwm", "100000",
             "-s", "boulders.list_m=0.05 0.17 0.0125, 0.05 0.1 0.0125 0 0 2"]

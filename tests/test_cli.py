@@ -416,6 +416,56 @@ def group_inputs():
                  ["run", poiseuille, "-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-o", regular],
                  [regular], code=3)
 
+    # --- earlier outputs are never lost without --overwrite (issue #24) ---------------------------------
+    quick = ["-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-s", "output.snapshot_interval_s=0.001"]
+    kept = os.path.join(WORK, "kept_run")
+    r = surge("run", poiseuille, *quick, "-o", kept)
+    with open(os.path.join(kept, "params.ini")) as f:
+        params_before = f.read()
+    snaps_before = sorted(f for f in os.listdir(kept) if f.startswith("snap_"))
+    report("outputs_first_run", exited(r, 0) and len(snaps_before) >= 3, r)
+    expect_error("outputs_rerun_refused", ["run", poiseuille, *quick, "-s", "fluid.viscosity_m2ps=0.02", "-o", kept],
+                 [kept, "earlier run", "--overwrite", "nothing was written"])
+    with open(os.path.join(kept, "params.ini")) as f:
+        report("outputs_rerun_left_the_run_alone", f.read() == params_before and
+               sorted(f for f in os.listdir(kept) if f.startswith("snap_")) == snaps_before, None,
+               "params.ini or the snapshots changed")
+    user_file = write_file(os.path.join("kept_run", "notes.txt"), "mine\n")
+    r = surge("run", poiseuille, "-s", "time.end_s=0.001", *quick[2:], "-o", kept, "--overwrite")
+    snaps_after = sorted(f for f in os.listdir(kept) if f.startswith("snap_"))
+    report("outputs_overwrite_replaces_the_run_only", exited(r, 0) and "--overwrite: removed" in r.stderr and
+           len(snaps_after) < len(snaps_before) and os.path.isfile(user_file), r,
+           "snapshots %s -> %s; notes.txt %s" % (snaps_before, snaps_after, os.path.isfile(user_file)))
+    # without -o: a fresh runs/<case>-N
+    home = os.path.join(WORK, "cwd_default")
+    os.makedirs(home, exist_ok=True)
+    r1 = surge("run", poiseuille, *quick, cwd=home)
+    r2 = surge("run", poiseuille, *quick, cwd=home)
+    report("outputs_default_folder_fresh_name", exited(r1, 0) and exited(r2, 0) and
+           os.path.isfile(os.path.join(home, "runs", "poiseuille", "params.ini")) and
+           os.path.isfile(os.path.join(home, "runs", "poiseuille-2", "params.ini")) and "poiseuille-2" in r2.stderr,
+           r2)
+    # frames: stale frames of another run are refused, and cleared by --overwrite
+    frames = os.path.join(WORK, "kept_frames")
+    os.makedirs(frames, exist_ok=True)
+    stale = write_file(os.path.join("kept_frames", "frame_000099.png"), b"old")
+    expect_error("outputs_frames_refused", ["run", poiseuille, *quick, "-o", os.path.join(WORK, "fr_run"), "--frames",
+                                            frames], [frames, "frames", "--overwrite"])
+    report("outputs_frames_left_alone", os.path.isfile(stale), None, "frame_000099.png was removed")
+    expect_error("outputs_movie_folder_checked_first",
+                 ["run", poiseuille, *quick, "-o", os.path.join(WORK, "mv_run"), "--movie",
+                  os.path.join(WORK, "no_such_folder", "m.mp4")], ["no_such_folder", "does not exist"])
+    report("outputs_movie_folder_nothing_run", not os.path.exists(os.path.join(WORK, "mv_run", "params.ini")), None,
+           "the run started before the movie's folder was checked")
+
+    # --- messages ----------------------------------------------------------------------------------------
+    empty = write_file("empty.ini", "# nothing but a comment\n\n")
+    expect_error("case_empty_refused", ["check", empty], [empty, "no parameters"])
+    expect_error("cli_s_did_you_mean", ["run", tank_case, "-o", out, "-s", "dp_m=0.001"],
+                 ["dp_m", "did you mean numerics.dp_m"])
+    expect_error("cli_s_long_key_not_truncated", ["run", tank_case, "-o", out, "-s",
+                                                  "numerics.dp_m" + "x" * 300 + "=0.001"], ["unknown parameter"])
+
     # --- the shipped cases, the parameter reference, help -----------------------------------------------
     shipped = sorted(f for f in os.listdir(cases_dir) if f.endswith(".ini"))
     report("shipped_cases_found", len(shipped) > 0, None, "no cases/*.ini in %s" % cases_dir)
@@ -632,7 +682,8 @@ def group_restart():
         r = surge("run", case, "-s", "time.end_s=0.04", *quiet, "-o", os.path.join(WORK, "T%d" % n),
                   "--threads", str(n), timeout=RUN_TIMEOUT_S)
         hashes[n] = state_hash(r)
-        report("threads_%d_run" % n, exited(r, 0) and hashes[n] is not None and ("%d threads" % n) in r.stderr, r)
+        report("threads_%d_run" % n, exited(r, 0) and hashes[n] is not None and
+               ("%d thread%s" % (n, "" if n == 1 else "s")) in r.stderr and "1 threads" not in r.stderr, r)
     report("threads_1_vs_2_same_hash", hashes[1] is not None and hashes[1] == hashes[2], None,
            "--threads 1: %s, --threads 2: %s" % (hashes[1], hashes[2]))
     report("threads_1_equals_default_run", hashes[1] is not None and hashes[1] == hash_a, None,
@@ -660,6 +711,35 @@ def group_restart():
     checkpoint = os.path.join(dir_i, "checkpoint.bin")
     report("sigint_stops_with_checkpoint", exited(r_int, 4) and "interrupted" in r_int.stderr and
            os.path.isfile(checkpoint), r_int, "needs exit 4, 'interrupted' and checkpoint.bin")
+    report("sigint_says_how_to_continue", "--restart " + checkpoint in r_int.stderr, r_int,
+           "needs the --restart command")
+
+    # OpenMP threads wait passively unless the user set a policy (issue #24): the running process's environment
+    for given, wanted in ((None, "PASSIVE"), ("ACTIVE", "ACTIVE")):
+        env = {k: v for k, v in ENV.items() if k != "OMP_WAIT_POLICY"}
+        if given:
+            env["OMP_WAIT_POLICY"] = given
+        proc = subprocess.Popen([SURGE, "run", case, "-s", "time.end_s=100", *quiet, "-o",
+                                 os.path.join(WORK, "wait_%s" % wanted), "--threads", "1"], stdin=subprocess.DEVNULL,
+                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
+        seen, deadline = None, time.time() + 30
+        while time.time() < deadline and proc.poll() is None and seen is None:
+            time.sleep(0.2)
+            try:
+                with open("/proc/%d/environ" % proc.pid, "rb") as f:
+                    entries = f.read().split(b"\0")
+                if os.path.isfile(os.path.join(WORK, "wait_%s" % wanted, "params.ini")):
+                    seen = [e.decode() for e in entries if e.startswith(b"OMP_WAIT_POLICY=")]
+            except OSError:
+                pass
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.communicate(timeout=RUN_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.communicate()
+        report("omp_wait_policy_%s" % ("default" if given is None else "user_" + given.lower()),
+               seen == ["OMP_WAIT_POLICY=" + wanted], None, "the run's environment had %s" % seen)
     try:
         checkpoint_step, checkpoint_time_s = checkpoint_position(checkpoint)
     except (OSError, struct.error):

@@ -57,7 +57,7 @@ snapshot_interval_s = 0.5
 def run(name, case, *overrides):
     """Runs SURGE on case into OUT/name; returns (exit status, output)."""
     out = os.path.join(OUT, name)
-    cmd = [SURGE, "run", case, "-o", out, "--threads", "2"]
+    cmd = [SURGE, "run", case, "-o", out, "--overwrite", "--threads", "2"]
     for o in overrides:
         cmd += ["-s", o]
     proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=1200)

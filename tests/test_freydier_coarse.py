@@ -29,7 +29,7 @@ def main():
     run_dir = os.path.join(work, "id1_coarse")
     argv = [surge, "run", os.path.join(source, "cases", "freydier_id1.ini"), "-s", "numerics.dp_m=0.002",
             "-s", "numerics.ch=1.3", "-s", "walls.layers=0", "-s", "fluid.shape=lubrication", "-s", "time.end_s=8",
-            "-s", "output.progress_interval_s=0", "-o", run_dir]
+            "-s", "output.progress_interval_s=0", "-o", run_dir, "--overwrite"]
     r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=1200)
     if r.returncode != 0:
         print("FAILED: %s exited %d\n%s" % (" ".join(argv), r.returncode, r.stderr))

@@ -293,7 +293,7 @@ def group_inputs():
     movie = os.path.join(d, "kept.mp4")
     with open(movie, "wb") as f:
         f.write(b"an earlier movie")
-    p = subprocess.run([SURGE, "run", TANK, "-o", out, "-s", "time.end_s=0.001", "--movie", movie],
+    p = subprocess.run([SURGE, "run", TANK, "-o", out, "--overwrite", "-s", "time.end_s=0.001", "--movie", movie],
                        capture_output=True, text=True, timeout=60, env=dict(ENV, PATH="/nonexistent"))
     with open(movie, "rb") as f:
         kept = f.read()

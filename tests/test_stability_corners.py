@@ -51,7 +51,7 @@ def main():
     for name, overrides, expected_rc, wanted in CASES:
         argv = [surge, "run", os.path.join(source, "cases", "freydier_id1.ini"), "-s", "walls.layers=0",
                 "-s", "output.progress_interval_s=0", "-s", "output.snapshot_interval_s=0.5"] + overrides + \
-               ["-o", os.path.join(work, name)]
+               ["-o", os.path.join(work, name), "--overwrite"]
         try:
             r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=900)
             rc, err = r.returncode, r.stderr

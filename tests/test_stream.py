@@ -448,11 +448,11 @@ def group_inputs():
     ]
     wrong = []
     for extra, words in cases:
-        args = [SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_bad"), "-s", "time.end_s=0.01"] + extra
+        args = [SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_bad"), "--overwrite", "-s", "time.end_s=0.01"] + extra
         p = subprocess.run(args, capture_output=True, text=True, timeout=30)
         if p.returncode != 2 or words not in p.stderr:
             wrong.append("%s -> exit %d: %s" % (" ".join(extra), p.returncode, p.stderr.strip()[-300:]))
-    p = subprocess.run([SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_late"), "-s", "time.end_s=0.01",
+    p = subprocess.run([SURGE, "run", TANK, "-o", os.path.join(WORK, "inputs_late"), "--overwrite", "-s", "time.end_s=0.01",
                         "--replay", late_journal], capture_output=True, text=True, timeout=30)
     if p.returncode != 2 or "late_journal.jsonl:1: numerics.dp_m cannot change" not in p.stderr:
         wrong.append("late journal -> exit %d: %s" % (p.returncode, p.stderr.strip()[-300:]))

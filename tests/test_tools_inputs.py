@@ -336,8 +336,8 @@ expect("surge_watch --record onto a file", tool(SW, "--record", path("run", "par
 expect("surge_watch --png into a missing folder", tool(SW, "--png", path("nowhere", "live.png")), "--png")
 expect("surge_watch --duration 0", tool(SW, "--record", path("rec"), "--duration", "0"), "--duration")
 r = tool(SW, "-e", "ipc://" + path("nobody.sock"), "--record", path("rec"), "--duration", "0.3")
-check("surge_watch says what it waits for", r.returncode == 0 and "waiting" in r.stderr and "nobody.sock" in r.stderr,
-      r.stderr.strip())
+check("surge_watch says what it waits for, and fails when nothing came", r.returncode == 1 and "waiting" in r.stderr
+      and "nobody.sock" in r.stderr and "no state received" in r.stderr, r.stderr.strip())
 pub = "ipc://" + path("pub.sock")
 r = with_peer(pub, zmq.PUB, [b"stats", b"not json"],
               lambda: tool(SW, "-e", pub, "--record", path("rec"), "--duration", "20"))

@@ -109,7 +109,7 @@ def main():
                 a_runs.append(run_bench(base_bench, case, ch, threads, args.end_s))
                 b_runs.append(run_bench(new_bench, case, ch, threads, args.end_s, args.set_b))
             ratios = [b[0] / a[0] for a, b in zip(a_runs, b_runs)]
-            print("%s %d | %s | %s | %.3f | %.3f | %s | %.2f | %.4f, %.4f" % (
+            print("%s %d | %s | %s | %.3f | %.3f | %s | %.2f | %.5f, %.5f" % (
                 ch, threads, " ".join("%.3f" % r[0] for r in a_runs), " ".join("%.3f" % r[0] for r in b_runs),
                 statistics.median(r[0] for r in a_runs), statistics.median(r[0] for r in b_runs),
                 " ".join("%.2f" % r for r in ratios), statistics.median(ratios), a_runs[0][1], b_runs[0][1]))

@@ -119,7 +119,7 @@ static int run_one(const bench_config *c, double *first_rate)
         *first_rate = rate;
     printf("C_h = %s, %d thread%s: %d fluid + %d wall particles, %.0f steps in %.2f s: %.3f million "
            "particle-steps/s (fluid particles; %.3f million counting walls), ratio %.2f; "
-           "velocity error vs analytic start-up %.4f; state hash %016llx\n",
+           "velocity error vs analytic start-up %.5f; state hash %016llx\n",
            c->ch, c->threads, c->threads > 1 ? "s" : "", d->fluid_count, d->wall_count, steps, wall, rate / 1e6,
            steps * (d->fluid_count + d->wall_count) / wall / 1e6, rate / *first_rate, film_error(sim),
            (unsigned long long)surge_sim_state_hash(sim));

@@ -1,6 +1,6 @@
 /* surge: the command-line program. Wires the solver (sim/) to its outputs, the state publisher and the control
  * socket (stream/) and the renderer (render/). */
-#define _POSIX_C_SOURCE 200809L
+#define _XOPEN_SOURCE 700 /* POSIX 2008 and realpath */
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include <zmq.h>
 
@@ -20,6 +21,7 @@
 #include "surge/publisher.h"
 #include "surge/render.h"
 #include "surge/run.h"
+#include "surge/run_folder.h"
 #include "surge/sim.h"
 #include "surge/vtk_output.h"
 
@@ -63,7 +65,9 @@ static const char *usage_run =
     "\n"
     "options:\n"
     "  -s section.key=value  override a parameter (repeatable; see 'surge params')\n"
-    "  -o OUTDIR             output folder (created if missing)\n"
+    "  -o OUTDIR             output folder (created if missing; default runs/<case name>). A folder that holds\n"
+    "                        an earlier run is refused; without -o the run goes to a fresh runs/<case name>-N\n"
+    "  --overwrite           replace the earlier run in OUTDIR (its files only) and the frames in --frames DIR\n"
     "  --threads N           OpenMP threads (default: all cores)\n"
     "  --restart FILE        continue from a checkpoint; only live parameters may be overridden (time.end_s...)\n"
     "                        and the output goes to the checkpoint's folder unless -o is given\n"
@@ -98,6 +102,7 @@ static const char *usage_check =
 
 static const char *usage_render =
     "usage: surge render RUN_DIR [--frames DIR] [--movie FILE] [-s render.key=value ...] [--font FILE]\n"
+    "                    [--overwrite]\n"
     "\n"
     "Renders every snapshot listed in RUN_DIR/run.pvd with the run's parameters (RUN_DIR/params.ini) and\n"
     "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot) and/or a movie at render.movie_fps.\n"
@@ -129,6 +134,7 @@ typedef struct cli {
     const char *frames_dir;
     const char *movie_path;
     const char *font_path;
+    int overwrite; /* --overwrite: replace an earlier run's files and frames */
 } cli;
 
 static int parse_int(const char *text, int lo, int hi, int *out)
@@ -254,6 +260,8 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
                 argv[++i];
         } else if (allow_run_options && !strcmp(a, "--paused")) {
             c->paused = 1;
+        } else if (allow_run_options && !strcmp(a, "--overwrite")) {
+            c->overwrite = 1;
         } else if (a[0] == '-' && a[1] != '\0') {
             fprintf(stderr, "surge: unknown option '%s' (see --help)\n", a);
             return -1;
@@ -413,9 +421,11 @@ static int close_live_links(live_links *l, const surge_sim *sim)
                 (unsigned long long)r.frames_drawn, (unsigned long long)r.frames_due,
                 (unsigned long long)(r.frames_due - r.frames_drawn), r.frames_drawn ? 1e3 * r.draw_s / r.frames_drawn : 0,
                 r.frames_drawn ? 1e3 * r.encode_s / r.frames_drawn : 0);
-        if (l->movie_path)
+        if (l->movie_path && r.movie_frames_before_restart > 0)
             fprintf(stderr, "surge: movie %s: %llu frames (%llu of them drawn before the restart)\n", l->movie_path,
                     (unsigned long long)r.movie_frames, (unsigned long long)r.movie_frames_before_restart);
+        else if (l->movie_path)
+            fprintf(stderr, "surge: movie %s: %llu frames\n", l->movie_path, (unsigned long long)r.movie_frames);
     }
     if (l->publisher) {
         surge_publisher_report r;
@@ -451,6 +461,89 @@ static void warn_diffusive_compressibility(const surge_sim *sim)
                 estimate, radius_m, d->c0_mps);
 }
 
+/* Refuses (-1) to write into a folder that holds earlier outputs (belongs) unless --overwrite, which removes them;
+ * what names the outputs and hint says how else to go on. */
+static int claim_folder(const char *folder, int (*belongs)(const char *name), int overwrite, const char *what,
+                        const char *hint)
+{
+    char example[256], err[1024];
+    const int count = surge_folder_count(folder, belongs, example, sizeof example, err, sizeof err);
+    if (count < 0) {
+        fprintf(stderr, "surge: %s\n", err);
+        return -1;
+    }
+    if (count == 0)
+        return 0;
+    if (!overwrite) {
+        fprintf(stderr, "surge: %s already holds %s (%d files, e.g. %s); nothing was written. %s, or add --overwrite "
+                        "to replace them\n", folder, what, count, example, hint);
+        return -1;
+    }
+    const int removed = surge_folder_clear(folder, belongs, err, sizeof err);
+    if (removed < 0) {
+        fprintf(stderr, "surge: --overwrite: %s\n", err);
+        return -1;
+    }
+    fprintf(stderr, "surge: --overwrite: removed %d files of %s from %s\n", removed, what, folder);
+    return 0;
+}
+
+/* The default output folder, or the first of folder-2, folder-3, ... that holds no earlier run. */
+static int fresh_default_folder(char *folder, size_t len)
+{
+    char base[4096], err[1024];
+    snprintf(base, sizeof base, "%s", folder);
+    for (int n = 1; n < 10000; n++) {
+        if (n > 1 && snprintf(folder, len, "%s-%d", base, n) >= (int)len) {
+            fprintf(stderr, "surge: the output folder name %s is too long\n", base);
+            return -1;
+        }
+        const int count = surge_folder_count(folder, surge_is_run_file, NULL, 0, err, sizeof err);
+        if (count < 0) {
+            fprintf(stderr, "surge: %s\n", err);
+            return -1;
+        }
+        if (count == 0) {
+            if (n > 1)
+                fprintf(stderr, "surge: %s holds an earlier run; this one goes to %s (-o chooses the folder, "
+                                "--overwrite replaces)\n", base, folder);
+            return 0;
+        }
+    }
+    fprintf(stderr, "surge: %s-2 ... %s-9999 all hold runs; choose a folder with -o\n", base, base);
+    return -1;
+}
+
+/* Whether two paths name the same existing folder. */
+static int same_folder(const char *a, const char *b)
+{
+    char ra[PATH_MAX], rb[PATH_MAX];
+    return realpath(a, ra) && realpath(b, rb) && !strcmp(ra, rb);
+}
+
+/* The folder part of a file path ("." when it has none). */
+static void folder_of(const char *path, char *folder, size_t len)
+{
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(folder, len, ".");
+    else
+        snprintf(folder, len, "%.*s", slash == path ? 1 : (int)(slash - path), path);
+}
+
+/* A movie file's folder must exist and be writable before the run starts, not when the first frame is encoded. */
+static int movie_folder_ok(const char *movie_path)
+{
+    char folder[4096];
+    folder_of(movie_path, folder, sizeof folder);
+    if (access(folder, W_OK) != 0) {
+        fprintf(stderr, "surge: --movie %s: its folder %s %s\n", movie_path, folder,
+                errno == ENOENT ? "does not exist" : "is not writable");
+        return -1;
+    }
+    return 0;
+}
+
 static int command_run(int argc, char **argv)
 {
     if (wants_help(argc, argv)) {
@@ -473,9 +566,7 @@ static int command_run(int argc, char **argv)
         if (c.output_dir) {
             snprintf(outdir, sizeof outdir, "%s", c.output_dir);
         } else {
-            const char *slash = strrchr(c.restart_path, '/');
-            const int folder_len = slash == NULL ? 0 : slash == c.restart_path ? 1 : (int)(slash - c.restart_path);
-            snprintf(outdir, sizeof outdir, "%.*s", slash ? folder_len : 1, slash ? c.restart_path : ".");
+            folder_of(c.restart_path, outdir, sizeof outdir);
         }
     } else {
         surge_params p;
@@ -491,11 +582,40 @@ static int command_run(int argc, char **argv)
         else
             default_output_dir(c.case_path, outdir, sizeof outdir);
     }
+    /* never over an earlier run without being asked; a restart continues its run in the checkpoint's folder */
+    char checkpoint_dir[4096] = "";
+    if (c.restart_path)
+        folder_of(c.restart_path, checkpoint_dir, sizeof checkpoint_dir);
+    const int continuing = c.restart_path && same_folder(outdir, checkpoint_dir);
+    int claimed = 0;
+    if (!continuing) {
+        if (!c.output_dir && !c.restart_path && !c.overwrite)
+            claimed = fresh_default_folder(outdir, sizeof outdir);
+        else
+            claimed = claim_folder(outdir, surge_is_run_file, c.overwrite, "an earlier run",
+                                   c.restart_path ? "Choose another folder with -o"
+                                                  : "Choose another folder with -o, or continue that run with "
+                                                    "--restart FOLDER/checkpoint.bin");
+    }
+    if (claimed == 0 && c.frames_dir && !c.restart_path)
+        claimed = claim_folder(c.frames_dir, surge_is_frame_file, c.overwrite, "frames of an earlier run",
+                               "Choose another --frames folder");
+    if (claimed == 0 && c.movie_path && movie_folder_ok(c.movie_path) != 0)
+        claimed = -1;
+    if (claimed == 0 && c.movie_path && !c.overwrite && !c.restart_path && access(c.movie_path, F_OK) == 0) {
+        fprintf(stderr, "surge: the movie %s exists; nothing was written. Choose another --movie file, or add "
+                        "--overwrite to replace it\n", c.movie_path);
+        claimed = -1;
+    }
+    if (claimed != 0) {
+        surge_sim_destroy(sim);
+        return EXIT_USAGE;
+    }
     const surge_derived *d = surge_sim_derived(sim);
-    fprintf(stderr, "surge: %s%s -> %s: %d fluid + %d wall particles, h = %.4g m, c0 = %.4g m/s, %d threads\n",
+    fprintf(stderr, "surge: %s%s -> %s: %d fluid + %d wall particles, h = %.4g m, c0 = %.4g m/s, %d thread%s\n",
             c.restart_path ? "restart from " : "", c.restart_path ? c.restart_path
                                                    : (c.case_path ? c.case_path : "default scene (cases/demo.ini)"),
-            outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads);
+            outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads, threads == 1 ? "" : "s");
     warn_diffusive_compressibility(sim);
     live_links links;
     if (open_live_links(&c, outdir, sim, &links) != 0) {
@@ -538,10 +658,12 @@ static int command_run(int argc, char **argv)
         return EXIT_UNHEALTHY;
     case SURGE_RUN_STOPPED:
         fprintf(stderr, "surge: stopped by a control request, state hash %016llx; checkpoint written to "
-                        "%s/checkpoint.bin\n", (unsigned long long)hash, outdir);
+                        "%s/checkpoint.bin (continue with surge run --restart %s/checkpoint.bin)\n",
+                (unsigned long long)hash, outdir, outdir);
         return EXIT_OK;
     case SURGE_RUN_INTERRUPTED:
-        fprintf(stderr, "surge: interrupted; checkpoint written to %s/checkpoint.bin\n", outdir);
+        fprintf(stderr, "surge: interrupted; checkpoint written to %s/checkpoint.bin; continue with\n"
+                        "  surge run --restart %s/checkpoint.bin\n", outdir, outdir);
         return EXIT_INTERRUPTED;
     case SURGE_RUN_IO_ERROR:
         fprintf(stderr, "surge: %s\n", err);
@@ -592,7 +714,7 @@ static int command_render(int argc, char **argv)
         return EXIT_USAGE;
     }
     if (c.publish[0] || c.control[0] || c.restart_path || c.replay_path || c.threads || c.output_dir) {
-        fprintf(stderr, "surge: render takes only --frames, --movie, --font and -s render.key=value\n");
+        fprintf(stderr, "surge: render takes only --frames, --movie, --font, --overwrite and -s render.key=value\n");
         return EXIT_USAGE;
     }
     for (int i = 0; i < c.override_count; i++)
@@ -617,6 +739,19 @@ static int command_render(int argc, char **argv)
     if (!c.frames_dir && !c.movie_path) {
         snprintf(frames_dir, sizeof frames_dir, "%s/frames", c.case_path);
         c.frames_dir = frames_dir;
+    }
+    int claimed = c.frames_dir ? claim_folder(c.frames_dir, surge_is_frame_file, c.overwrite, "frames",
+                                              "Choose another --frames folder") : 0;
+    if (claimed == 0 && c.movie_path && movie_folder_ok(c.movie_path) != 0)
+        claimed = -1;
+    if (claimed == 0 && c.movie_path && !c.overwrite && access(c.movie_path, F_OK) == 0) {
+        fprintf(stderr, "surge: the movie %s exists; nothing was written. Choose another --movie file, or add "
+                        "--overwrite to replace it\n", c.movie_path);
+        claimed = -1;
+    }
+    if (claimed != 0) {
+        surge_pvd_close(pvd);
+        return EXIT_USAGE;
     }
     if (c.frames_dir && surge_make_folders(c.frames_dir, "the frames", err, sizeof err) != 0) {
         fprintf(stderr, "surge: %s\n", err);
@@ -701,8 +836,22 @@ static int command_check(int argc, char **argv)
     return EXIT_OK;
 }
 
+/* While they wait at a barrier, libgomp's threads spin (OMP_WAIT_POLICY unset: about 300,000 times before they
+ * sleep), which on cores shared with other work starves the thread the others wait for: a run that takes minutes
+ * can take hours (issue #24). libgomp reads the variable before main, so a run without the user's own setting
+ * executes itself again, once, with OMP_WAIT_POLICY=PASSIVE (docs/performance.md measures both). */
+static void prefer_passive_wait(char **argv)
+{
+    if (getenv("OMP_WAIT_POLICY") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0)
+        return;
+    execv("/proc/self/exe", argv);
+    unsetenv("OMP_WAIT_POLICY"); /* no /proc: go on with libgomp's default */
+}
+
 int main(int argc, char **argv)
 {
+    if (argc >= 2 && (!strcmp(argv[1], "run") || !strcmp(argv[1], "render")))
+        prefer_passive_wait(argv);
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
         fputs(usage_main, argc < 2 ? stderr : stdout);
         return argc < 2 ? EXIT_USAGE : EXIT_OK;

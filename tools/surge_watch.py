@@ -153,6 +153,10 @@ def main():
         stats_log.close()
     print("surge_watch: %d states received%s" % (states, ", run finished" if stats and stats.get("status") == "final"
                                                   else ""), file=sys.stderr)
+    if states == 0:  # nothing came: no run there, or the wrong endpoint; not a success
+        print("surge_watch: no state received from %s (is a run publishing there? surge run --publish PORT)"
+              % args.endpoint, file=sys.stderr)
+        return 1
     return 0
 
 

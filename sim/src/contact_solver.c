@@ -375,7 +375,8 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
             }
         }
         /* this sub-step's impulses warm-start the next */
-        qsort(s->now, (size_t)s->now_count, sizeof *s->now, compare_keys);
+        if (s->now_count > 1) /* qsort's array must not be NULL, even when empty */
+            qsort(s->now, (size_t)s->now_count, sizeof *s->now, compare_keys);
         contact *swap = s->before;
         s->before = s->now;
         s->now = swap;

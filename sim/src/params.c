@@ -449,10 +449,23 @@ static char *find_comment(char *line)
     return NULL;
 }
 
+/* " (did you mean section.key?)" when name's last part is the key of a parameter in another section, else "". */
+static void suggestion(const char *name, char *out, size_t len)
+{
+    const char *dot = strrchr(name, '.');
+    const char *key = dot ? dot + 1 : name;
+    out[0] = '\0';
+    for (int i = 0; i < REGISTRY_COUNT; i++)
+        if (!strcmp(registry[i].key, key)) {
+            snprintf(out, len, " (did you mean %s.%s?)", registry[i].section, registry[i].key);
+            return;
+        }
+}
+
 int surge_params_load_text(surge_params *p, const char *text, const char *source, char *err, size_t err_len)
 {
     char section[64] = "";
-    int line_no = 0;
+    int line_no = 0, assignments = 0;
     const char *cursor = text;
     while (*cursor) {
         line_no++;
@@ -508,10 +521,13 @@ int surge_params_load_text(surge_params *p, const char *text, const char *source
             return -1;
         }
         char name[160];
-        snprintf(name, sizeof name, "%s.%s", section, key);
-        const surge_param_info *info = surge_param_find(name);
+        const int fits = snprintf(name, sizeof name, "%s.%s", section, key) < (int)sizeof name;
+        const surge_param_info *info = fits ? surge_param_find(name) : NULL; /* never a truncated name's match */
         if (!info) {
-            fail(err, err_len, "%s:%d: unknown key '%s' in [%s] (see 'surge params')", source, line_no, key, section);
+            char hint[160];
+            suggestion(key, hint, sizeof hint);
+            fail(err, err_len, "%s:%d: unknown key '%s' in [%s]%s (see 'surge params')", source, line_no, key, section,
+                 hint);
             return -1;
         }
         char msg[400];
@@ -519,6 +535,12 @@ int surge_params_load_text(surge_params *p, const char *text, const char *source
             fail(err, err_len, "%s:%d: %s", source, line_no, msg);
             return -1;
         }
+        assignments++;
+    }
+    if (assignments == 0) { /* would silently be the default scene */
+        fail(err, err_len, "%s: no parameters set (an empty case file); 'surge run' without a CASE runs the default "
+             "scene", source);
+        return -1;
     }
     return 0;
 }
@@ -575,13 +597,18 @@ int surge_params_override(surge_params *p, const char *assignment, bool live_onl
     }
     char name[160];
     size_t len = (size_t)(eq - assignment);
-    if (len >= sizeof name)
-        len = sizeof name - 1;
+    if (len >= sizeof name) { /* no parameter name is this long: never match a truncated one */
+        fail(err, err_len, "-s %.60s...: unknown parameter (a name of %zu characters; see 'surge params')", assignment,
+             len);
+        return -1;
+    }
     memcpy(name, assignment, len);
     name[len] = '\0';
     const surge_param_info *info = surge_param_find(trim(name));
     if (!info) {
-        fail(err, err_len, "-s %s: unknown parameter '%s' (see 'surge params')", assignment, trim(name));
+        char hint[160];
+        suggestion(trim(name), hint, sizeof hint);
+        fail(err, err_len, "-s %s: unknown parameter '%s'%s (see 'surge params')", assignment, trim(name), hint);
         return -1;
     }
     if (live_only && !info->live) {

@@ -16,7 +16,7 @@
 
 #include "surge/run.h"
 
-enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10 };
+enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10, MAX_REQUESTS_PER_STEP = 8 };
 
 struct surge_control {
     void *socket;
@@ -435,8 +435,10 @@ int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_
         c->paused = 1;
         c->pause_at_step = -1;
     }
+    /* a bounded budget per step: a flood of requests slows the run by at most this many replies a step, it
+     * never stops it (issue #24, D1); a paused run serves on through the loop below */
     int requests = SURGE_CONTINUE;
-    while (serve_one(c, sim, &requests))
+    for (int served = 0; served < MAX_REQUESTS_PER_STEP && serve_one(c, sim, &requests); served++)
         ;
     if (!c->paused || (requests & SURGE_REQUEST_STOP) || (stop_signal && *stop_signal))
         return requests;
@@ -445,7 +447,7 @@ int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_
     if (!requests) {
         zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
         if (zmq_poll(&item, 1, PAUSED_POLL_MS) > 0)
-            while (serve_one(c, sim, &requests))
+            for (int served = 0; served < MAX_REQUESTS_PER_STEP && serve_one(c, sim, &requests); served++)
                 ;
     }
     return requests | (c->paused && !(requests & SURGE_REQUEST_STOP) ? SURGE_REQUEST_AGAIN : 0);

@@ -26,7 +26,8 @@ typedef struct surge_control surge_control;
 surge_control *surge_control_start(void *zmq_context, const surge_control_def *def, surge_journal *journal,
                                    char *err, size_t err_len);
 
-/* Solver thread, at a step boundary: answers every pending request. While paused it waits up to 0.1 s for one
+/* Solver thread, at a step boundary: answers the pending requests, at most MAX_REQUESTS_PER_STEP (8) of them, so
+ * that a flood of requests cannot hold the solver. While paused it waits up to 0.1 s for one
  * and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping (unless stop_signal is set).
  * Returns SURGE_CONTINUE or SURGE_REQUEST_* flags (surge/run.h). */
 int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_atomic_t *stop_signal);
