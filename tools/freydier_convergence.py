@@ -77,7 +77,7 @@ def run_one(args, case, dp, ch, deadline):
              "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
              "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
              "-s", "numerics.continuity_correction=%s" % ("true" if args.continuity == "renormalised" else "false"),
-             "-o", folder]
+             "-o", folder, "--overwrite"]  # the study owns its folders: a fresh start replaces a failed piece
     rc, progress = study.run_resumable("freydier_convergence: " + name, folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False

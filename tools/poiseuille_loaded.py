@@ -109,7 +109,7 @@ def command_reference(args):
     for phi in args.phi:
         folder = os.path.join(args.runs_dir, "placement_phi%g_seed%d" % (phi, args.seed))
         argv = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
-                "-s", "numerics.dp_m=0.01", "-s", "boulders.solid_fraction=%g" % phi, "-s", "boulders.seed=%d" % args.seed,
+                "--overwrite", "-s", "numerics.dp_m=0.01", "-s", "boulders.solid_fraction=%g" % phi, "-s", "boulders.seed=%d" % args.seed,
                 "-s", "time.end_s=1e-6", "-s", "output.progress_interval_s=0", "--threads", "1"]
         if subprocess.run(argv, stdin=subprocess.DEVNULL, env=study.solver_environment()).returncode != 0:
             fail("placing the discs for phi = %g failed: %s" % (phi, " ".join(argv)))
@@ -156,7 +156,7 @@ def run_one(args, phi, deadline):
                                           "_dd%g" % args.diffusion if args.diffusion >= 0 else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
-    fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder,
+    fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder, "--overwrite",
              "-s", "numerics.dp_m=%.17g" % args.dp, "-s", "numerics.ch=%g" % args.ch, "-s", "boulders.seed=%d" % args.seed]
     fresh += ["-s", "boulders.solid_fraction=%g" % phi] if phi > 0 else ["-s", "boulders.placement=none"]
     fresh += ["-s", "numerics.c0_mps=%g" % args.c0] if args.c0 else []

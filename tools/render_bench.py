@@ -56,7 +56,7 @@ def main():
             shutil.rmtree(folder, ignore_errors=True)
             extra = render + ["--frames", os.path.join(folder, "frames"), "--movie",
                               os.path.join(folder, "movie.mp4")] if name == "rendering" else []
-            p = subprocess.run([args.surge, "run", film, "-o", os.path.join(folder, "out")] + common + extra,
+            p = subprocess.run([args.surge, "run", film, "-o", os.path.join(folder, "out"), "--overwrite"] + common + extra,
                                capture_output=True, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
             rate = re.findall(r"([0-9.]+) steps/s", p.stderr)
             if p.returncode != 0 or not rate:

@@ -89,7 +89,8 @@ def run_cell(args, shifting, ch, cfl, c0f):
             "-s", "numerics.dp_m=%g" % args.dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
             "-s", "numerics.cfl=%g" % cfl, "-s", "numerics.c0_factor=%g" % c0f, "-s", "shifting.form=%s" % shifting,
             "-s", "time.end_s=%g" % args.end_s, "-s", "output.snapshot_interval_s=0.5",
-            "-s", "output.progress_interval_s=0", "--threads", str(args.threads), "-o", folder]
+            "-s", "output.progress_interval_s=0", "--threads", str(args.threads), "-o", folder,
+            "--overwrite"]
     start = time.time()
     r = subprocess.run(argv, stdin=subprocess.DEVNULL, capture_output=True, text=True, errors="replace",
                        env=study.solver_environment())

@@ -76,7 +76,7 @@ def run_config(args, name, case, overrides, publish, subscriber, extra):
     shutil.rmtree(folder, ignore_errors=True)
     os.makedirs(folder)
     pub, ctl = "ipc://%s/pub.sock" % folder, "ipc://%s/ctl.sock" % folder
-    argv = [args.surge, "run", case, "-o", os.path.join(folder, "out"), "--threads", str(args.threads),
+    argv = [args.surge, "run", case, "-o", os.path.join(folder, "out"), "--overwrite", "--threads", str(args.threads),
             "--control", ctl, "--paused", "-s", "output.snapshot_interval_s=0", "-s", "output.progress_interval_s=1e5",
             "-s", "time.end_s=%g" % args.end_s] + overrides + extra + (["--publish", pub] if publish else [])
     proc = subprocess.Popen(argv, stderr=subprocess.PIPE, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
