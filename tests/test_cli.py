@@ -472,6 +472,15 @@ def group_inputs():
     for name in shipped:
         r = surge("check", os.path.join(cases_dir, name))
         report("check_shipped_%s" % name[:-4], exited(r, 0) and "ok" in r.stdout, r)
+        # changing dp alone never breaks a shipped scene (issue #24): half and twice its spacing
+        with open(os.path.join(cases_dir, name)) as f:
+            found = re.search(r"^\s*dp_m\s*=\s*([0-9.eE+-]+)", f.read(), re.M)
+        dp = float(found.group(1)) if found else None
+        for factor in (0.5, 2.0):
+            if dp is None:
+                break
+            r = surge("check", os.path.join(cases_dir, name), "-s", "numerics.dp_m=%.17g" % (dp * factor))
+            report("check_shipped_%s_dp_x%g" % (name[:-4], factor), exited(r, 0) and "ok" in r.stdout, r)
 
     r = surge("params")
     ok = exited(r, 0)

@@ -684,8 +684,9 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
     }
     if (p->walls.upstream &&
         (p->walls.upstream_x_m - layers * dp < -1e-12 || p->walls.upstream_x_m > p->fluid.x0_m + 1e-12)) {
-        fail(err, err_len, "walls.upstream_x_m (%g) must leave room for %d wall layers after x = 0 and lie upstream "
-             "of the fluid (fluid.x0_m = %g)", p->walls.upstream_x_m, layers, p->fluid.x0_m);
+        fail(err, err_len, "walls.upstream_x_m (%g) must leave room for %d wall layers after x = 0 (at least %g m at "
+             "dp = %g m) and lie upstream of the fluid (fluid.x0_m = %g)", p->walls.upstream_x_m, layers, layers * dp,
+             dp, p->fluid.x0_m);
         return -1;
     }
     double layers_needed = ceil(support / dp - 1e-9);
