@@ -458,6 +458,17 @@ def group_inputs():
     report("outputs_movie_folder_nothing_run", not os.path.exists(os.path.join(WORK, "mv_run", "params.ini")), None,
            "the run started before the movie's folder was checked")
 
+    # --- resolution and cost in surge check (issue #24) --------------------------------------------------
+    r = surge("check", os.path.join(cases_dir, "demo.ini"), "-s", "numerics.dp_m=0.004")
+    report("check_warns_few_particles_in_depth", exited(r, 0) and "4.5 particles" in r.stdout and
+           "dp <= 0.0012 m gives 15" in r.stdout and "estimated memory" in r.stdout and
+           "wall time per simulated second" in r.stdout, r)
+    r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005")
+    report("check_warns_coarse_discs", exited(r, 0) and "2.5 dp, fewer than 4" in r.stdout, r)
+    r = surge("check", os.path.join(cases_dir, "still_tank.ini"))
+    report("check_quiet_when_resolved", exited(r, 0) and "warning" not in r.stdout + r.stderr and
+           "note" not in r.stdout + r.stderr, r)
+
     # --- messages ----------------------------------------------------------------------------------------
     empty = write_file("empty.ini", "# nothing but a comment\n\n")
     expect_error("case_empty_refused", ["check", empty], [empty, "no parameters"])

@@ -29,6 +29,7 @@ extern const char surge_default_case_text[]; /* cases/demo.ini, embedded at buil
 
 enum { EXIT_OK = 0, EXIT_UNHEALTHY = 1, EXIT_USAGE = 2, EXIT_IO = 3, EXIT_INTERRUPTED = 4 };
 enum { ENDPOINT_BYTES = 256 };
+#define SURGE_PI_CLI 3.14159265358979323846
 
 static volatile sig_atomic_t stop_requested = 0;
 static void on_signal(int sig)
@@ -544,6 +545,46 @@ static int movie_folder_ok(const char *movie_path)
     return 0;
 }
 
+/* Resolution and cost, from the scene as built (issue #24): warnings when the flow depth holds fewer than 15
+ * particles (the paper's minimum) or a disc's radius fewer than 4 dp; the memory and the time a simulated second
+ * will take, estimated from the list sizes and the throughput measured in docs/performance.md. */
+static void report_resolution(const surge_sim *sim, int verbose)
+{
+    const surge_params *p = surge_sim_params(sim);
+    const surge_derived *d = surge_sim_derived(sim);
+    const double dp = p->numerics.dp_m, h = d->h_m;
+    const double depth_particles = p->fluid.depth_m / dp;
+    FILE *out = verbose ? stdout : stderr; /* check: with its report; run: with its messages */
+    if (d->fluid_count > 0 && depth_particles < 15)
+        fprintf(out, "surge: note: the fluid's depth (%g m) holds %.1f particles at dp = %g m, fewer than the 15 "
+                        "that velocity profiles and fronts need (GMD 2025); dp <= %g m gives 15\n",
+                p->fluid.depth_m, depth_particles, dp, p->fluid.depth_m / 15);
+    if (d->boulder_count > 0 && d->smallest_boulder_radius_m < 4 * dp)
+        fprintf(out, "surge: warning: the smallest disc's radius (%g m) is %.1f dp, fewer than 4: its surface is "
+                        "too coarse for the fluid's forces on it; dp <= %g m gives 4\n",
+                d->smallest_boulder_radius_m, d->smallest_boulder_radius_m / dp, d->smallest_boulder_radius_m / 4);
+    /* list entries per fluid particle: the particles within 2h + skin; 12 bytes each, about 200 bytes of state */
+    const double reach = (2.0 + p->numerics.neighbour_skin_h) * h;
+    const double entries = SURGE_PI_CLI * reach * reach / (dp * dp);
+    const double bytes = d->fluid_count * (12 * entries + 200) + d->wall_count * (6 * entries + 150);
+    double dt = p->numerics.dt_fixed_s;
+    if (!(dt > 0)) {
+        dt = h / d->c0_mps;
+        if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)
+            dt = fmin(dt, h * h / p->fluid.viscosity_m2ps);
+        dt *= p->numerics.cfl;
+    }
+    /* seconds per particle-step on 2 threads of the 2-core EPYC VM, fitted to the benchmark at C_h 1.0 and 1.8 */
+    const double per_particle_step_s = 1.37e-7 + 4.43e-9 * entries;
+    const double particle_steps = d->fluid_count / dt;
+    if (verbose || bytes > 4e9)
+        fprintf(out,
+                "%sestimated memory %.3g MB (%.0f list entries per fluid particle); at most %.3g steps and %.3g "
+                "particle-steps per simulated second (dt <= %.3g s), about %.3g s of wall time per simulated second "
+                "on 2 cores (docs/performance.md)\n", verbose ? "  " : "surge: ", bytes / 1e6, entries, 1 / dt,
+                particle_steps, dt, particle_steps * per_particle_step_s);
+}
+
 static int command_run(int argc, char **argv)
 {
     if (wants_help(argc, argv)) {
@@ -617,6 +658,7 @@ static int command_run(int argc, char **argv)
                                                    : (c.case_path ? c.case_path : "default scene (cases/demo.ini)"),
             outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads, threads == 1 ? "" : "s");
     warn_diffusive_compressibility(sim);
+    report_resolution(sim, 0);
     live_links links;
     if (open_live_links(&c, outdir, sim, &links) != 0) {
         close_live_links(&links, sim);
@@ -831,6 +873,7 @@ static int command_check(int argc, char **argv)
     const surge_derived *d = surge_sim_derived(sim);
     printf("%s: ok: %d fluid + %d wall particles, h = %.6g m, c0 = %.6g m/s (expected speed %.4g m/s)\n",
            c.case_path, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, d->expected_speed_mps);
+    report_resolution(sim, 1);
     warn_diffusive_compressibility(sim);
     surge_sim_destroy(sim);
     return EXIT_OK;

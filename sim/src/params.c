@@ -321,12 +321,14 @@ static int enum_name(const char *names, int n, char *buf, size_t len)
     return 1;
 }
 
-/* The shortest %g form that reads back as the same double (0.6, not 0.59999999999999998). */
+/* The shortest %g form that reads back as the same double (0.6, not 0.59999999999999998), without an exponent
+ * where plain digits serve (10, not 1e+01). */
 static void format_real(double value, char *buf, size_t len)
 {
+    const int plain = value == 0 || (fabs(value) >= 1e-4 && fabs(value) < 1e15);
     for (int digits = 1; digits <= 17; digits++) {
         snprintf(buf, len, "%.*g", digits, value);
-        if (strtod(buf, NULL) == value)
+        if (strtod(buf, NULL) == value && (!plain || !strchr(buf, 'e')))
             return;
     }
 }
