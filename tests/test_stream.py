@@ -355,6 +355,15 @@ BAD_REQUESTS = [  # (request bytes, words the error must contain)
     (b'{"cmd": "status"} trailing', "not valid JSON"),
     (b'{"cmd": "status\x00"}', "NUL byte"),
     (b'\xff\xfe{"cmd": 1}', "not valid JSON"),
+    # issue #24: D3 an escaped NUL would cut the string; D4 echoed bytes come back as valid UTF-8 (a request's
+    # invalid bytes, a character cut by the length limit); D5 numbers and names JSON and the registry do not allow
+    (b'{"cmd": "status\\u0000junk"}', "\\u0000"),
+    (b'{"cmd": "set", "key": "shifting.form", "value": "none\\u0000junk"}', "\\u0000"),
+    (b'{"cmd": "\xff\xfeboom"}', "unknown command '??boom'"),
+    (b'{"cmd": "' + "\u20ac".encode() * 100 + b'"}', "unknown command"),
+    (b'{"cmd": "set", "key": "health.min_dt_ratio", "value": 01}', "JSON does not allow"),
+    (b'{"cmd": "set", "key": "fluid.viscosity_m2ps", "value": +1}', "JSON does not allow"),
+    (b'{"cmd": "set", "key": "shifting.form", "value": " none"}', "without spaces"),
 ]
 
 

@@ -6,6 +6,7 @@
 #include "surge/control.h"
 
 #include <cjson/cJSON.h>
+#include <ctype.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -75,10 +76,40 @@ void surge_control_close(surge_control *c)
 
 /* ---- replies ---- */
 
+/* Rewrites s in place as valid UTF-8 without control characters: each byte that does not start a complete,
+ * well-formed sequence (a request's bytes, or a sequence cut by a length limit) becomes '?'. */
+static void make_printable_utf8(char *s)
+{
+    unsigned char *in = (unsigned char *)s, *out = (unsigned char *)s;
+    while (*in) {
+        const unsigned char c = *in;
+        int length = c < 0x80 ? 1 : (c & 0xE0) == 0xC0 ? 2 : (c & 0xF0) == 0xE0 ? 3 : (c & 0xF8) == 0xF0 ? 4 : 0;
+        uint32_t code = length == 1 ? c : length == 2 ? c & 0x1F : length == 3 ? c & 0x0F : c & 0x07;
+        for (int k = 1; k < length; k++) {
+            if ((in[k] & 0xC0) != 0x80) {
+                length = 0;
+                break;
+            }
+            code = code << 6 | (in[k] & 0x3F);
+        }
+        static const uint32_t smallest[5] = {0, 0, 0x80, 0x800, 0x10000};
+        if (length == 0 || code < smallest[length] || code > 0x10FFFF || (code >= 0xD800 && code < 0xE000) ||
+            code < 0x20 || code == 0x7F) {
+            *out++ = '?';
+            in++;
+            continue;
+        }
+        for (int k = 0; k < length; k++)
+            *out++ = *in++;
+    }
+    *out = '\0';
+}
+
 static cJSON *error_reply(const char *format, const char *detail)
 {
     char message[512];
     snprintf(message, sizeof message, format, detail);
+    make_printable_utf8(message); /* never echo a request's bytes as invalid UTF-8 (issue #24, D4) */
     cJSON *r = cJSON_CreateObject();
     cJSON_AddFalseToObject(r, "ok");
     cJSON_AddStringToObject(r, "error", message);
@@ -202,8 +233,12 @@ static cJSON *command_set(surge_control *c, const cJSON *request, surge_sim *sim
         snprintf(text, sizeof text, "%s", cJSON_IsTrue(value) ? "true" : "false");
     else if (!info->live)
         return error_reply("%s cannot change while the simulation runs", name);
-    else if (cJSON_IsString(value) && info->type == SURGE_PARAM_ENUM)
-        snprintf(text, sizeof text, "%.100s", value->valuestring);
+    else if (cJSON_IsString(value) && info->type == SURGE_PARAM_ENUM) {
+        const char *v = value->valuestring;
+        if (!*v || isspace((unsigned char)v[0]) || isspace((unsigned char)v[strlen(v) - 1])) /* " cividis" */
+            return error_reply("\"value\" for %s must be one of the names exactly, without spaces around it", name);
+        snprintf(text, sizeof text, "%.100s", v);
+    }
     else {
         static const char *const expected[] = {"a number", "a whole number", "true or false", "one of the names ",
                                                "text"};
@@ -336,10 +371,66 @@ static cJSON *run_command(surge_control *c, const char *name, const cJSON *reque
     return command_simple(c, name, sim, requests);
 }
 
+/* The first number token outside strings that JSON's grammar rejects (-?(0|[1-9][0-9]*)(.[0-9]+)?([eE][+-]?[0-9]+)?),
+ * or NULL. */
+static const char *non_json_number(const char *text)
+{
+    int in_string = 0;
+    for (const char *p = text; *p; p++) {
+        if (in_string) {
+            if (*p == '\\' && p[1])
+                p++;
+            else if (*p == '"')
+                in_string = 0;
+            continue;
+        }
+        if (*p == '"') {
+            in_string = 1;
+            continue;
+        }
+        if (!(isdigit((unsigned char)*p) || *p == '-' || *p == '+' || *p == '.'))
+            continue;
+        const char *start = p, *q = p;
+        if (*q == '-')
+            q++;
+        if (*q == '0')
+            q++;
+        else if (isdigit((unsigned char)*q))
+            while (isdigit((unsigned char)*q))
+                q++;
+        else
+            return start;
+        if (*q == '.') {
+            if (!isdigit((unsigned char)*++q))
+                return start;
+            while (isdigit((unsigned char)*q))
+                q++;
+        }
+        if (*q == 'e' || *q == 'E') {
+            q++;
+            if (*q == '+' || *q == '-')
+                q++;
+            if (!isdigit((unsigned char)*q))
+                return start;
+            while (isdigit((unsigned char)*q))
+                q++;
+        }
+        if (isdigit((unsigned char)*q) || *q == '.' || *q == '+' || *q == '-' || *q == 'e' || *q == 'E')
+            return start; /* 01, 1.2.3, 1e5e5 */
+        p = q - 1;
+    }
+    return NULL;
+}
+
 static cJSON *handle_request(surge_control *c, const char *body, size_t len, surge_sim *sim, int *requests)
 {
     if (memchr(body, '\0', len))
         return error_reply("%s", "request contains a NUL byte; send one JSON object as UTF-8 text");
+    if (strstr(body, "\\u0000")) /* cJSON would cut the string there: "status\u0000junk" ran as status (D3) */
+        return error_reply("%s", "request contains \\u0000 (a NUL character) in a string");
+    const char *bad_number = non_json_number(body);
+    if (bad_number) /* cJSON reads 01 as 1 and +1 as 1; JSON has neither (D5) */
+        return error_reply("request holds a number JSON does not allow near '%.20s'", bad_number);
     const char *end = NULL;
     cJSON *request = cJSON_ParseWithOpts(body, &end, 1);
     if (!request) {
