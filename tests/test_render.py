@@ -320,6 +320,15 @@ def group_inputs():
           bool(snapshots) and code == 2 and snapshots[-1] in stderr and "truncated or has the wrong size" in stderr,
           "exit %d: %s" % (code, stderr.strip()[-300:]))
 
+    # run.pvd naming a folder instead of a snapshot (it sent the reader to malloc 2^63 bytes; issue #24, D8)
+    if snapshots:
+        os.remove(path)
+        os.makedirs(path)
+    code, stderr = run(["render", run_dir, "--overwrite"], timeout=60)
+    check("inputs: a run.pvd entry naming a folder exits 2, naming it",
+          bool(snapshots) and code == 2 and snapshots[-1] in stderr and "not a regular file" in stderr,
+          "exit %d: %s" % (code, stderr.strip()[-300:]))
+
 
 os.makedirs(WORK, exist_ok=True)
 {"live": group_live, "ctrl_c": group_ctrl_c, "restart": group_restart, "offline": group_offline,

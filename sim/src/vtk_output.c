@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 /* Particles staged per fwrite when arrays have to be interleaved or converted. */
 #define CHUNK_PARTICLES 1024
@@ -793,6 +794,12 @@ static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, 
     FILE *f = fopen(path, "rb");
     if (f == NULL) {
         set_err(err, err_len, "cannot read '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) { /* a folder's "size" sent malloc to 2^63 (D8) */
+        fclose(f);
+        set_err(err, err_len, "'%s' is not a regular file (a snapshot .vtp was expected)", path);
         return -1;
     }
     unsigned char *data = NULL;
