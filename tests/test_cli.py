@@ -375,10 +375,38 @@ def group_inputs():
         path = write_file("corrupt_checkpoint.bin", bytes(corrupt))
         expect_error("cli_restart_corrupt_byte", ["run", "--restart", path, "-o", os.path.join(WORK, "out_corrupt")],
                      [path, "corrupt"])
+        def fnv(raw):
+            h = 14695981039346656037
+            for byte in raw:
+                h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+            return h
+
+        def resealed(raw):
+            """The checkpoint with its version 4 checksum made to match (a deliberate edit), so that the checks
+            behind the checksum are tested too."""
+            raw = bytearray(raw)
+            raw[-8:] = struct.pack("<Q", fnv(bytes(raw[:-8])))
+            return bytes(raw)
+
+        # edits outside the state hash: the parameters, the first time step, bytes appended (issue #24, D7)
+        text = bytes(data[24:24 + plen])
+        edited = text.replace(b"viscosity_m2ps = ", b"viscosity_m2ps = 9", 1)
+        corrupt = bytearray(data[:16]) + struct.pack("<Q", len(edited)) + edited + data[24 + plen:]
+        path = write_file("edited_params_checkpoint.bin", bytes(corrupt))
+        expect_error("cli_restart_edited_parameters", ["run", "--restart", path, "-o", os.path.join(WORK, "out_ep")],
+                     [path, "checksum mismatch"])
+        path = write_file("trailing_checkpoint.bin", bytes(data) + b"\0")
+        expect_error("cli_restart_trailing_bytes", ["run", "--restart", path, "-o", os.path.join(WORK, "out_tb")],
+                     [path, "bytes after the end"])
+        corrupt = bytearray(data)
+        corrupt[24 + plen + 24:24 + plen + 32] = struct.pack("<d", 0.0)
+        path = write_file("zero_first_dt_checkpoint.bin", resealed(corrupt))
+        expect_error("cli_restart_zero_first_dt", ["run", "--restart", path, "-o", os.path.join(WORK, "out_fd")],
+                     [path, "corrupt step, time or time step"])
         # a NaN time step (outside the state hash) is refused by name
         corrupt = bytearray(data)
         corrupt[24 + plen + 16:24 + plen + 24] = struct.pack("<d", float("nan"))
-        path = write_file("nan_dt_checkpoint.bin", bytes(corrupt))
+        path = write_file("nan_dt_checkpoint.bin", resealed(corrupt))
         expect_error("cli_restart_nan_dt", ["run", "--restart", path, "-o", os.path.join(WORK, "out_nan_dt")],
                      [path, "corrupt step, time or time step"])
         # a repeated fluid id under a state hash made to match is still refused (the ids must be a permutation)
@@ -389,11 +417,8 @@ def group_inputs():
         corrupt = bytearray(data)
         corrupt[first_id + 4:first_id + 8] = corrupt[first_id:first_id + 4]
         hashed = bytes(corrupt[24 + plen:24 + plen + 16]) + bytes(corrupt[first_x:first_id + 4 * fluid])
-        h = 14695981039346656037
-        for byte in hashed:
-            h = ((h ^ byte) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
-        corrupt[-8:] = struct.pack("<Q", h)
-        path = write_file("repeated_id_checkpoint.bin", bytes(corrupt))
+        corrupt[-16:-8] = struct.pack("<Q", fnv(hashed))  # the state hash, before the checksum
+        path = write_file("repeated_id_checkpoint.bin", resealed(corrupt))
         expect_error("cli_restart_repeated_id", ["run", "--restart", path, "-o", os.path.join(WORK, "out_rep_id")],
                      [path, "corrupt particle ids", "repeated"])
     expect_error("cli_restart_non_live_override",

@@ -9,9 +9,11 @@
  *         (version 2 on, when the scene has boulders) boulders x y angle vx vy omega [f64 each] |
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
- *         u64 state hash
- * Versions 1 (no boulder block) and 2 are still read: the lists are then built afresh at the first step, so the
- * restarted run agrees with the saved one to round-off, not bit for bit. */
+ *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
+ * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
+ * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
+ * boulder block), 2 and 3 are still read: 1 and 2 build the lists afresh at the first step, so the restarted run
+ * agrees with the saved one to round-off, not bit for bit. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -22,9 +24,30 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 3u
+#define CHECKPOINT_VERSION 4u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
+
+/* FNV-1a of the first `length` bytes of f (read from its start); -1 when they cannot be read. */
+static int file_checksum(FILE *f, long length, uint64_t *checksum)
+{
+    unsigned char chunk[65536];
+    uint64_t h = 14695981039346656037ull;
+    if (fseek(f, 0, SEEK_SET) != 0)
+        return -1;
+    for (long done = 0; done < length;) {
+        const size_t want = (size_t)(length - done < (long)sizeof chunk ? length - done : (long)sizeof chunk);
+        if (fread(chunk, 1, want, f) != want)
+            return -1;
+        for (size_t i = 0; i < want; i++) {
+            h ^= chunk[i];
+            h *= 1099511628211ull;
+        }
+        done += (long)want;
+    }
+    *checksum = h;
+    return 0;
+}
 static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len, f) == len ? 0 : -1; }
 
 /* The wall particles' build positions by id (boulder scenes: the walls' order at restart follows them). */
@@ -136,7 +159,7 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
 
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "wb");
+    FILE *f = fopen(tmp, "wb+"); /* read back for the checksum */
     if (!f) {
         snprintf(err, err_len, "cannot write checkpoint '%s': %s", tmp, strerror(errno));
         free(params_text);
@@ -158,6 +181,10 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->neighbours.y_build + w, nf * sizeof(double)) |
              write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) | write_all(f, &hash, 8);
     free(params_text);
+    uint64_t checksum = 0;
+    const long length = rc == 0 && fflush(f) == 0 ? ftell(f) : -1;
+    rc |= length < 0 || file_checksum(f, length, &checksum) != 0 || fseek(f, 0, SEEK_END) != 0 ||
+          write_all(f, &checksum, 8) != 0;
     /* on disk before it replaces the previous checkpoint, so a crash leaves one of the two whole */
     rc |= fflush(f) != 0 || fsync(fileno(f)) != 0;
     if (fclose(f) != 0 || rc != 0 || rename(tmp, path) != 0) {
@@ -252,7 +279,29 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: truncated checkpoint", path);
         goto fail;
     }
-    if (!(isfinite(t) && t >= 0 && isfinite(dt) && dt >= 0 && isfinite(first_dt) && first_dt >= 0 && step >= 0)) {
+    if (version >= 4) {
+        const long length = ftell(f);
+        uint64_t stored = 0, computed = 0;
+        if (length < 0 || read_all(f, &stored, 8)) {
+            snprintf(err, err_len, "%s: truncated checkpoint (no checksum)", path);
+            goto fail;
+        }
+        if (fgetc(f) != EOF) {
+            snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
+            goto fail;
+        }
+        if (file_checksum(f, length, &computed) != 0 || computed != stored) {
+            snprintf(err, err_len, "%s: checksum mismatch: the checkpoint was changed or damaged after it was "
+                     "written (its parameters, time step or state)", path);
+            goto fail;
+        }
+    } else if (fgetc(f) != EOF) {
+        snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
+        goto fail;
+    }
+    /* a run past its first step has a first time step (the dt-collapse check divides by it) */
+    if (!(isfinite(t) && t >= 0 && isfinite(dt) && dt >= 0 && isfinite(first_dt) && first_dt >= 0 && step >= 0) ||
+        (step > 0 && !(first_dt > 0 && dt > 0))) {
         snprintf(err, err_len, "%s: corrupt step, time or time step (outside the state hash)", path);
         goto fail;
     }
