@@ -163,6 +163,29 @@ static long missing_pairs(const surge_sim *sim, int a, const double *px, const d
     return missing;
 }
 
+/* Fluid within 2h of boulder particle k (positions px, py) that its list of the fluid around it lacks (the disc's
+ * force, eq. 10); mark is scratch of sim->count zeros. */
+static long missing_boulder_pairs(const surge_sim *sim, int k, const double *px, const double *py, int8_t *mark)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const double period = sim->grid.period_m, support2 = 4 * sim->derived.h_m * sim->derived.h_m;
+    const double *xb = nl->x_build;
+    for (int64_t e = nl->wall_fluid_first[k]; e < nl->wall_fluid_first[k + 1]; e++) {
+        const int a = nl->wall_fluid_index[e];
+        mark[a] = (int8_t)((period > 0 ? round((xb[k] - xb[a] - nl->wall_fluid_dx0[e]) / period) : 0) + 2);
+    }
+    long missing = 0;
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double image = period > 0 ? round((px[k] - px[a]) / period) : 0;
+        const double dx = px[k] - image * period - px[a], dy = py[k] - py[a];
+        if (dx * dx + dy * dy < support2 && mark[a] != (int8_t)(image + 2))
+            missing++;
+    }
+    for (int64_t e = nl->wall_fluid_first[k]; e < nl->wall_fluid_first[k + 1]; e++)
+        mark[nl->wall_fluid_index[e]] = 0;
+    return missing;
+}
+
 /* The neighbour lists against brute force over many steps of reuse: a periodic sheared layer with a moving,
  * spinning boulder and randomly displaced particles; every pair within 2h at the step's start and at the
  * corrector's positions (advanced half the largest time step) is listed; lists are reused; a fast particle forces
@@ -209,6 +232,11 @@ static int test_neighbour_lists(void)
                 missing_start += missing_pairs(sim, a, sim->x, sim->y, mark);
                 missing_corrector += missing_pairs(sim, a, cx, cy, mark);
             }
+            for (int k = 0; k < sim->wall_count; k++)
+                if (sim->boulders.of_wall[sim->id[k]] >= 0) {
+                    missing_start += missing_boulder_pairs(sim, k, sim->x, sim->y, mark);
+                    missing_corrector += missing_boulder_pairs(sim, k, cx, cy, mark);
+                }
             pairs += sim->neighbours.fluid_first[sim->count - sim->wall_count];
         }
         healthy = surge_sim_step(sim) == 0;

@@ -371,36 +371,35 @@ void boulders_fluid_forces(surge_sim *sim)
     boulder_set *b = &sim->boulders;
     if (b->count == 0)
         return;
-    const cell_grid *g = &sim->grid;
+    const neighbour_lists *nl = &sim->neighbours;
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
     const real mass = (real)sim->mass, eta2 = (real)sim->eta2, support2 = sim->kernel.support2;
     const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
-    const double *restrict x = sim->x, *restrict y = sim->y;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
     const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     real *restrict fx = sim->ax, *restrict fy = sim->ay; /* wall entries are free scratch */
     #pragma omp parallel for schedule(static)
     for (int k = 0; k < sim->wall_count; k++) {
         fx[k] = fy[k] = 0;
         if (b->of_wall[sim->id[k]] < 0)
             continue;
-        neighbour_ranges nr;
-        grid_neighbour_ranges(g, g->fluid_start, x[k], y[k], &nr);
         real sum_x = 0, sum_y = 0, sum_viscous = 0;
-        for (int q = 0; q < nr.count; q++) {
-            for (int a = nr.begin[q]; a < nr.end[q]; a++) {
-                const real dx = (real)(x[a] + nr.shift_x[q] - x[k]), dy = (real)(y[a] - y[k]);
-                const real r2 = dx * dx + dy * dy;
-                if (r2 >= support2)
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop) */
-                const real pressure_coef = pair_pressure_coef(mass, pres[a], pres[k], inv_rho[a], inv_rho[k]);
-                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rho[a], rho[k], eta2);
-                sum_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, vx[a] - sim->wall_vx[k]);
-                sum_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, vy[a] - sim->wall_vy[k]);
-                sum_viscous += viscous_coef;
-            }
+        for (int64_t e = nl->wall_fluid_first[k]; e < nl->wall_fluid_first[k + 1]; e++) {
+            const int a = nl->wall_fluid_index[e];
+            /* r_a - r_k, as the fluid's wall loop has it (interaction.c) */
+            const real dx = -(nl->wall_fluid_dx0[e] + (moved_x[k] - moved_x[a]));
+            const real dy = -(nl->wall_fluid_dy0[e] + (moved_y[k] - moved_y[a]));
+            const real r2 = dx * dx + dy * dy;
+            if (r2 >= support2)
+                continue;
+            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+            /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop) */
+            const real pressure_coef = pair_pressure_coef(mass, pres[a], pres[k], inv_rho[a], inv_rho[k]);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rho[a], rho[k], eta2);
+            sum_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, vx[a] - sim->wall_vx[k]);
+            sum_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, vy[a] - sim->wall_vy[k]);
+            sum_viscous += viscous_coef;
         }
         fx[k] = -mass * sum_x;
         fy[k] = -mass * sum_y;

@@ -86,9 +86,9 @@ void boundary_update(surge_sim *sim)
         ghost_sums sums = {0};
         if (sim->wall_of[b] != WALL_BOULDER) {
             /* the ghost does not move: r_ghost - r_j = its offset at the build less j's displacement since */
-            for (int64_t e = nl->ghost_first[b]; e < nl->ghost_first[b + 1]; e++) {
-                const int j = nl->ghost_index[e];
-                add_fluid_neighbour(&sums, k, mass, nl->ghost_dx0[e] - nl->moved_x[j], nl->ghost_dy0[e] - nl->moved_y[j],
+            for (int64_t e = nl->wall_fluid_first[b]; e < nl->wall_fluid_first[b + 1]; e++) {
+                const int j = nl->wall_fluid_index[e];
+                add_fluid_neighbour(&sums, k, mass, nl->wall_fluid_dx0[e] - nl->moved_x[j], nl->wall_fluid_dy0[e] - nl->moved_y[j],
                                     rho[j], vx[j], vy[j]);
             }
         } else {

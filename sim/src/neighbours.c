@@ -18,10 +18,10 @@ int neighbours_init(surge_sim *sim, char *err, size_t err_len)
     nl->y_build = malloc((n + 1) * sizeof *nl->y_build);
     nl->fluid_first = calloc(nf + 1, sizeof *nl->fluid_first);
     nl->wall_first = calloc(nf + 1, sizeof *nl->wall_first);
-    nl->ghost_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_first);
+    nl->wall_fluid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->wall_fluid_first);
     nl->moved_x = calloc(n + 1, sizeof *nl->moved_x);
     nl->moved_y = calloc(n + 1, sizeof *nl->moved_y);
-    if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first || !nl->ghost_first || !nl->moved_x ||
+    if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first || !nl->wall_fluid_first || !nl->moved_x ||
         !nl->moved_y) {
         snprintf(err, err_len, "out of memory for the neighbour lists of %zu particles", n);
         return -1;
@@ -36,7 +36,7 @@ void neighbours_free(neighbour_lists *nl)
 {
     void *arrays[] = {nl->x_build, nl->y_build, nl->moved_x, nl->moved_y, nl->fluid_first, nl->fluid_index,
                       nl->fluid_dx0, nl->fluid_dy0, nl->wall_first, nl->wall_index, nl->wall_dx0, nl->wall_dy0,
-                      nl->ghost_first, nl->ghost_index, nl->ghost_dx0, nl->ghost_dy0};
+                      nl->wall_fluid_first, nl->wall_fluid_index, nl->wall_fluid_dx0, nl->wall_fluid_dy0};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     memset(nl, 0, sizeof *nl);
@@ -88,8 +88,8 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
     return count;
 }
 
-/* Where a list's searches start: fluid particle a's build position, or the ghost node of wall particle k = a
- * (wrapped into the period); 0 for a wall particle without a ghost list (a boulder's). */
+/* Where a list's searches start: fluid particle a's build position; for wall particle a, its mDBC ghost node, or
+ * for a boulder's particle the particle itself (wrapped into the period). */
 static int search_point(const surge_sim *sim, int a, double *xs, double *ys)
 {
     const neighbour_lists *nl = &sim->neighbours;
@@ -97,10 +97,9 @@ static int search_point(const surge_sim *sim, int a, double *xs, double *ys)
         *xs = nl->x_build[a], *ys = nl->y_build[a];
         return 1;
     }
-    if (sim->wall_of[a] == WALL_BOULDER)
-        return 0;
-    *xs = surge_sim_wrapped_x(sim, nl->x_build[a] + sim->ghost_dx[a]);
-    *ys = nl->y_build[a] + sim->ghost_dy[a];
+    const int boulder = sim->wall_of[a] == WALL_BOULDER;
+    *xs = surge_sim_wrapped_x(sim, nl->x_build[a] + (boulder ? 0 : sim->ghost_dx[a]));
+    *ys = nl->y_build[a] + (boulder ? 0 : sim->ghost_dy[a]);
     return 1;
 }
 
@@ -117,10 +116,10 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
         if (listed)
             grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
         if (!fill)
-            nl->ghost_first[a + 1] = listed ? scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL) : 0;
+            nl->wall_fluid_first[a + 1] = listed ? scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL) : 0;
         else if (listed) {
-            const int64_t e = nl->ghost_first[a];
-            scan(sim, &fluid, xs, ys, -1, reach2, nl->ghost_index + e, nl->ghost_dx0 + e, nl->ghost_dy0 + e);
+            const int64_t e = nl->wall_fluid_first[a];
+            scan(sim, &fluid, xs, ys, -1, reach2, nl->wall_fluid_index + e, nl->wall_fluid_dx0 + e, nl->wall_fluid_dy0 + e);
         }
         return;
     }
@@ -156,10 +155,10 @@ static int build_lists(surge_sim *sim)
         list_particle(sim, a, reach2, 0);
     prefix_sum(nl->fluid_first, nf);
     prefix_sum(nl->wall_first, nf);
-    prefix_sum(nl->ghost_first, nw);
+    prefix_sum(nl->wall_fluid_first, nw);
     if (reserve(&nl->fluid_index, &nl->fluid_dx0, &nl->fluid_dy0, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) ||
         reserve(&nl->wall_index, &nl->wall_dx0, &nl->wall_dy0, &nl->wall_capacity, (size_t)nl->wall_first[nf]) ||
-        reserve(&nl->ghost_index, &nl->ghost_dx0, &nl->ghost_dy0, &nl->ghost_capacity, (size_t)nl->ghost_first[nw]))
+        reserve(&nl->wall_fluid_index, &nl->wall_fluid_dx0, &nl->wall_fluid_dy0, &nl->wall_fluid_capacity, (size_t)nl->wall_fluid_first[nw]))
         return -1;
     #pragma omp parallel for schedule(static)
     for (int a = 0; a < sim->count; a++)
@@ -227,9 +226,12 @@ int neighbours_update(surge_sim *sim)
     const double period = sim->grid.period_m;
     const int moving_walls = sim->boulders.count > 0;
     const int from = moving_walls ? 0 : sim->wall_count;
-    if (period > 0) { /* the particles have moved less than a period since the last build */
+    /* the particles have moved less than a period since the last build; a boulder's particles too, which must sort
+     * into the cell they are in (one past the period sat in the last cell, and the fluid beyond that cell missed
+     * it) */
+    if (period > 0) {
         #pragma omp parallel for schedule(static)
-        for (int a = sim->wall_count; a < sim->count; a++) {
+        for (int a = from; a < sim->count; a++) {
             if (sim->x[a] >= period)
                 sim->x[a] -= period;
             else if (sim->x[a] < 0)

@@ -45,20 +45,21 @@ typedef struct cell_span {
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
  * wall_index[wall_first[i] .. wall_first[i+1]), in cell order, each with r_a - r_b at the build (periodic image
  * included) in *_dx0, *_dy0. Between builds r_a - r_b = dx0 + (moved_a - moved_b), all in pair precision: no
- * periodic images, no large coordinates. Wall particle k that does not move (not a boulder's) has the fluid
- * neighbours of its mDBC ghost node in ghost_index[ghost_first[k] .. ghost_first[k+1]), with r_ghost - r_j at the
- * build in ghost_dx0, ghost_dy0; a boulder's particles have none (their ghosts turn with the disc; boundary.c
- * searches the cells). */
+ * periodic images, no large coordinates. Wall particle k has the fluid around it in
+ * wall_fluid_index[wall_fluid_first[k] .. wall_fluid_first[k+1]): for a wall that does not move, the fluid within
+ * 2h + skin of its mDBC ghost node, with r_ghost - r_j at the build in wall_fluid_dx0, wall_fluid_dy0; for a
+ * boulder's particle, the fluid within 2h + skin of the particle (its force on the disc, eq. 10), with r_k - r_j
+ * (its ghost turns with the disc; boundary.c searches the cells for it). */
 typedef struct neighbour_lists {
     double skin_m;
     int valid;                 /* 0: build at the next step */
     int64_t builds;
     double *x_build, *y_build; /* every particle's position at the build (the arrays are sorted by its cells) */
     real *moved_x, *moved_y;   /* every particle's displacement since the build (neighbours_track) */
-    int64_t *fluid_first, *wall_first, *ghost_first;
-    int32_t *fluid_index, *wall_index, *ghost_index;
-    real *fluid_dx0, *fluid_dy0, *wall_dx0, *wall_dy0, *ghost_dx0, *ghost_dy0;
-    size_t fluid_capacity, wall_capacity, ghost_capacity;
+    int64_t *fluid_first, *wall_first, *wall_fluid_first;
+    int32_t *fluid_index, *wall_index, *wall_fluid_index;
+    real *fluid_dx0, *fluid_dy0, *wall_dx0, *wall_dy0, *wall_fluid_dx0, *wall_fluid_dy0;
+    size_t fluid_capacity, wall_capacity, wall_fluid_capacity;
 } neighbour_lists;
 
 struct surge_sim {
