@@ -186,6 +186,31 @@ static long missing_boulder_pairs(const surge_sim *sim, int k, const double *px,
     return missing;
 }
 
+/* Fluid within 2h of boulder particle k's mDBC ghost node that its ghost list lacks (positions now); mark is scratch
+ * of sim->count zeros. */
+static long missing_ghost_pairs(const surge_sim *sim, int k, int8_t *mark)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const double period = sim->grid.period_m, support2 = 4 * sim->derived.h_m * sim->derived.h_m;
+    const double *xb = nl->x_build;
+    for (int64_t e = nl->ghost_fluid_first[k]; e < nl->ghost_fluid_first[k + 1]; e++) {
+        const int a = nl->ghost_fluid_index[e];
+        const double offset = xb[k] + nl->ghost_dx_build[k] - xb[a] - nl->ghost_fluid_dx0[e];
+        mark[a] = (int8_t)((period > 0 ? round(offset / period) : 0) + 2);
+    }
+    const double gx = sim->x[k] + sim->ghost_dx[k], gy = sim->y[k] + sim->ghost_dy[k];
+    long missing = 0;
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double image = period > 0 ? round((gx - sim->x[a]) / period) : 0;
+        const double dx = gx - image * period - sim->x[a], dy = gy - sim->y[a];
+        if (dx * dx + dy * dy < support2 && mark[a] != (int8_t)(image + 2))
+            missing++;
+    }
+    for (int64_t e = nl->ghost_fluid_first[k]; e < nl->ghost_fluid_first[k + 1]; e++)
+        mark[nl->ghost_fluid_index[e]] = 0;
+    return missing;
+}
+
 /* The neighbour lists against brute force over many steps of reuse: a periodic sheared layer with a moving,
  * spinning boulder and randomly displaced particles; every pair within 2h at the step's start and at the
  * corrector's positions (advanced half the largest time step) is listed; lists are reused; a fast particle forces
@@ -236,6 +261,7 @@ static int test_neighbour_lists(void)
                 if (sim->boulders.of_wall[sim->id[k]] >= 0) {
                     missing_start += missing_boulder_pairs(sim, k, sim->x, sim->y, mark);
                     missing_corrector += missing_boulder_pairs(sim, k, cx, cy, mark);
+                    missing_start += missing_ghost_pairs(sim, k, mark);
                 }
             pairs += sim->neighbours.fluid_first[sim->count - sim->wall_count];
         }

@@ -23,7 +23,7 @@ static int allocate_discs(boulder_set *b, int n)
     ALLOC(b->x_n); ALLOC(b->y_n); ALLOC(b->angle_n); ALLOC(b->vx_n); ALLOC(b->vy_n); ALLOC(b->omega_n);
     ALLOC(b->radius); ALLOC(b->mass); ALLOC(b->inv_mass); ALLOC(b->inv_inertia);
     ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
-    ALLOC(b->spin_damping); ALLOC(b->omega_forces);
+    ALLOC(b->spin_damping); ALLOC(b->omega_forces); ALLOC(b->angle_build);
 #undef ALLOC
     return ok ? 0 : -1;
 }
@@ -33,7 +33,7 @@ void boulders_free(boulder_set *b)
     void *arrays[] = {b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->x_n, b->y_n, b->angle_n, b->vx_n, b->vy_n,
                       b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
                       b->ay, b->alpha, b->spin_damping, b->omega_forces, b->spin_coupling, b->of_wall,
-                      b->local_x, b->local_y};
+                      b->local_x, b->local_y, b->angle_build};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     contact_solver_destroy(b->contacts);
@@ -316,6 +316,22 @@ int boulders_cover(const surge_sim *sim, double x, double y)
 }
 
 /* eq. 11: u_k = V + Omega x (r_k - R0); the ghost node mirrors the particle across the circle. */
+/* Offset of the disc particle with id from its disc's centre at the given orientation. */
+static inline void disc_offset(const boulder_set *b, int id, double angle, double *rx, double *ry)
+{
+    const double c = cos(angle), s = sin(angle);
+    *rx = c * b->local_x[id] - s * b->local_y[id];
+    *ry = s * b->local_x[id] + c * b->local_y[id];
+}
+
+/* The mDBC ghost offset of a disc particle at offset (rx, ry): mirrored across the disc's surface. */
+static inline void ghost_offset(const boulder_set *b, int i, double rx, double ry, real *gdx, real *gdy)
+{
+    const double rho = sqrt(rx * rx + ry * ry), to_ghost = 2 * (b->radius[i] - rho) / rho;
+    *gdx = (real)(rx * to_ghost);
+    *gdy = (real)(ry * to_ghost);
+}
+
 void boulders_place_particles(surge_sim *sim)
 {
     const boulder_set *b = &sim->boulders;
@@ -327,8 +343,8 @@ void boulders_place_particles(surge_sim *sim)
         const int id = sim->id[k], i = b->of_wall[id];
         if (i < 0)
             continue;
-        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
-        const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+        double rx, ry;
+        disc_offset(b, id, b->angle[i], &rx, &ry);
         double x = b->x[i] + rx;
         if (period > 0) {
             /* the periodic image nearest the particle's neighbour-list build position, so that the lists' images
@@ -342,10 +358,17 @@ void boulders_place_particles(surge_sim *sim)
         sim->y[k] = b->y[i] + ry;
         sim->vx[k] = (real)(b->vx[i] - b->omega[i] * ry);
         sim->vy[k] = (real)(b->vy[i] + b->omega[i] * rx);
-        const double rho = sqrt(rx * rx + ry * ry), to_ghost = 2 * (b->radius[i] - rho) / rho;
-        sim->ghost_dx[k] = (real)(rx * to_ghost);
-        sim->ghost_dy[k] = (real)(ry * to_ghost);
+        ghost_offset(b, i, rx, ry, &sim->ghost_dx[k], &sim->ghost_dy[k]);
     }
+}
+
+void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy)
+{
+    const boulder_set *b = &sim->boulders;
+    const int id = sim->id[k], i = b->of_wall[id];
+    double rx, ry;
+    disc_offset(b, id, angle, &rx, &ry);
+    ghost_offset(b, i, rx, ry, gdx, gdy);
 }
 
 void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy)

@@ -18,6 +18,7 @@ typedef struct boulder_set {
     double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
     double *spin_damping;   /* -d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit */
     double *omega_forces;   /* the omega the last fluid forces were computed with */
+    double *angle_build;    /* orientation at the last neighbour-list build (where the ghosts' lists were made) */
     real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */
     /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
     int32_t *of_wall;

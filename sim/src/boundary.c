@@ -46,61 +46,59 @@ typedef struct ghost_sums {
     double rhs[3][3];
 } ghost_sums;
 
-/* Fluid particle j at r_ghost - r_j = (dx, dy) in the ghost's sums (nothing beyond 2h) */
-static inline void add_fluid_neighbour(ghost_sums *s, const kernel2d *k, double mass, real dx, real dy, real rho_j,
-                                       real vx_j, real vy_j)
+/* The ghost node's sums over a list of fluid particles j at r_ghost - r_j = dx0 + (g - moved_j) (nothing beyond 2h):
+ * kernel and gradient in pair precision, sums in double; an omp simd loop over the list, pairs beyond 2h masked. */
+static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict index, const real *restrict dx0,
+                                  const real *restrict dy0, int64_t first, int64_t last, real gx, real gy)
 {
-    const real r2 = dx * dx + dy * dy;
-    if (r2 >= k->support2)
-        return;
-    const real r = REAL_SQRT(r2);
-    const double w = kernel2d_w_inside(k->alpha, k->inv_h, r);
-    const double f = kernel2d_grad_factor_inside(k->grad_coef, k->inv_h, r);
-    const double vol = mass / rho_j;
-    const double wx = f * dx, wy = f * dy; /* gradient at the ghost node */
-    const double rx = -(double)dx, ry = -(double)dy; /* r_j - r_ghost */
-    const double basis[3] = {w * vol, wx * vol, wy * vol};
-    const double fields[3] = {rho_j, vx_j, vy_j};
-    for (int row = 0; row < 3; row++) {
-        s->a[row][0] += basis[row];
-        s->a[row][1] += rx * basis[row];
-        s->a[row][2] += ry * basis[row];
+    const kernel2d *k = &sim->kernel;
+    const real support2 = k->support2, alpha = k->alpha, inv_h = k->inv_h, grad_coef = k->grad_coef;
+    const real mass = (real)sim->mass;
+    const real *restrict moved_x = sim->neighbours.moved_x, *restrict moved_y = sim->neighbours.moved_y;
+    const real *restrict rho = sim->rho, *restrict vx = sim->vx, *restrict vy = sim->vy;
+    double a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
+    double r00 = 0, r01 = 0, r02 = 0, r10 = 0, r11 = 0, r12 = 0, r20 = 0, r21 = 0, r22 = 0;
+    #pragma omp simd simdlen(8) reduction(+ : a00, a01, a02, a10, a11, a12, a20, a21, a22, r00, r01, r02, r10, r11, \
+                                          r12, r20, r21, r22)
+    for (int64_t e = first; e < last; e++) {
+        const int j = index[e];
+        const real dx = dx0[e] + (gx - moved_x[j]), dy = dy0[e] + (gy - moved_y[j]);
+        const real r2 = dx * dx + dy * dy;
+        const real r = REAL_SQRT(r2);
+        const real vol = r2 < support2 ? mass / rho[j] : 0; /* beyond 2h: no contribution */
+        const double w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
+        const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
+        const double wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
+        const double rx = -(double)dx, ry = -(double)dy;      /* r_j - r_ghost */
+        a00 += w_vol, a01 += rx * w_vol, a02 += ry * w_vol;
+        a10 += wx_vol, a11 += rx * wx_vol, a12 += ry * wx_vol;
+        a20 += wy_vol, a21 += rx * wy_vol, a22 += ry * wy_vol;
+        r00 += rho[j] * w_vol, r01 += rho[j] * wx_vol, r02 += rho[j] * wy_vol;
+        r10 += vx[j] * w_vol, r11 += vx[j] * wx_vol, r12 += vx[j] * wy_vol;
+        r20 += vy[j] * w_vol, r21 += vy[j] * wx_vol, r22 += vy[j] * wy_vol;
     }
-    for (int q = 0; q < 3; q++)
-        for (int row = 0; row < 3; row++)
-            s->rhs[q][row] += fields[q] * basis[row];
+    return (ghost_sums){{{a00, a01, a02}, {a10, a11, a12}, {a20, a21, a22}},
+                        {{r00, r01, r02}, {r10, r11, r12}, {r20, r21, r22}}};
 }
 
 void boundary_update(surge_sim *sim)
 {
-    const cell_grid *g = &sim->grid;
     const neighbour_lists *nl = &sim->neighbours;
-    const kernel2d *k = &sim->kernel;
-    const double rho0 = sim->rho0, mass = sim->mass;
-    const double *restrict x = sim->x, *restrict y = sim->y;
-    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
+    const double rho0 = sim->rho0;
+    const real *restrict vx = sim->vx, *restrict vy = sim->vy;
 
     #pragma omp parallel for schedule(static)
     for (int b = 0; b < sim->wall_count; b++) {
         /* A s = rhs for s = (value, d/dx, d/dy) of density, vx, vy at the ghost node */
-        ghost_sums sums = {0};
-        if (sim->wall_of[b] != WALL_BOULDER) {
-            /* the ghost does not move: r_ghost - r_j = its offset at the build less j's displacement since */
-            for (int64_t e = nl->wall_fluid_first[b]; e < nl->wall_fluid_first[b + 1]; e++) {
-                const int j = nl->wall_fluid_index[e];
-                add_fluid_neighbour(&sums, k, mass, nl->wall_fluid_dx0[e] - nl->moved_x[j], nl->wall_fluid_dy0[e] - nl->moved_y[j],
-                                    rho[j], vx[j], vy[j]);
-            }
-        } else {
-            /* a boulder's ghost turns with the disc: the fluid in the cells around it */
-            const double xg = surge_sim_wrapped_x(sim, x[b] + sim->ghost_dx[b]), yg = y[b] + sim->ghost_dy[b];
-            neighbour_ranges nr;
-            grid_neighbour_ranges(g, g->fluid_start, xg, yg, &nr);
-            for (int s = 0; s < nr.count; s++)
-                for (int j = nr.begin[s]; j < nr.end[s]; j++)
-                    add_fluid_neighbour(&sums, k, mass, (real)(xg - (x[j] + nr.shift_x[s])), (real)(yg - y[j]),
-                                        rho[j], vx[j], vy[j]);
-        }
+        ghost_sums sums;
+        if (sim->wall_of[b] != WALL_BOULDER) /* the ghost does not move: r_ghost - r_j = dx0 - moved_j */
+            sums = ghost_node_sums(sim, nl->wall_fluid_index, nl->wall_fluid_dx0, nl->wall_fluid_dy0,
+                                   nl->wall_fluid_first[b], nl->wall_fluid_first[b + 1], 0, 0);
+        else /* a boulder's ghost turns with the disc: add how far the particle has moved and the ghost turned */
+            sums = ghost_node_sums(sim, nl->ghost_fluid_index, nl->ghost_fluid_dx0, nl->ghost_fluid_dy0,
+                                   nl->ghost_fluid_first[b], nl->ghost_fluid_first[b + 1],
+                                   nl->moved_x[b] + (sim->ghost_dx[b] - nl->ghost_dx_build[b]),
+                                   nl->moved_y[b] + (sim->ghost_dy[b] - nl->ghost_dy_build[b]));
         const double a00 = sums.a[0][0], a01 = sums.a[0][1], a02 = sums.a[0][2], a10 = sums.a[1][0],
                      a11 = sums.a[1][1], a12 = sums.a[1][2], a20 = sums.a[2][0], a21 = sums.a[2][1],
                      a22 = sums.a[2][2];

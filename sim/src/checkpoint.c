@@ -7,6 +7,7 @@
  *         fluid x[f64] y[f64] vx[real] vy[real] rho[real] id[i32] |
  *         (version 3) u32 lists built | fluid x_build[f64] y_build[f64] (the neighbour lists' build positions) |
  *         (version 2 on, when the scene has boulders) boulders x y angle vx vy omega [f64 each] |
+ *             (version 4) angle at the last neighbour-list build [f64 each] |
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
@@ -101,7 +102,8 @@ static int write_boulders(FILE *f, const boulder_set *b)
     if (keys && lambda_n && lambda_t) {
         contact_solver_cache_get(b->contacts, keys, lambda_n, lambda_t);
         rc = write_all(f, b->x, n) | write_all(f, b->y, n) | write_all(f, b->angle, n) | write_all(f, b->vx, n) |
-             write_all(f, b->vy, n) | write_all(f, b->omega, n) | write_all(f, &contacts, 4) |
+             write_all(f, b->vy, n) | write_all(f, b->omega, n) | write_all(f, b->angle_build, n) |
+             write_all(f, &contacts, 4) |
              write_all(f, keys, (size_t)contacts * 8) | write_all(f, lambda_n, (size_t)contacts * 8) |
              write_all(f, lambda_t, (size_t)contacts * 8);
     }
@@ -111,15 +113,24 @@ static int write_boulders(FILE *f, const boulder_set *b)
     return rc;
 }
 
-static int read_boulders(FILE *f, boulder_set *b)
+/* version: the checkpoint's (4 on: the orientations at the last neighbour-list build follow the state) */
+static int read_boulders(FILE *f, boulder_set *b, uint32_t version)
 {
     const size_t n = (size_t)b->count * sizeof(double);
     if (b->count == 0)
         return 0;
     int32_t contacts = 0;
     if (read_all(f, b->x, n) || read_all(f, b->y, n) || read_all(f, b->angle, n) || read_all(f, b->vx, n) ||
-        read_all(f, b->vy, n) || read_all(f, b->omega, n) || read_all(f, &contacts, 4) || contacts < 0 ||
-        contacts > 64 * b->count + 1024)
+        read_all(f, b->vy, n) || read_all(f, b->omega, n))
+        return -1;
+    if (version < 4)
+        memcpy(b->angle_build, b->angle, n);
+    else if (read_all(f, b->angle_build, n))
+        return -1;
+    for (int i = 0; i < b->count; i++) /* outside the state hash */
+        if (!isfinite(b->angle_build[i]))
+            return -1;
+    if (read_all(f, &contacts, 4) || contacts < 0 || contacts > 64 * b->count + 1024)
         return -1;
     int64_t *keys = malloc((size_t)(contacts + 1) * sizeof *keys);
     double *lambda_n = malloc((size_t)(contacts + 1) * sizeof *lambda_n);
@@ -267,7 +278,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
         goto fail;
     }
-    if (read_boulders(f, &sim->boulders)) {
+    if (read_boulders(f, &sim->boulders, version)) {
         snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
         goto fail;
     }

@@ -19,9 +19,13 @@ int neighbours_init(surge_sim *sim, char *err, size_t err_len)
     nl->fluid_first = calloc(nf + 1, sizeof *nl->fluid_first);
     nl->wall_first = calloc(nf + 1, sizeof *nl->wall_first);
     nl->wall_fluid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->wall_fluid_first);
+    nl->ghost_fluid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_fluid_first);
+    nl->ghost_dx_build = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_dx_build);
+    nl->ghost_dy_build = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_dy_build);
     nl->moved_x = calloc(n + 1, sizeof *nl->moved_x);
     nl->moved_y = calloc(n + 1, sizeof *nl->moved_y);
     if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first || !nl->wall_fluid_first || !nl->moved_x ||
+        !nl->ghost_fluid_first || !nl->ghost_dx_build || !nl->ghost_dy_build ||
         !nl->moved_y) {
         snprintf(err, err_len, "out of memory for the neighbour lists of %zu particles", n);
         return -1;
@@ -36,7 +40,9 @@ void neighbours_free(neighbour_lists *nl)
 {
     void *arrays[] = {nl->x_build, nl->y_build, nl->moved_x, nl->moved_y, nl->fluid_first, nl->fluid_index,
                       nl->fluid_dx0, nl->fluid_dy0, nl->wall_first, nl->wall_index, nl->wall_dx0, nl->wall_dy0,
-                      nl->wall_fluid_first, nl->wall_fluid_index, nl->wall_fluid_dx0, nl->wall_fluid_dy0};
+                      nl->wall_fluid_first, nl->wall_fluid_index, nl->wall_fluid_dx0, nl->wall_fluid_dy0,
+                      nl->ghost_fluid_first, nl->ghost_fluid_index, nl->ghost_fluid_dx0, nl->ghost_fluid_dy0,
+                      nl->ghost_dx_build, nl->ghost_dy_build};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     memset(nl, 0, sizeof *nl);
@@ -90,17 +96,16 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
 
 /* Where a list's searches start: fluid particle a's build position; for wall particle a, its mDBC ghost node, or
  * for a boulder's particle the particle itself (wrapped into the period). */
-static int search_point(const surge_sim *sim, int a, double *xs, double *ys)
+static void search_point(const surge_sim *sim, int a, double *xs, double *ys)
 {
     const neighbour_lists *nl = &sim->neighbours;
     if (a >= sim->wall_count) {
         *xs = nl->x_build[a], *ys = nl->y_build[a];
-        return 1;
+        return;
     }
     const int boulder = sim->wall_of[a] == WALL_BOULDER;
     *xs = surge_sim_wrapped_x(sim, nl->x_build[a] + (boulder ? 0 : sim->ghost_dx[a]));
     *ys = nl->y_build[a] + (boulder ? 0 : sim->ghost_dy[a]);
-    return 1;
 }
 
 /* Counts (fill = 0) or writes (fill = 1) the lists of particle a (a fluid particle's fluid and wall lists, or a
@@ -112,15 +117,32 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
     double xs, ys;
     if (a < sim->wall_count) {
         neighbour_ranges fluid;
-        const int listed = search_point(sim, a, &xs, &ys);
-        if (listed)
-            grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
+        search_point(sim, a, &xs, &ys);
+        grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
+        const int64_t e = nl->wall_fluid_first[a];
         if (!fill)
-            nl->wall_fluid_first[a + 1] = listed ? scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL) : 0;
-        else if (listed) {
-            const int64_t e = nl->wall_fluid_first[a];
-            scan(sim, &fluid, xs, ys, -1, reach2, nl->wall_fluid_index + e, nl->wall_fluid_dx0 + e, nl->wall_fluid_dy0 + e);
+            nl->wall_fluid_first[a + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
+        else
+            scan(sim, &fluid, xs, ys, -1, reach2, nl->wall_fluid_index + e, nl->wall_fluid_dx0 + e,
+                 nl->wall_fluid_dy0 + e);
+        if (sim->wall_of[a] != WALL_BOULDER) {
+            if (!fill)
+                nl->ghost_fluid_first[a + 1] = 0;
+            return;
         }
+        /* a boulder's ghost node as it was at the disc's build orientation */
+        real gdx, gdy;
+        boulders_ghost_offset(sim, a, sim->boulders.angle_build[sim->boulders.of_wall[sim->id[a]]], &gdx, &gdy);
+        nl->ghost_dx_build[a] = gdx, nl->ghost_dy_build[a] = gdy;
+        xs = surge_sim_wrapped_x(sim, nl->x_build[a] + gdx);
+        ys = nl->y_build[a] + gdy;
+        grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
+        const int64_t eg = nl->ghost_fluid_first[a];
+        if (!fill)
+            nl->ghost_fluid_first[a + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
+        else
+            scan(sim, &fluid, xs, ys, -1, reach2, nl->ghost_fluid_index + eg, nl->ghost_fluid_dx0 + eg,
+                 nl->ghost_fluid_dy0 + eg);
         return;
     }
     const int i = a - sim->wall_count;
@@ -156,9 +178,13 @@ static int build_lists(surge_sim *sim)
     prefix_sum(nl->fluid_first, nf);
     prefix_sum(nl->wall_first, nf);
     prefix_sum(nl->wall_fluid_first, nw);
+    prefix_sum(nl->ghost_fluid_first, nw);
     if (reserve(&nl->fluid_index, &nl->fluid_dx0, &nl->fluid_dy0, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) ||
         reserve(&nl->wall_index, &nl->wall_dx0, &nl->wall_dy0, &nl->wall_capacity, (size_t)nl->wall_first[nf]) ||
-        reserve(&nl->wall_fluid_index, &nl->wall_fluid_dx0, &nl->wall_fluid_dy0, &nl->wall_fluid_capacity, (size_t)nl->wall_fluid_first[nw]))
+        reserve(&nl->wall_fluid_index, &nl->wall_fluid_dx0, &nl->wall_fluid_dy0, &nl->wall_fluid_capacity,
+                (size_t)nl->wall_fluid_first[nw]) ||
+        reserve(&nl->ghost_fluid_index, &nl->ghost_fluid_dx0, &nl->ghost_fluid_dy0, &nl->ghost_fluid_capacity,
+                (size_t)nl->ghost_fluid_first[nw]))
         return -1;
     #pragma omp parallel for schedule(static)
     for (int a = 0; a < sim->count; a++)
@@ -213,6 +239,12 @@ static double largest_excursion(const surge_sim *sim)
             const double dx = sim->x[k] - nl->x_build[k], dy = sim->y[k] - nl->y_build[k];
             const double speed = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
             largest = fmax(largest, sqrt(dx * dx + dy * dy) + half_dt * speed);
+            /* its ghost node turns with the disc, at most |omega| (R + |ghost offset|) faster */
+            const double gx = dx + (sim->ghost_dx[k] - nl->ghost_dx_build[k]);
+            const double gy = dy + (sim->ghost_dy[k] - nl->ghost_dy_build[k]);
+            const double ghost_offset = sqrt((double)sim->ghost_dx[k] * sim->ghost_dx[k] +
+                                             (double)sim->ghost_dy[k] * sim->ghost_dy[k]);
+            largest = fmax(largest, sqrt(gx * gx + gy * gy) + half_dt * (speed + fabs(b->omega[i]) * ghost_offset));
         }
     }
     return largest;
@@ -238,6 +270,8 @@ int neighbours_update(surge_sim *sim)
                 sim->x[a] += period;
         }
     }
+    for (int i = 0; i < sim->boulders.count; i++) /* the discs' ghosts are listed where they are now */
+        sim->boulders.angle_build[i] = sim->boulders.angle[i];
     memcpy(nl->x_build + from, sim->x + from, (size_t)(sim->count - from) * sizeof *sim->x);
     memcpy(nl->y_build + from, sim->y + from, (size_t)(sim->count - from) * sizeof *sim->y);
     return neighbours_adopt_build_positions(sim);

@@ -48,8 +48,8 @@ typedef struct cell_span {
  * periodic images, no large coordinates. Wall particle k has the fluid around it in
  * wall_fluid_index[wall_fluid_first[k] .. wall_fluid_first[k+1]): for a wall that does not move, the fluid within
  * 2h + skin of its mDBC ghost node, with r_ghost - r_j at the build in wall_fluid_dx0, wall_fluid_dy0; for a
- * boulder's particle, the fluid within 2h + skin of the particle (its force on the disc, eq. 10), with r_k - r_j
- * (its ghost turns with the disc; boundary.c searches the cells for it). */
+ * boulder's particle, the fluid within 2h + skin of the particle (its force on the disc, eq. 10), with r_k - r_j,
+ * and, in the ghost_fluid lists below, the fluid around its ghost node, which turns with the disc. */
 typedef struct neighbour_lists {
     double skin_m;
     int valid;                 /* 0: build at the next step */
@@ -60,6 +60,13 @@ typedef struct neighbour_lists {
     int32_t *fluid_index, *wall_index, *wall_fluid_index;
     real *fluid_dx0, *fluid_dy0, *wall_dx0, *wall_dy0, *wall_fluid_dx0, *wall_fluid_dy0;
     size_t fluid_capacity, wall_capacity, wall_fluid_capacity;
+    /* a boulder's particle k: the fluid within 2h + skin of its ghost node at the build,
+     * ghost_fluid_index[ghost_fluid_first[k] .. ghost_fluid_first[k+1]) with r_ghost - r_j in ghost_fluid_dx0/dy0, and
+     * the ghost's offset from the particle then (ghost_dx_build, ghost_dy_build; the disc's angle_build) */
+    int64_t *ghost_fluid_first;
+    int32_t *ghost_fluid_index;
+    real *ghost_fluid_dx0, *ghost_fluid_dy0, *ghost_dx_build, *ghost_dy_build;
+    size_t ghost_fluid_capacity;
 } neighbour_lists;
 
 struct surge_sim {
@@ -170,6 +177,8 @@ int boulders_particle_count(const surge_sim *sim);
 void boulders_create_particles(surge_sim *sim, int first);
 int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc */
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
+/* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
+void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);
 void boulders_fluid_forces(surge_sim *sim);                   /* eq. 10, after interaction_compute */
 /* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target). */
 void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy);
