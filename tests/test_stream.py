@@ -469,6 +469,22 @@ def group_inputs():
     check("inputs: bad stream options and journals exit 2 with a message naming them (%d cases)" % (len(cases) + 1),
           not wrong, "\n".join(wrong))
 
+    # one subscriber with 100 junk topics and 100 field selections cannot take a later "stats" subscriber's slot
+    # (issue #24, D6: 64 junk subscriptions filled the table and stats never came)
+    hogged = Surge("inputs_hog", ["-s", "time.end_s=100", "--publish-hz", "0"], paused=True)
+    hog = surge_client.subscribe(hogged.pub, ["junk%d" % i for i in range(100)] +
+                                 ["state/junk%d" % i for i in range(100)], ctx, latest_only=True)
+    time.sleep(1.0)  # the publisher reads the hog's subscriptions first
+    late = surge_client.subscribe(hogged.pub, ["stats"], ctx, latest_only=False)
+    hctl = surge_client.Control(hogged.ctl, 10)
+    got = wait_for(lambda: (hctl.request({"cmd": "step", "n": 1}), surge_client.receive(late, 200))[1], 30)
+    hctl.request({"cmd": "stop"})
+    hogged.wait(60)
+    hog.close()
+    late.close()
+    check("inputs: a subscriber holding 200 useless subscriptions leaves room for a later stats subscriber",
+          got is not None, hogged.describe())
+
 
 # ---------------------------------------------------------------------------------------------------------------
 def group_stalled():

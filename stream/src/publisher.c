@@ -23,7 +23,7 @@
 #error "the wire format sends arrays in memory order, which must be little-endian"
 #endif
 
-enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256 };
+enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256, SELECTION_RESERVE = 24 };
 enum { WANT_STATE = 1, WANT_BODIES = 2, WANT_STATS = 4 };
 
 /* The final frame is not dropped at a full queue: the publisher waits up to this long for room, so a
@@ -129,7 +129,21 @@ static void update_wanted(surge_publisher *p)
     atomic_store(&p->wanted, wanted);
 }
 
-/* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. */
+/* Whether a subscription can ever receive a message: a prefix of a topic we send (the empty one included), or a
+ * field selection "state/...". Others are junk, never stored, so they cannot fill the table (issue #24, D6). */
+static int could_match(const char *topic)
+{
+    static const char *const topics[] = {"state", "bodies", "stats", "frame"};
+    if (!strncmp(topic, "state/", 6))
+        return 1;
+    for (size_t i = 0; i < sizeof topics / sizeof topics[0]; i++)
+        if (!strncmp(topics[i], topic, strlen(topic)))
+            return 1;
+    return 0;
+}
+
+/* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. Field selections may take
+ * all slots but SELECTION_RESERVE, which the prefixes of the plain topics (at most 20 of them) always find. */
 static void read_subscriptions(surge_publisher *p)
 {
     char buf[MAX_SUBSCRIPTION_BYTES + 2];
@@ -146,7 +160,13 @@ static void read_subscriptions(surge_publisher *p)
             if (!strcmp(p->subscriptions[i], topic))
                 found = i;
         if (buf[0] == 1 && found < 0) {
-            if (p->subscription_count == MAX_SUBSCRIPTIONS) {
+            if (!could_match(topic))
+                continue;
+            int selections = 0;
+            for (int i = 0; i < p->subscription_count; i++)
+                selections += !strncmp(p->subscriptions[i], "state/", 6);
+            if (p->subscription_count == MAX_SUBSCRIPTIONS ||
+                (!strncmp(topic, "state/", 6) && selections >= MAX_SUBSCRIPTIONS - SELECTION_RESERVE)) {
                 fprintf(stderr, "surge: publisher: more than %d distinct subscriptions; ignoring '%s'\n",
                         MAX_SUBSCRIPTIONS, topic);
                 continue;
