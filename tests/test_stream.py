@@ -485,6 +485,43 @@ def group_inputs():
     check("inputs: a subscriber holding 200 useless subscriptions leaves room for a later stats subscriber",
           got is not None, hogged.describe())
 
+    # idle TCP connections cannot take the file descriptors the outputs need (issue #24, D2): the run starts with
+    # a soft limit of 256 open files, 400 plain connections arrive at its control and publisher ports, and it must
+    # still write every snapshot and finish
+    import resource
+    import socket
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    hard = resource.getrlimit(resource.RLIMIT_NOFILE)[1]
+    out = os.path.join(WORK, "inputs_fds")
+    shutil.rmtree(out, ignore_errors=True)
+    proc = subprocess.Popen([SURGE, "run", TANK, "-o", out, "--threads", "1", "-s", "time.end_s=0.3", "-s",
+                             "output.snapshot_interval_s=0.01", "-s", "output.progress_interval_s=0", "--control",
+                             str(port), "--publish", str(port + 1)], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"),
+                            preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (min(256, hard), hard)))
+    held = []
+    deadline = time.time() + 20
+    while len(held) < 400 and time.time() < deadline and proc.poll() is None:
+        for target in (port, port + 1):
+            try:
+                held.append(socket.create_connection(("127.0.0.1", target), timeout=1))
+            except OSError:
+                time.sleep(0.01)
+    try:
+        _, err_text = proc.communicate(timeout=120)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err_text = proc.communicate()
+    for c in held:
+        c.close()
+    snaps = [f for f in os.listdir(out) if f.startswith("snap_")] if os.path.isdir(out) else []
+    check("inputs: 400 idle TCP connections under a 256-file limit cost no output (%d connected)" % len(held),
+          proc.returncode == 0 and len(held) >= 300 and len(snaps) >= 25,
+          "exit %s, %d snapshots: %s" % (proc.returncode, len(snaps), (err_text or "").strip()[-400:]))
+
 
 # ---------------------------------------------------------------------------------------------------------------
 def group_stalled():

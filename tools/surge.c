@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <zmq.h>
@@ -891,10 +892,23 @@ static void prefer_passive_wait(char **argv)
     unsetenv("OMP_WAIT_POLICY"); /* no /proc: go on with libgomp's default */
 }
 
+/* The soft limit on open files up to the hard one: each connection to the control or publisher socket takes a
+ * file descriptor, and a table filled by idle connections (1,024 on many machines) made the next snapshot write
+ * fail (issue #24, D2). */
+static void raise_open_file_limit(void)
+{
+    struct rlimit limit;
+    if (getrlimit(RLIMIT_NOFILE, &limit) == 0 && limit.rlim_cur < limit.rlim_max) {
+        limit.rlim_cur = limit.rlim_max;
+        setrlimit(RLIMIT_NOFILE, &limit);
+    }
+}
+
 int main(int argc, char **argv)
 {
     if (argc >= 2 && (!strcmp(argv[1], "run") || !strcmp(argv[1], "render")))
         prefer_passive_wait(argv);
+    raise_open_file_limit();
     if (argc < 2 || !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h") || !strcmp(argv[1], "help")) {
         fputs(usage_main, argc < 2 ? stderr : stdout);
         return argc < 2 ? EXIT_USAGE : EXIT_OK;

@@ -18,6 +18,9 @@
 #include "surge/run.h"
 
 enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10, MAX_REQUESTS_PER_STEP = 8 };
+/* a connection that has not completed ZeroMQ's greeting by then is closed: idle TCP connections cannot pile up
+ * and take the file descriptors the run's outputs need (issue #24, D2) */
+enum { HANDSHAKE_MS = 2000 };
 
 struct surge_control {
     void *socket;
@@ -48,9 +51,10 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     }
     c->socket = zmq_socket(context, ZMQ_ROUTER);
     const int64_t max_bytes = def->max_request_bytes;
-    const int linger_ms = 200;
+    const int linger_ms = 200, handshake_ms = HANDSHAKE_MS;
     if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
         zmq_bind(c->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot open the control socket on '%s': %s", def->endpoint,
                  zmq_strerror(zmq_errno()));

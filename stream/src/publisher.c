@@ -447,9 +447,10 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     p->last_step = -1;
     pthread_mutex_init(&p->frame.lock, NULL);
     p->socket = zmq_socket(context, ZMQ_XPUB);
-    const int linger_ms = 1000;
+    const int linger_ms = 1000, handshake_ms = 2000; /* idle connections closed after 2 s (control.c) */
     if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
+        zmq_setsockopt(p->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
         zmq_bind(p->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
         if (p->socket)
