@@ -494,6 +494,15 @@ def group_inputs():
     report("check_quiet_when_resolved", exited(r, 0) and "warning" not in r.stdout + r.stderr and
            "note" not in r.stdout + r.stderr, r)
 
+    # --- who may steer a run (issue #24): a control socket other machines can reach is refused, any transport
+    for n, endpoint in enumerate(("tcp://0.0.0.0:5999", "tcp://*:5999", "norm://127.0.0.1:5999",
+                                  "epgm://eth0;239.192.1.1:5999")):
+        expect_error("cli_control_not_local_%d_%s" % (n, endpoint.split(":")[0]),
+                     ["run", tank_case, "-o", out, "--control", endpoint], [endpoint, "refused"])
+    r = surge("run", tank_case, "-s", "time.end_s=0.001", "-o", os.path.join(WORK, "pub_norm"), "--publish",
+              "tcp://0.0.0.0:0")
+    report("cli_publish_not_local_warns", "not bound to loopback" in r.stderr, r)
+
     # --- messages ----------------------------------------------------------------------------------------
     empty = write_file("empty.ini", "# nothing but a comment\n\n")
     expect_error("case_empty_refused", ["check", empty], [empty, "no parameters"])

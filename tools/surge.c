@@ -175,11 +175,20 @@ static int parse_endpoint(const char *option, const char *text, char *out)
         return -1;
     }
     snprintf(out, ENDPOINT_BYTES, "%s", text);
-    if (!strncmp(text, "tcp://", 6) && strncmp(text, "tcp://127.", 10) && strncmp(text, "tcp://localhost:", 16) &&
-        strncmp(text, "tcp://[::1]:", 12))
-        fprintf(stderr, "surge: warning: %s %s is not bound to loopback; it has no authentication, so anyone who "
-                        "can reach it can %s (see docs/protocol.md)\n", option, text,
-                !strcmp(option, "--control") ? "steer and stop the run" : "read the state");
+    /* this machine only: a local socket file, or TCP on loopback; any other transport (tcp elsewhere, pgm, epgm,
+     * norm, udp, ws...) can be reached from other machines */
+    const int local = !strncmp(text, "ipc://", 6) || !strncmp(text, "inproc://", 9) || !strncmp(text, "tcp://127.", 10) ||
+                      !strncmp(text, "tcp://localhost:", 16) || !strncmp(text, "tcp://[::1]:", 12);
+    if (local)
+        return 0;
+    if (!strcmp(option, "--control")) { /* the sockets have no authentication: nobody elsewhere may steer a run */
+        fprintf(stderr, "surge: --control %s can be reached from other machines and has no authentication: refused. "
+                        "Bind it to loopback (a bare port does) and reach it through an SSH tunnel (docs/protocol.md)\n",
+                text);
+        return -1;
+    }
+    fprintf(stderr, "surge: warning: %s %s is not bound to loopback; it has no authentication, so anyone who can reach "
+                    "it can read the state (see docs/protocol.md)\n", option, text);
     return 0;
 }
 
