@@ -207,6 +207,17 @@ static void group_colours(const char *work)
     uint8_t expected[3];
     surge_colormap_rgb(SURGE_COLORMAP_CIVIDIS, s.vx_mps[k] + 0.5, 0.5, 1.5, expected);
     check("colours: vx_rel on cividis subtracts the belt speed", near_rgb(pixel(&im2, cx, cy), expected, 1), "");
+
+    /* a fluid at rest, automatic range: the speed bar starts at 0 (it read -0.5..0.5; issue #24) */
+    p.render.field = SURGE_FIELD_SPEED;
+    p.render.color_min = p.render.color_max = 0;
+    for (int32_t i = 0; i < s.count; i++)
+        s.vx_mps[i] = s.vy_mps[i] = 0;
+    surge_canvas_draw(canvas, &s, &p);
+    l = surge_canvas_last_layout(canvas);
+    snprintf(detail, sizeof detail, "range %g..%g", l->color_min, l->color_max);
+    check("colours: a fluid at rest gets the speed range 0..1, not a negative speed", l->color_min == 0 &&
+          l->color_max == 1, detail);
     free(im.rgb);
     free(im2.rgb);
     surge_canvas_destroy(canvas);

@@ -324,9 +324,10 @@ static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_par
     } else if (vmax > vmin) {
         l->color_min = vmin;
         l->color_max = vmax;
-    } else {
-        l->color_min = isfinite(vmin) ? vmin - 0.5 : 0;
-        l->color_max = isfinite(vmin) ? vmin + 0.5 : 1;
+    } else { /* one value everywhere (a fluid at rest): a unit range from it, not below zero for a speed */
+        const double low = !isfinite(vmin) ? 0 : p->render.field == SURGE_FIELD_SPEED ? vmin : vmin - 0.5;
+        l->color_min = low;
+        l->color_max = low + 1;
     }
     return 0;
 }
@@ -414,7 +415,9 @@ static void draw_colorbar(surge_canvas *c, const surge_params *p)
     outline_rect(c, l->colorbar_x0, l->colorbar_y0, l->colorbar_x1, l->colorbar_y1);
     const int size = surge_text_size(c->text);
     for (int k = 0; k <= 4; k++) {
-        const double value = l->color_min + (l->color_max - l->color_min) * k / 4.0;
+        double value = l->color_min + (l->color_max - l->color_min) * k / 4.0;
+        if (fabs(value) < 1e-9 * (l->color_max - l->color_min)) /* round-off of a range across zero: 0, not 2.3e-10 */
+            value = 0;
         const int y = l->colorbar_y1 - (int)lround(k / 4.0 * h);
         fill_rect(c, l->colorbar_x1, y, l->colorbar_x1 + size / 3, y + 1, ink_rgb);
         char label[32];
