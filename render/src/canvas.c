@@ -486,8 +486,13 @@ const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const
     outline_rect(c, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1);
     draw_colorbar(c, p);
     draw_length_scale(c);
-    char label[96];
-    snprintf(label, sizeof label, "t = %.3f s", s->time_s);
+    char label[160];
+    /* the time, and what drives the flow: the slope and the belt (issue #24) */
+    int used = snprintf(label, sizeof label, "t = %.3f s", s->time_s);
+    if (p->body.slope_deg != 0 && used > 0 && used < (int)sizeof label)
+        used += snprintf(label + used, sizeof label - (size_t)used, "   slope %.3g deg", p->body.slope_deg);
+    if (p->walls.bottom && p->walls.bottom_speed_mps != 0 && used > 0 && used < (int)sizeof label)
+        snprintf(label + used, sizeof label - (size_t)used, "   belt %.3g m/s", p->walls.bottom_speed_mps);
     const int size = surge_text_size(c->text);
     surge_text_draw(c->text, c->pixels, c->width, c->height, l->plot_x0, l->plot_y0 - size / 2, label, ink_rgb);
     return c->pixels;
