@@ -216,6 +216,9 @@ def group_offline():
     code3, stderr3 = run(["render", os.path.join(d, "out")])
     check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
           code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
+    # one colour range for the whole movie, from all its frames, unless the user sets one (issue #24)
+    check("offline: an automatic colour range is the range over all frames", "over all 5 frames" in stderr3,
+          stderr3[-300:])
 
     # a restarted run adds its frames after the first run's instead of overwriting them
     cont_run, cont_frames = os.path.join(d, "cont"), os.path.join(d, "cont_frames")

@@ -828,6 +828,25 @@ static int command_render(int argc, char **argv)
     const int has_boulders = boulders_pvd != NULL;
     if (boulders_pvd)
         fclose(boulders_pvd);
+    /* an automatic colour range is the range of all the frames, so that a colour means one value all through the
+     * movie (each frame's own range, as a live run must use, changed meanings; issue #24) */
+    if (!(p.render.color_max > p.render.color_min)) {
+        double low = INFINITY, high = -INFINITY;
+        for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
+            snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, i));
+            const surge_canvas_layout *l = NULL;
+            if (surge_vtp_read(path, &snap, err, sizeof err) != 0)
+                rc = EXIT_USAGE;
+            else if ((l = surge_canvas_layout_only(canvas, &snap, &p)) != NULL && isfinite(l->field_min))
+                low = fmin(low, l->field_min), high = fmax(high, l->field_max);
+        }
+        if (high > low) {
+            p.render.color_min = low;
+            p.render.color_max = high;
+            fprintf(stderr, "surge: colour range %.4g .. %.4g over all %zu frames (set render.color_min and "
+                            "render.color_max to choose it)\n", low, high, count);
+        }
+    }
     for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
         const char *file = surge_pvd_file(pvd, i);
         snprintf(path, sizeof path, "%s/%s", c.case_path, file);

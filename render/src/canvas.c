@@ -318,6 +318,8 @@ static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_par
     l->world_x0_m = 0.5 * (X0 + X1) - 0.5 * plot_w / l->scale_px_per_m;
     l->world_y0_m = Y0;
     l->radius_px = 0.5 * p->numerics.dp_m * l->scale_px_per_m;
+    l->field_min = isfinite(vmin) ? vmin : NAN;
+    l->field_max = isfinite(vmax) ? vmax : NAN;
     if (p->render.color_max > p->render.color_min) {
         l->color_min = p->render.color_min;
         l->color_max = p->render.color_max;
@@ -450,14 +452,26 @@ static void draw_length_scale(surge_canvas *c)
     surge_text_draw(c->text, c->pixels, c->width, c->height, x0 + px + size / 2, y, label, ink_rgb);
 }
 
-const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+/* The speed of the belt in a snapshot: the lowest moving wall (a moving lid is not one); 0 without. */
+static double snapshot_belt_mps(const surge_snapshot *s)
 {
-    double belt_mps = 0, belt_y_m = INFINITY; /* the lowest moving wall is the belt (a moving lid is not) */
+    double belt_mps = 0, belt_y_m = INFINITY;
     for (int i = 0; i < s->count; i++)
         if (s->kind[i] == SURGE_KIND_MOVING_WALL && s->y_m[i] < belt_y_m) {
             belt_mps = s->vx_mps[i];
             belt_y_m = s->y_m[i];
         }
+    return belt_mps;
+}
+
+const surge_canvas_layout *surge_canvas_layout_only(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+{
+    return layout_view(c, s, p, snapshot_belt_mps(s)) == 0 ? &c->layout : NULL;
+}
+
+const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+{
+    const double belt_mps = snapshot_belt_mps(s);
     if (layout_view(c, s, p, belt_mps) != 0)
         return NULL;
     const int n = fill_instances(c, s, p, belt_mps);

@@ -30,6 +30,7 @@ typedef struct surge_canvas_layout {
     int plot_x0, plot_y0, plot_x1, plot_y1;     /* the particle area */
     int colorbar_x0, colorbar_y0, colorbar_x1, colorbar_y1; /* bottom = color_min, top = color_max */
     double color_min, color_max;                 /* the colour range used */
+    double field_min, field_max;                 /* the field's own range in the view (NaN: no fluid there) */
     double scale_px_per_m;
     double world_x0_m, world_y0_m;               /* the world point drawn at (plot_x0, plot_y1) */
     double radius_px;                            /* a particle's disc (dp/2) */
@@ -39,6 +40,10 @@ typedef struct surge_canvas_layout {
  * RGBA pixels, top row first, valid until the next draw; NULL when the settings do not fit the canvas. */
 const uint8_t *surge_canvas_draw(surge_canvas *canvas, const surge_snapshot *snap, const surge_params *params);
 const surge_canvas_layout *surge_canvas_last_layout(const surge_canvas *canvas);
+/* Lays out a snapshot as surge_canvas_draw would, without drawing: its view and colour range (a movie's first pass
+ * finds the range of all its frames this way). Returns the layout, NULL on failure. */
+const surge_canvas_layout *surge_canvas_layout_only(surge_canvas *canvas, const surge_snapshot *snap,
+                                                    const surge_params *params);
 /* The last image drawn (RGBA, top row first). */
 const uint8_t *surge_canvas_pixels(const surge_canvas *canvas);
 
