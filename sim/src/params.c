@@ -201,7 +201,7 @@ static const surge_param_info registry[] = {
     {"render", "colormap", SURGE_PARAM_ENUM, "-", SURGE_COLORMAP_VIRIDIS, 0, 1, true, "viridis|cividis",
      "Perceptually uniform colour map.", OFF(render.colormap)},
     {"render", "color_min", SURGE_PARAM_REAL, "field unit", 0, -BIG, BIG, true, NULL,
-     "Low end of the colour range (equal to color_max: each frame's own range).", OFF(render.color_min)},
+     "Low end of the colour range (equal to color_max: automatic, the range over all frames in surge render, each frame's own while a run renders).", OFF(render.color_min)},
     {"render", "color_max", SURGE_PARAM_REAL, "field unit", 0, -BIG, BIG, true, NULL,
      "High end of the colour range.", OFF(render.color_max)},
     {"render", "view", SURGE_PARAM_ENUM, "-", SURGE_VIEW_WHOLE, 0, 2, true, "whole|follow|fixed",
