@@ -542,14 +542,20 @@ static void folder_of(const char *path, char *folder, size_t len)
         snprintf(folder, len, "%.*s", slash == path ? 1 : (int)(slash - path), path);
 }
 
-/* A movie file's folder must exist and be writable before the run starts, not when the first frame is encoded. */
-static int movie_folder_ok(const char *movie_path)
+/* A movie file's folder must exist and be writable before the run starts, not when the first frame is encoded;
+ * and, unless replacing is allowed, no movie may be there already. 0, or -1 with the message printed. */
+static int claim_movie(const char *movie_path, int may_replace)
 {
     char folder[4096];
     folder_of(movie_path, folder, sizeof folder);
     if (access(folder, W_OK) != 0) {
         fprintf(stderr, "surge: --movie %s: its folder %s %s\n", movie_path, folder,
                 errno == ENOENT ? "does not exist" : "is not writable");
+        return -1;
+    }
+    if (!may_replace && access(movie_path, F_OK) == 0) {
+        fprintf(stderr, "surge: the movie %s exists; nothing was written. Choose another --movie file, or add "
+                        "--overwrite to replace it\n", movie_path);
         return -1;
     }
     return 0;
@@ -651,13 +657,8 @@ static int command_run(int argc, char **argv)
     if (claimed == 0 && c.frames_dir && !c.restart_path)
         claimed = claim_folder(c.frames_dir, surge_is_frame_file, c.overwrite, "frames of an earlier run",
                                "Choose another --frames folder");
-    if (claimed == 0 && c.movie_path && movie_folder_ok(c.movie_path) != 0)
-        claimed = -1;
-    if (claimed == 0 && c.movie_path && !c.overwrite && !c.restart_path && access(c.movie_path, F_OK) == 0) {
-        fprintf(stderr, "surge: the movie %s exists; nothing was written. Choose another --movie file, or add "
-                        "--overwrite to replace it\n", c.movie_path);
-        claimed = -1;
-    }
+    if (claimed == 0 && c.movie_path) /* a restart rewrites its movie with the frames before it */
+        claimed = claim_movie(c.movie_path, c.overwrite || c.restart_path);
     if (claimed != 0) {
         surge_sim_destroy(sim);
         return EXIT_USAGE;
@@ -794,13 +795,8 @@ static int command_render(int argc, char **argv)
     }
     int claimed = c.frames_dir ? claim_folder(c.frames_dir, surge_is_frame_file, c.overwrite, "frames",
                                               "Choose another --frames folder") : 0;
-    if (claimed == 0 && c.movie_path && movie_folder_ok(c.movie_path) != 0)
-        claimed = -1;
-    if (claimed == 0 && c.movie_path && !c.overwrite && access(c.movie_path, F_OK) == 0) {
-        fprintf(stderr, "surge: the movie %s exists; nothing was written. Choose another --movie file, or add "
-                        "--overwrite to replace it\n", c.movie_path);
-        claimed = -1;
-    }
+    if (claimed == 0 && c.movie_path)
+        claimed = claim_movie(c.movie_path, c.overwrite);
     if (claimed != 0) {
         surge_pvd_close(pvd);
         return EXIT_USAGE;
