@@ -108,23 +108,29 @@ static void search_point(const surge_sim *sim, int a, double *xs, double *ys)
     *ys = nl->y_build[a] + (boulder ? 0 : sim->ghost_dy[a]);
 }
 
+/* Counts (fill = 0: into first[k + 1]) or writes (fill = 1: from first[k]) the fluid within reach of the point
+ * (xs, ys), list k of one of the wall particles' lists. */
+static void list_fluid_around(surge_sim *sim, double xs, double ys, double reach2, int fill, int64_t *first, int k,
+                              int32_t *index, real *dx0, real *dy0)
+{
+    neighbour_ranges fluid;
+    grid_neighbour_ranges(&sim->grid, sim->grid.fluid_start, xs, ys, &fluid);
+    if (!fill)
+        first[k + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
+    else
+        scan(sim, &fluid, xs, ys, -1, reach2, index + first[k], dx0 + first[k], dy0 + first[k]);
+}
+
 /* Counts (fill = 0) or writes (fill = 1) the lists of particle a (a fluid particle's fluid and wall lists, or a
- * wall particle's ghost list). */
+ * wall particle's lists of the fluid around it and, for a boulder's, around its ghost). */
 static void list_particle(surge_sim *sim, int a, double reach2, int fill)
 {
     neighbour_lists *nl = &sim->neighbours;
-    const cell_grid *g = &sim->grid;
     double xs, ys;
+    search_point(sim, a, &xs, &ys);
     if (a < sim->wall_count) {
-        neighbour_ranges fluid;
-        search_point(sim, a, &xs, &ys);
-        grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
-        const int64_t e = nl->wall_fluid_first[a];
-        if (!fill)
-            nl->wall_fluid_first[a + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
-        else
-            scan(sim, &fluid, xs, ys, -1, reach2, nl->wall_fluid_index + e, nl->wall_fluid_dx0 + e,
-                 nl->wall_fluid_dy0 + e);
+        list_fluid_around(sim, xs, ys, reach2, fill, nl->wall_fluid_first, a, nl->wall_fluid_index,
+                          nl->wall_fluid_dx0, nl->wall_fluid_dy0);
         if (sim->wall_of[a] != WALL_BOULDER) {
             if (!fill)
                 nl->ghost_fluid_first[a + 1] = 0;
@@ -134,21 +140,13 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
         real gdx, gdy;
         boulders_ghost_offset(sim, a, sim->boulders.angle_build[sim->boulders.of_wall[sim->id[a]]], &gdx, &gdy);
         nl->ghost_dx_build[a] = gdx, nl->ghost_dy_build[a] = gdy;
-        xs = surge_sim_wrapped_x(sim, nl->x_build[a] + gdx);
-        ys = nl->y_build[a] + gdy;
-        grid_neighbour_ranges(g, g->fluid_start, xs, ys, &fluid);
-        const int64_t eg = nl->ghost_fluid_first[a];
-        if (!fill)
-            nl->ghost_fluid_first[a + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
-        else
-            scan(sim, &fluid, xs, ys, -1, reach2, nl->ghost_fluid_index + eg, nl->ghost_fluid_dx0 + eg,
-                 nl->ghost_fluid_dy0 + eg);
+        list_fluid_around(sim, surge_sim_wrapped_x(sim, nl->x_build[a] + gdx), nl->y_build[a] + gdy, reach2, fill,
+                          nl->ghost_fluid_first, a, nl->ghost_fluid_index, nl->ghost_fluid_dx0, nl->ghost_fluid_dy0);
         return;
     }
     const int i = a - sim->wall_count;
     neighbour_ranges fluid, walls;
-    search_point(sim, a, &xs, &ys);
-    grid_fluid_and_wall_ranges(g, xs, ys, &fluid, &walls);
+    grid_fluid_and_wall_ranges(&sim->grid, xs, ys, &fluid, &walls);
     if (!fill) {
         nl->fluid_first[i + 1] = scan(sim, &fluid, xs, ys, a, reach2, NULL, NULL, NULL);
         nl->wall_first[i + 1] = scan(sim, &walls, xs, ys, -1, reach2, NULL, NULL, NULL);
