@@ -10,6 +10,10 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP inputs    every malformed control request gets its error reply and the run goes on to finish normally;
                   an oversize request or a vanished client does not disturb it; stop ends it with its outputs;
                   bad stream options and journals get clear errors.
+  GROUP curve     surge keygen's files (modes, never replaced, read by pyzmq's zmq.auth); with --curve-key and
+                  --curve-clients only an allowed client is answered and fed states, an unknown key or a plain
+                  client gets nothing; a --control reachable from elsewhere is refused without keys and runs with
+                  them; bad key files and option pairs get clear errors.
   GROUP stalled   a subscriber that never reads (its subscription shown live first) does not hold the solver
                   back: the run finishes and states were dropped for it (step rates: tools/stream_bench.py).
 
@@ -556,7 +560,87 @@ def group_stalled():
           received < int(published.group(1)) - 1, "%d of %s" % (received, published.group(1)))
 
 
-groups = {"state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
+def group_curve():
+    import zmq.auth
+    keys = os.path.join(WORK, "curve_keys")
+    shutil.rmtree(keys, ignore_errors=True)
+    os.makedirs(os.path.join(keys, "clients"))
+
+    def keygen(name):
+        return subprocess.run([SURGE, "keygen", os.path.join(keys, name)], capture_output=True, text=True)
+
+    made = [keygen(n) for n in ("run", "clients/alice", "clients/bob", "mallory")]
+    secret_mode = os.stat(os.path.join(keys, "run.key")).st_mode & 0o777
+    run_key_before = open(os.path.join(keys, "run.key")).read()
+    again = keygen("run")
+    public, secret = zmq.auth.load_certificate(os.path.join(keys, "run.key"))
+    public_only, no_secret = zmq.auth.load_certificate(os.path.join(keys, "run.pub"))
+    check("curve: keygen writes NAME.key (mode 0600) and NAME.pub, which pyzmq's zmq.auth reads",
+          all(m.returncode == 0 for m in made) and secret_mode == 0o600 and len(public) == 40 and
+          len(secret) == 40 and public_only == public and no_secret is None,
+          "rc %s, mode %o, keys %r %r" % ([m.returncode for m in made], secret_mode, public, public_only))
+    check("curve: keygen never replaces a key file", again.returncode != 0 and "already exists" in again.stderr and
+          open(os.path.join(keys, "run.key")).read() == run_key_before, again.stderr)
+
+    def key(name):
+        return os.path.join(keys, name)
+    secured = ["--curve-key", key("run.key"), "--curve-clients", key("clients")]
+    run = Surge("curve", ["-s", "time.end_s=0.05"] + secured, paused=True)
+    alice = surge_client.curve_keys(key("run.pub"), key("clients/alice.key"))
+    mallory = surge_client.curve_keys(key("run.pub"), key("mallory.key"))
+    answered = {}
+    for name, curve in (("alice", alice), ("mallory", mallory), ("plain", None)):
+        try:
+            answered[name] = surge_client.Control(run.ctl, 2 if name != "alice" else 20, curve=curve).request(
+                {"cmd": "status"}).get("ok")
+        except TimeoutError:
+            answered[name] = None
+    check("curve: the run answers an allowed client only (not an unknown key, not a plain client)",
+          answered == {"alice": True, "mallory": None, "plain": None}, str(answered))
+    subs = {n: surge_client.subscribe(run.pub, ["state"], curve=c) for n, c in (("bob", surge_client.curve_keys(
+        key("run.pub"), key("clients/bob.key"))), ("mallory", mallory), ("plain", None))}
+    surge_client.Control(run.ctl, 20, curve=alice).request({"cmd": "resume"})
+    rc = run.wait()
+    got = {n: surge_client.receive(s, 3000 if n == "bob" else 500) is not None for n, s in subs.items()}
+    check("curve: states reach an allowed subscriber only; the run finishes and reports the refusals",
+          got == {"bob": True, "mallory": False, "plain": False} and rc == 0 and
+          "is not in the allow-list" in run.stderr and re.search(r"refused \d+ connection", run.stderr),
+          "%s\n%s" % (got, run.describe()))
+
+    def cli(*extra):
+        return subprocess.run([SURGE, "run", "-o", os.path.join(WORK, "curve_cli"), "--overwrite", "--threads", "1",
+                               "-s", "time.end_s=0.001", "-s", "output.progress_interval_s=0"] + list(extra),
+                              capture_output=True, text=True, timeout=120)
+    with open(key("bad.key"), "w") as f:
+        f.write('curve\n    public-key = "tooshort"\n')
+    os.makedirs(key("empty"), exist_ok=True)
+    bad = [(("--control", "tcp://0.0.0.0:*"), "refused"),
+           (("--control", "5599", "--curve-key", key("run.key")), "--curve-key needs --curve-clients"),
+           (("--control", "5599", "--curve-clients", key("clients")), "--curve-clients needs --curve-key"),
+           (("--control", "tcp://0.0.0.0:*", "--curve-key", key("run.pub"), "--curve-clients", key("clients")),
+            "holds no secret-key"),
+           (("--control", "tcp://0.0.0.0:*", "--curve-key", key("bad.key"), "--curve-clients", key("clients")),
+            "bad.key line 2"),
+           (("--control", "tcp://0.0.0.0:*", "--curve-key", key("run.key"), "--curve-clients", key("empty")),
+            "holds no *.pub"),
+           (("--control", "tcp://0.0.0.0:*", "--curve-key", key("run.key"), "--curve-clients", key("nothing")),
+            "nothing: No such file"),
+           (("--curve-key", key("run.key"), "--curve-clients", key("clients")), "neither is given")]
+    wrong = []
+    for args, words in bad:
+        r = cli(*args)
+        if r.returncode != 2 or words not in r.stderr:
+            wrong.append("%s -> %d %s" % (" ".join(args), r.returncode, r.stderr.strip()[-300:]))
+    check("curve: bad keys, lone key options and an open --control without keys are refused with the reason",
+          not wrong, "\n".join(wrong))
+    remote = cli("--control", "tcp://0.0.0.0:*", *secured)
+    warned = cli("--publish", "tcp://0.0.0.0:*")
+    check("curve: a --control reachable from elsewhere runs with keys; an open --publish is warned about",
+          remote.returncode == 0 and warned.returncode == 0 and "no authentication" in warned.stderr,
+          "%d %s\n%d %s" % (remote.returncode, remote.stderr[-400:], warned.returncode, warned.stderr[-400:]))
+
+
+groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -104,6 +104,27 @@ def endpoint(text):
     return text
 
 
+def add_curve_options(parser):
+    """--server-key and --key, for a run secured with CURVE (docs/protocol.md)."""
+    parser.add_argument("--server-key", metavar="RUN.pub",
+                        help="the run's public key file, when it was started with --curve-key")
+    parser.add_argument("--key", metavar="CLIENT.key",
+                        help="this client's key file (surge keygen); its .pub must be in the run's --curve-clients")
+
+
+def curve_of(parser, args):
+    """The keys of add_curve_options' options for surge_client, or None when neither is given."""
+    import surge_client
+    if (args.server_key is None) != (args.key is None):
+        parser.error("--server-key and --key go together")
+    if args.server_key is None:
+        return None
+    try:
+        return surge_client.curve_keys(args.server_key, args.key)
+    except ValueError as e:
+        parser.error(str(e))
+
+
 def run(main):
     """Runs a tool's main() and gives the exit status it returns (None: 0). A reader that stops early (| head)
     ends the tool quietly with status 1: no BrokenPipe traceback, and none again when Python flushes at exit.

@@ -17,6 +17,7 @@
 
 #include "surge/platform.h"
 #include "surge/control.h"
+#include "surge/curve.h"
 #include "surge/journal.h"
 #include "surge/params.h"
 #include "surge/publisher.h"
@@ -50,6 +51,7 @@ static const char *usage_main =
     "  render RUN_DIR    render a finished run's snapshots as PNG frames and/or a movie\n"
     "  check CASE        validate a case file without running it\n"
     "  params            print the parameter reference (Markdown)\n"
+    "  keygen NAME       make a CURVE key pair for the live links: NAME.key (secret) and NAME.pub\n"
     "\n"
     "'surge COMMAND --help' describes each command.\n"
     "exit status: 0 done, 1 stopped by the health monitor, 2 bad input, 3 output error, 4 interrupted\n";
@@ -92,8 +94,11 @@ static const char *usage_run =
     "                        socket; applied commands are journaled in OUTDIR/control.jsonl\n"
     "  --paused              with --control: wait for 'resume' or 'step' before the first step\n"
     "  --replay JOURNAL      apply a control.jsonl's parameter changes and stop at the same steps again\n"
-    "The sockets have no authentication: bind to 127.0.0.1 (the default) and reach them through an SSH\n"
-    "tunnel from elsewhere.\n"
+    "  --curve-key FILE      secure both sockets with ZeroMQ's CURVE: the run's key (NAME.key, surge keygen)\n"
+    "  --curve-clients PATH  and admit only the clients whose public key (a .pub file, or each *.pub in a\n"
+    "                        folder) is listed; required for a --control reachable from other machines\n"
+    "Without keys the sockets have no authentication: bind them to 127.0.0.1 (the default; a --control\n"
+    "elsewhere is refused) or reach them through an SSH tunnel.\n"
     "Ctrl-C stops at the next step and writes a checkpoint.\n";
 
 static const char *usage_check =
@@ -109,6 +114,13 @@ static const char *usage_render =
     "Renders every snapshot listed in RUN_DIR/run.pvd with the run's parameters (RUN_DIR/params.ini) and\n"
     "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot) and/or a movie at render.movie_fps.\n"
     "Without --frames or --movie, frames go to RUN_DIR/frames.\n";
+
+static const char *usage_keygen =
+    "usage: surge keygen NAME\n\n"
+    "Makes a CURVE key pair (ZeroMQ's certificate format, as pyzmq's zmq.auth reads it): NAME.key holds the\n"
+    "secret key (file mode 0600; keep it private) and NAME.pub the public key to hand to peers. Existing files\n"
+    "are never replaced. A run takes its own NAME.key with --curve-key and its clients' .pub files with\n"
+    "--curve-clients; a client takes its own .key and the run's .pub (docs/protocol.md).\n";
 
 static const char *usage_params =
     "usage: surge params\n\nPrints the parameter reference (the source of docs/parameters.md).\n";
@@ -130,6 +142,9 @@ typedef struct cli {
     int threads;
     char publish[ENDPOINT_BYTES];
     char control[ENDPOINT_BYTES];
+    int publish_remote, control_remote; /* the endpoint can be reached from other machines */
+    const char *curve_key_path;         /* --curve-key: the run's secret key file (CURVE on both sockets) */
+    const char *curve_clients_path;     /* --curve-clients: the allowed clients' .pub file or folder */
     const char *replay_path;
     surge_publisher_def publisher;
     int paused;
@@ -161,10 +176,11 @@ static int parse_real(const char *text, double lo, double hi, double *out)
     return 0;
 }
 
-/* A ZeroMQ endpoint, or a bare port meaning loopback. Warns when it is reachable from other machines. */
-static int parse_endpoint(const char *option, const char *text, char *out)
+/* A ZeroMQ endpoint, or a bare port meaning loopback; *remote tells whether other machines can reach it. */
+static int parse_endpoint(const char *option, const char *text, char *out, int *remote)
 {
     int port;
+    *remote = 0;
     if (parse_int(text, 1, 65535, &port) == 0) {
         snprintf(out, ENDPOINT_BYTES, "tcp://127.0.0.1:%d", port);
         return 0;
@@ -177,18 +193,39 @@ static int parse_endpoint(const char *option, const char *text, char *out)
     snprintf(out, ENDPOINT_BYTES, "%s", text);
     /* this machine only: a local socket file, or TCP on loopback; any other transport (tcp elsewhere, pgm, epgm,
      * norm, udp, ws...) can be reached from other machines */
-    const int local = !strncmp(text, "ipc://", 6) || !strncmp(text, "inproc://", 9) || !strncmp(text, "tcp://127.", 10) ||
-                      !strncmp(text, "tcp://localhost:", 16) || !strncmp(text, "tcp://[::1]:", 12);
-    if (local)
-        return 0;
-    if (!strcmp(option, "--control")) { /* the sockets have no authentication: nobody elsewhere may steer a run */
-        fprintf(stderr, "surge: --control %s can be reached from other machines and has no authentication: refused. "
-                        "Bind it to loopback (a bare port does) and reach it through an SSH tunnel (docs/protocol.md)\n",
-                text);
+    *remote = !(!strncmp(text, "ipc://", 6) || !strncmp(text, "inproc://", 9) || !strncmp(text, "tcp://127.", 10) ||
+                !strncmp(text, "tcp://localhost:", 16) || !strncmp(text, "tcp://[::1]:", 12));
+    return 0;
+}
+
+/* Who may reach the sockets: with CURVE keys, only the allowed clients, from anywhere; without, whoever can
+ * reach the endpoint, so nobody elsewhere may steer a run and a remote publisher is warned about (issue #24). */
+static int check_endpoint_security(const cli *c)
+{
+    if (!c->curve_key_path != !c->curve_clients_path) {
+        fprintf(stderr, "surge: %s needs %s too: the run's secret key and the allowed clients' public keys go "
+                        "together (docs/protocol.md, \"Steering from another machine\")\n",
+                c->curve_key_path ? "--curve-key" : "--curve-clients",
+                c->curve_key_path ? "--curve-clients" : "--curve-key");
         return -1;
     }
-    fprintf(stderr, "surge: warning: %s %s is not bound to loopback; it has no authentication, so anyone who can reach "
-                    "it can read the state (see docs/protocol.md)\n", option, text);
+    if (c->curve_key_path && !c->publish[0] && !c->control[0]) {
+        fprintf(stderr, "surge: --curve-key secures --publish and --control; neither is given\n");
+        return -1;
+    }
+    if (c->curve_key_path)
+        return 0;
+    if (c->control_remote) {
+        fprintf(stderr, "surge: --control %s can be reached from other machines and has no authentication: refused. "
+                        "Give it CURVE keys (--curve-key and --curve-clients; `surge keygen` makes them), or bind it to "
+                        "loopback (a bare port does) and reach it through an SSH tunnel (docs/protocol.md)\n",
+                c->control);
+        return -1;
+    }
+    if (c->publish_remote)
+        fprintf(stderr, "surge: warning: --publish %s is not bound to loopback and has no authentication, so anyone "
+                        "who can reach it can read the state; --curve-key and --curve-clients admit only the clients "
+                        "you name (docs/protocol.md)\n", c->publish);
     return 0;
 }
 
@@ -229,7 +266,9 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
             }
             c->restart_path = argv[++i];
         } else if (allow_run_options && (!strcmp(a, "--publish") || !strcmp(a, "--control"))) {
-            if (!has_value || parse_endpoint(a, argv[i + 1], !strcmp(a, "--publish") ? c->publish : c->control) != 0) {
+            const int publish = !strcmp(a, "--publish");
+            if (!has_value || parse_endpoint(a, argv[i + 1], publish ? c->publish : c->control,
+                                             publish ? &c->publish_remote : &c->control_remote) != 0) {
                 if (!has_value)
                     fprintf(stderr, "surge: %s needs an endpoint or a port\n", a);
                 return -1;
@@ -269,6 +308,14 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
             }
             *(!strcmp(a, "--frames") ? &c->frames_dir : !strcmp(a, "--movie") ? &c->movie_path : &c->font_path) =
                 argv[++i];
+        } else if (allow_run_options && (!strcmp(a, "--curve-key") || !strcmp(a, "--curve-clients"))) {
+            if (!has_value || argv[i + 1][0] == '\0') {
+                fprintf(stderr, "surge: %s needs a %s\n", a,
+                        !strcmp(a, "--curve-key") ? "key file (NAME.key from surge keygen)"
+                                                   : "public key file or a folder of *.pub files");
+                return -1;
+            }
+            *(!strcmp(a, "--curve-key") ? &c->curve_key_path : &c->curve_clients_path) = argv[++i];
         } else if (allow_run_options && !strcmp(a, "--paused")) {
             c->paused = 1;
         } else if (allow_run_options && !strcmp(a, "--overwrite")) {
@@ -295,7 +342,7 @@ static int parse_cli(int argc, char **argv, cli *c, int allow_run_options)
         fprintf(stderr, "surge: --publish and --control need different endpoints\n");
         return -1;
     }
-    return 0;
+    return allow_run_options ? check_endpoint_security(c) : 0;
 }
 
 /* An error found after the case parsed (a rule across parameters, the scene it builds) names the set of
@@ -344,6 +391,7 @@ typedef struct live_links {
     surge_replay *replay;
     surge_journal *journal;
     surge_renderer *renderer;
+    surge_curve_server *curve; /* NULL: the sockets have no security */
     const char *movie_path; /* NULL: no movie */
     char replay_error[1024]; /* set when a journal entry could not be replayed */
 } live_links;
@@ -387,9 +435,17 @@ static int open_live_links(const cli *c, const char *outdir, const surge_sim *si
     }
     if (c->publish[0] || c->control[0])
         l->zmq_context = zmq_ctx_new();
+    if (c->curve_key_path) {
+        if (!(l->curve = surge_curve_server_start(l->zmq_context, c->curve_key_path, c->curve_clients_path, err,
+                                                  sizeof err)))
+            goto fail;
+        fprintf(stderr, "surge: CURVE security: %d allowed client key%s (%s)\n", surge_curve_allowed_count(l->curve),
+                surge_curve_allowed_count(l->curve) == 1 ? "" : "s", c->curve_clients_path);
+    }
     if (c->control[0]) {
         surge_control_def def = surge_default_control_def();
         def.endpoint = c->control;
+        def.curve = l->curve;
         def.start_paused = c->paused;
         if (!(l->control = surge_control_start(l->zmq_context, &def, l->journal, err, sizeof err)))
             goto fail;
@@ -397,6 +453,7 @@ static int open_live_links(const cli *c, const char *outdir, const surge_sim *si
     if (c->publish[0]) {
         surge_publisher_def def = c->publisher;
         def.endpoint = c->publish;
+        def.curve = l->curve;
         if (!(l->publisher = surge_publisher_start(l->zmq_context, &def, err, sizeof err)))
             goto fail;
     }
@@ -448,6 +505,10 @@ static int close_live_links(live_links *l, const surge_sim *sim)
     surge_control_close(l->control);
     surge_replay_free(l->replay);
     surge_journal_close(l->journal);
+    if (l->curve && surge_curve_refused_count(l->curve) > 0)
+        fprintf(stderr, "surge: refused %ld connection%s whose client key was not allowed\n",
+                surge_curve_refused_count(l->curve), surge_curve_refused_count(l->curve) == 1 ? "" : "s");
+    surge_curve_server_stop(l->curve);
     if (l->zmq_context)
         zmq_ctx_term(l->zmq_context);
     return rc;
@@ -943,6 +1004,23 @@ int main(int argc, char **argv)
         return command_check(argc - 2, argv + 2);
     if (!strcmp(argv[1], "render"))
         return command_render(argc - 2, argv + 2);
+    if (!strcmp(argv[1], "keygen")) {
+        if (wants_help(argc - 2, argv + 2)) {
+            fputs(usage_keygen, stdout);
+            return EXIT_OK;
+        }
+        if (argc != 3 || argv[2][0] == '\0' || argv[2][0] == '-') {
+            fprintf(stderr, "surge: keygen needs one NAME (it writes NAME.key and NAME.pub)\n%s", usage_keygen);
+            return EXIT_USAGE;
+        }
+        char err[1024];
+        if (surge_curve_write_key_pair(argv[2], err, sizeof err) != 0) {
+            fprintf(stderr, "surge: keygen: %s\n", err);
+            return EXIT_IO;
+        }
+        printf("surge: wrote %s.key (secret, mode 0600) and %s.pub (public)\n", argv[2], argv[2]);
+        return EXIT_OK;
+    }
     if (!strcmp(argv[1], "params")) {
         if (wants_help(argc - 2, argv + 2)) {
             fputs(usage_params, stdout);

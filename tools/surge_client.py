@@ -5,6 +5,10 @@
     topic, header, arrays = surge_client.receive(sub)        # arrays["x_m"] is a numpy array
     ctl = surge_client.Control("tcp://127.0.0.1:5556")
     ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": 0.006})
+
+A run started with --curve-key/--curve-clients admits only clients with an allowed key (docs/protocol.md):
+    keys = surge_client.curve_keys("run.pub", "me.key")      # the run's public key, this client's key pair
+    ctl = surge_client.Control("tcp://host:5556", curve=keys)
 """
 import json
 
@@ -29,10 +33,33 @@ def _is_field(field):
             and field["dtype"] in DTYPES and isinstance(field.get("components"), int) and field["components"] >= 1)
 
 
-def subscribe(endpoint, topics, context=None, latest_only=True):
+def curve_keys(server_public_path, client_key_path):
+    """(server public key, client public key, client secret key) from key files made by `surge keygen` (or
+    pyzmq's zmq.auth); ValueError naming the file when one cannot be read or lacks a key."""
+    import zmq.auth
+    keys = []
+    for path, secret in ((server_public_path, False), (client_key_path, True)):
+        try:
+            public, secret_key = zmq.auth.load_certificate(path)
+        except (OSError, ValueError) as e:
+            raise ValueError("%s: %s" % (path, e))
+        if secret and not secret_key:
+            raise ValueError("%s holds no secret-key: give this client's .key file, not its .pub" % path)
+        keys += [public, secret_key] if secret else [public]
+    return tuple(keys)
+
+
+def _secure(sock, curve):
+    if curve is not None:
+        sock.curve_serverkey, sock.curve_publickey, sock.curve_secretkey = curve
+
+
+def subscribe(endpoint, topics, context=None, latest_only=True, curve=None):
     """A SUB socket connected to a surge publisher. latest_only keeps a short receive queue (the publisher
-    drops what a slow client cannot take); pair it with receive_latest() to always show the newest state."""
+    drops what a slow client cannot take); pair it with receive_latest() to always show the newest state.
+    curve: curve_keys(...) for a run that uses CURVE."""
     sock = (context or zmq.Context.instance()).socket(zmq.SUB)
+    _secure(sock, curve)
     if latest_only:
         sock.setsockopt(zmq.RCVHWM, 2)
     sock.connect(endpoint)
@@ -99,14 +126,15 @@ class Control:
     """A REQ client of the control socket; a request without a reply within timeout_s raises TimeoutError
     and the socket is replaced (a REQ socket cannot send again before it has its reply)."""
 
-    def __init__(self, endpoint, timeout_s=5.0, context=None):
-        self.endpoint, self.timeout_ms = endpoint, int(1000 * timeout_s)
+    def __init__(self, endpoint, timeout_s=5.0, context=None, curve=None):
+        self.endpoint, self.timeout_ms, self.curve = endpoint, int(1000 * timeout_s), curve
         self.context = context or zmq.Context.instance()
         self._open()
 
     def _open(self):
         self.sock = self.context.socket(zmq.REQ)
         self.sock.setsockopt(zmq.LINGER, 0)
+        _secure(self.sock, self.curve)
         self.sock.connect(self.endpoint)
 
     def request(self, message):

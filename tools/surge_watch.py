@@ -87,6 +87,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("-e", "--endpoint", type=cli_checks.endpoint, default="tcp://127.0.0.1:5555",
                         help="surge's publisher (default tcp://127.0.0.1:5555; a bare port means loopback)")
+    cli_checks.add_curve_options(parser)
     parser.add_argument("--field", choices=sorted(FIELDS), default="speed", help="colour field (default speed)")
     parser.add_argument("--png", type=cli_checks.png_file,
                         help="no window: rewrite this PNG with the newest state (at most twice a second)")
@@ -105,7 +106,8 @@ def main():
     fields = ["x_m", "y_m", "kind"] + FIELDS[args.field][2]
     state_topic = "state" if args.record else "state/" + ",".join(fields)  # every field when recording
     try:
-        sub = surge_client.subscribe(args.endpoint, [state_topic, "stats"], latest_only=not args.record)
+        sub = surge_client.subscribe(args.endpoint, [state_topic, "stats"], latest_only=not args.record,
+                                     curve=cli_checks.curve_of(parser, args))
     except zmq.ZMQError as e:
         parser.error("--endpoint %s: %s" % (args.endpoint, e))
     stats_log = None

@@ -55,6 +55,7 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
+        (def->curve && surge_curve_secure_socket(def->curve, c->socket, err, err_len) != 0) ||
         zmq_bind(c->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot open the control socket on '%s': %s", def->endpoint,
                  zmq_strerror(zmq_errno()));

@@ -451,6 +451,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
+        (def->curve && surge_curve_secure_socket(def->curve, p->socket, err, err_len) != 0) ||
         zmq_bind(p->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
         if (p->socket)

@@ -9,6 +9,7 @@
 #include <signal.h>
 #include <stddef.h>
 
+#include "surge/curve.h"
 #include "surge/journal.h"
 #include "surge/sim.h"
 
@@ -16,6 +17,7 @@ typedef struct surge_control_def {
     const char *endpoint;  /* where the ROUTER socket binds, e.g. "tcp://127.0.0.1:5556" */
     int start_paused;      /* wait for "resume" or "step" before the first step */
     int max_request_bytes; /* a larger request drops the client's connection (ZMQ_MAXMSGSIZE) */
+    const surge_curve_server *curve; /* CURVE security with an allow-list of clients; NULL: none (loopback only) */
 } surge_control_def;
 
 surge_control_def surge_default_control_def(void);

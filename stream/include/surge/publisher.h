@@ -10,6 +10,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "surge/curve.h"
 #include "surge/sim.h"
 
 typedef struct surge_publisher_def {
@@ -17,6 +18,7 @@ typedef struct surge_publisher_def {
     int every_steps;      /* publish at most once every this many steps */
     double max_rate_hz;   /* and at most this many times per wall-clock second; 0: no limit */
     int send_hwm;         /* messages queued per subscriber before the newest are dropped (ZMQ_SNDHWM) */
+    const surge_curve_server *curve; /* CURVE security with an allow-list of subscribers; NULL: none */
 } surge_publisher_def;
 
 surge_publisher_def surge_default_publisher_def(void);
