@@ -1,0 +1,410 @@
+#!/usr/bin/python3
+"""A bounded, seeded fuzz pass over every outside input, against surge built with AddressSanitizer and
+UndefinedBehaviorSanitizer (cmake -DSURGE_SANITIZE=ON; the fuzz_build test makes that build).
+
+Usage: fuzz.py SURGE_SANITIZED SOURCE_DIR WORK_DIR GROUP [--count N] [--seed S]
+  GROUP cases        mutated case files (every shipped case as seed) through `surge check`
+  GROUP control      mutated and generated control requests against a live run: each gets a reply, or the run
+                     ended by a request (stop, an end time) or by its health monitor, and is started again
+  GROUP checkpoints  mutated checkpoints (a scene with and one without boulders) through `surge run --restart`;
+                     most with the checksum recomputed, so the mutation reaches the reader behind it
+  GROUP snapshots    mutated snapshots, run.pvd and params.ini of a run folder through `surge render`
+
+An input fails when the program dies on a signal, a sanitizer reports (any "runtime error" or AddressSanitizer /
+LeakSanitizer report; leaks inside libOSMesa are suppressed, tests/lsan.supp), it exits with a status outside
+surge's documented ones (0-4), prints nothing on a refusal, or does not finish within its time limit. A failing
+input is kept in WORK_DIR/failures/ with the seed and the command, to rerun by hand. Longer runs outside CI:
+a larger --count, another --seed, or a coverage-guided engine (docs/verification.md, "Fuzzing").
+"""
+import json
+import os
+import random
+import re
+import shutil
+import struct
+import subprocess
+import sys
+
+import zmq
+
+SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
+OPTIONS = dict(zip(sys.argv[5::2], sys.argv[6::2]))
+SEED = int(OPTIONS.get("--seed", 1))
+DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120}
+COUNT = int(OPTIONS.get("--count", DEFAULT_COUNT[GROUP]))
+sys.path.insert(0, os.path.join(SOURCE, "tools"))
+import surge_client  # noqa: E402
+
+ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE", OMP_NUM_THREADS="1",
+           ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:allocator_may_return_null=1",
+           UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1",
+           LSAN_OPTIONS="suppressions=" + os.path.join(SOURCE, "tests", "lsan.supp"))
+SANITIZER_WORDS = re.compile(r"runtime error|AddressSanitizer|LeakSanitizer|UndefinedBehaviorSanitizer")
+rng = random.Random(SEED)
+failures = []
+
+
+def verdict(rc, stderr, timed_out):
+    """None when surge behaved, else what went wrong."""
+    if timed_out:
+        return "did not finish within its time limit"
+    if SANITIZER_WORDS.search(stderr):
+        return "sanitizer report"
+    if rc is None or rc < 0:
+        return "killed by signal %s" % (-rc if rc else "?")
+    if rc > 4:
+        return "exit status %d is not one of surge's (0-4)" % rc
+    if rc in (2, 3) and "surge" not in stderr:
+        return "refused without a message"
+    return None
+
+
+def record(kind, data, command, problem, stderr):
+    folder = os.path.join(WORK, "failures")
+    os.makedirs(folder, exist_ok=True)
+    path = os.path.join(folder, "%s_%d_%d" % (GROUP, SEED, len(failures)))
+    with open(path + ".input", "wb") as f:
+        f.write(data)
+    with open(path + ".txt", "w") as f:
+        f.write("seed %d, %s\ncommand: %s\nproblem: %s\nstderr (end):\n%s\n" % (SEED, kind, command, problem,
+                                                                              stderr[-6000:]))
+    failures.append("%s: %s (input and stderr in %s.*)\n%s" % (kind, problem, path, stderr[-1500:]))
+
+
+def run(args, timeout_s):
+    try:
+        p = subprocess.run(args, capture_output=True, env=ENV, timeout=timeout_s)
+        return p.returncode, p.stderr.decode(errors="replace"), False
+    except subprocess.TimeoutExpired as e:
+        return None, (e.stderr or b"").decode(errors="replace"), True
+
+
+def finish(what):
+    print("%s: %d inputs, seed %d, %d failing" % (what, COUNT, SEED, len(failures)))
+    for f in failures[:10]:
+        print("FAILED " + f)
+    sys.exit(1 if failures else 0)
+
+
+# ---- byte-level mutations, shared by every group ----
+SPECIAL_NUMBERS = [b"0", b"-1", b"-0", b"nan", b"NaN", b"inf", b"-inf", b"1e308", b"-1e308", b"1e-308", b"4.9e-324",
+                   b"2147483648", b"9223372036854775808", b"-2147483649", b"0x10", b"1,5", b"1e", b"++1", b"", b"x",
+                   b"1" * 400, b"0.5", b"2", b"1e-9", b"1e9"]
+
+
+def mutate_bytes(data):
+    data = bytearray(data)
+    choice = rng.randrange(6)
+    at = rng.randrange(len(data) + 1)
+    if choice == 0 and data:
+        data[min(at, len(data) - 1)] ^= 1 << rng.randrange(8)
+    elif choice == 1:
+        data[at:at] = bytes(rng.randrange(256) for _ in range(rng.randint(1, 8)))
+    elif choice == 2:
+        del data[at:at + rng.randint(1, 16)]
+    elif choice == 3:
+        data = data[:at]
+    elif choice == 4:
+        end = min(len(data), at + rng.randint(1, 64))
+        data[at:at] = data[at:end] * rng.randint(1, 4)
+    else:
+        data[at:at] = rng.choice([b"\x00", b"\xff\xfe", b"\xe2\x82", b"\n", b"=", b"[", b"]", b"#", b"\\", b'"'])
+    return bytes(data)
+
+
+# ---- case files ----
+NUMBER = re.compile(rb"(?<=[=\s])[-+]?[0-9.]+(?:e[-+]?[0-9]+)?")
+
+
+def mutate_case(text):
+    lines = text.split(b"\n")
+    choice = rng.randrange(9)
+    if choice == 0:
+        numbers = list(NUMBER.finditer(text))
+        if numbers:
+            m = rng.choice(numbers)
+            return text[:m.start()] + rng.choice(SPECIAL_NUMBERS) + text[m.end():]
+    if choice == 1:  # a scale: length or count doubled or halved, never run away
+        numbers = list(NUMBER.finditer(text))
+        if numbers:
+            m = rng.choice(numbers)
+            try:
+                value = float(m.group()) * rng.choice([0.5, 2.0])
+                return text[:m.start()] + repr(value).encode() + text[m.end():]
+            except ValueError:
+                pass
+    if choice == 2 and len(lines) > 1:
+        del lines[rng.randrange(len(lines))]
+    elif choice == 3:
+        k = rng.randrange(len(lines))
+        lines.insert(k, lines[k])
+    elif choice == 4 and len(lines) > 1:
+        a, b = rng.randrange(len(lines)), rng.randrange(len(lines))
+        lines[a], lines[b] = lines[b], lines[a]
+    elif choice == 5:
+        k = rng.randrange(len(lines))
+        lines[k] = lines[k].replace(b"]", b"", 1) if b"[" in lines[k] else lines[k].replace(b"_", b"", 1)
+    elif choice == 6:
+        k = rng.randrange(len(lines))
+        lines[k] = lines[k] + b"x" * rng.choice([1, 300, 10000])
+    elif choice == 7:
+        lines.insert(rng.randrange(len(lines) + 1), rng.choice([b"[boulders]", b"[fluid]", b"[nope]", b"key = 1",
+                                                                b"fluid.viscosity_m2ps = 0.1", b"=", b"[", b"count = 3"]))
+    else:
+        return mutate_bytes(text)
+    return b"\n".join(lines)
+
+
+def group_cases():
+    seeds = sorted(os.path.join(SOURCE, "cases", f) for f in os.listdir(os.path.join(SOURCE, "cases"))
+                   if f.endswith(".ini"))
+    corpus = [open(f, "rb").read() for f in seeds]
+    folder = os.path.join(WORK, "cases")
+    os.makedirs(folder, exist_ok=True)
+    path = os.path.join(folder, "input.ini")
+    outcomes = {}
+    for i in range(COUNT):
+        data = rng.choice(corpus)
+        for _ in range(rng.randint(1, 3)):
+            data = mutate_case(data)
+        with open(path, "wb") as f:
+            f.write(data)
+        rc, stderr, timed_out = run([SURGE, "check", path], 120)
+        outcomes[rc] = outcomes.get(rc, 0) + 1
+        problem = verdict(rc, stderr, timed_out)
+        if problem:
+            record("case file %d" % i, data, "surge check input.ini", problem, stderr)
+    print("exit statuses: %s" % outcomes)
+    finish("case files through surge check")
+
+
+# ---- control requests ----
+COMMANDS = ["list", "get", "set", "pause", "resume", "step", "snapshot", "checkpoint", "status"]
+
+
+def random_value(depth=0):
+    kind = rng.randrange(10 if depth < 3 else 7)
+    if kind == 0:
+        return rng.choice([0, 1, -1, 2 ** 31, -2 ** 31 - 1, 2 ** 53 + 1, 2 ** 63, 10 ** 30])
+    if kind == 1:
+        return rng.choice([0.0, -0.0, 1e-300, 1e300, -1e300, 0.5, 1e-9, 3.7, 89.9, 90.0, 360.0])
+    if kind == 2:
+        return rng.uniform(-10, 10)
+    if kind == 3:
+        return rng.choice(["", "none", "lind", "velocity", "x" * 5000, "\u0000", "\u20ac" * 50, "\ud800", " none",
+                           "fluid.viscosity_m2ps", "1e3", "true"])
+    if kind == 4:
+        return rng.choice([True, False, None])
+    if kind in (5, 6):
+        return rng.uniform(0, 1e-2)
+    if kind == 7:
+        return [random_value(depth + 1) for _ in range(rng.randint(0, 3))]
+    return {rng.choice(["cmd", "key", "value", "n", "x"]): random_value(depth + 1) for _ in range(rng.randint(0, 3))}
+
+
+def plausible_value(param):
+    """A value a user might set: the current one scaled, a bound, another choice, or the other boolean."""
+    value = param.get("value")
+    if isinstance(value, bool):
+        return not value if rng.random() < 0.5 else value
+    if isinstance(value, (int, float)):
+        candidates = [value * rng.choice([0.5, 0.9, 1.1, 2.0]), param.get("min"), param.get("max")]
+        return rng.choice([c for c in candidates if c is not None])
+    return rng.choice(param.get("values") or [value])
+
+
+def random_request(params):
+    cmd = rng.choice(COMMANDS) if rng.random() < 0.9 else random_value()
+    request = {"cmd": cmd} if rng.random() < 0.97 else {}
+    if cmd in ("get", "set"):
+        param = rng.choice(params)
+        request["key"] = param["key"] if rng.random() < 0.9 else random_value()
+        if cmd == "set":
+            request["value"] = plausible_value(param) if rng.random() < 0.6 else random_value()
+    if cmd == "step":
+        request["n"] = rng.choice([1, 2, 5, 0, -1, 2.5, "3", 2 ** 40]) if rng.random() < 0.9 else random_value()
+    if rng.random() < 0.1:
+        request[rng.choice(["vlaue", "", "\u0000", "extra", "key", "n"])] = random_value()
+    try:
+        data = json.dumps(request, allow_nan=rng.random() < 0.05).encode("utf-8", "surrogatepass")
+    except (ValueError, UnicodeEncodeError):
+        data = b'{"cmd": "status"}'
+    special = rng.random()
+    if special < 0.3:
+        for _ in range(rng.randint(1, 3)):
+            data = mutate_bytes(data)
+    elif special < 0.32:
+        data = rng.choice([b"[" * 100000, b'{"cmd": ' * 20000, b'{"cmd": "status", "pad": "' + b"y" * 70000 + b'"}',
+                           b'{"cmd": "get", "key": "' + b"a" * 60000 + b'"}'])
+    return data
+
+
+class LiveRun:
+    def __init__(self, index):
+        self.dir = os.path.join(WORK, "control", "run%d" % index)
+        shutil.rmtree(self.dir, ignore_errors=True)
+        os.makedirs(self.dir)
+        self.endpoint = "ipc://" + os.path.join(self.dir, "ctl.sock")
+        self.stderr_path = os.path.join(self.dir, "stderr.txt")
+        self.args = [SURGE, "run", os.path.join(SOURCE, "cases", "still_tank.ini"), "-o", os.path.join(self.dir, "out"),
+                     "--threads", "1", "--control", self.endpoint, "--paused", "-s", "time.end_s=1000",
+                     "-s", "output.snapshot_interval_s=0", "-s", "output.progress_interval_s=0",
+                     "-s", "numerics.dp_m=0.01"]
+        self.proc = subprocess.Popen(self.args, stderr=open(self.stderr_path, "w"), stdout=subprocess.DEVNULL,
+                                     env=ENV)
+        self.control = surge_client.Control(self.endpoint, 30)
+
+    def stderr(self):
+        with open(self.stderr_path, errors="replace") as f:
+            return f.read()
+
+    def end(self, timeout_s=60):
+        try:
+            return self.proc.wait(timeout_s), False
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            return None, True
+
+
+def group_control():
+    runs, live = 0, LiveRun(0)
+    params = live.control.request({"cmd": "list"})["params"]
+    replies = {"ok": 0, "error": 0}
+    for i in range(COUNT):
+        data = random_request(params)
+        try:
+            reply = live.control.request(data) if len(data) <= 65536 else live.control.request(b'{"cmd":"status"}')
+            replies["ok" if reply.get("ok") else "error"] += 1
+            if not reply.get("ok") and not isinstance(reply.get("error"), str):
+                record("request %d" % i, data, " ".join(live.args), "an error reply without its message", str(reply))
+            continue
+        except TimeoutError:
+            pass
+        except surge_client.ProtocolError as e:
+            record("request %d" % i, data, " ".join(live.args), "reply is not a JSON object: %s" % e, live.stderr())
+        if live.proc.poll() is None:  # no reply and still running: a hang
+            live.end(1)
+            record("request %d" % i, data, " ".join(live.args), "no reply within 30 s from a live run", live.stderr())
+        else:
+            rc, timed_out = live.end()
+            problem = verdict(rc, live.stderr(), timed_out)
+            if problem:
+                record("request %d" % i, data, " ".join(live.args), "the run ended: " + problem, live.stderr())
+        runs += 1
+        live = LiveRun(runs)
+    ctl_status = live.control.request({"cmd": "status"})
+    live.control.request({"cmd": "stop"})
+    rc, timed_out = live.end()
+    problem = verdict(rc, live.stderr(), timed_out) or (None if rc == 0 and ctl_status.get("ok") else
+                                                         "the last run did not stop cleanly (exit %s)" % rc)
+    if problem:
+        record("final stop", b"", " ".join(live.args), problem, live.stderr())
+    print("replies: %s; the run was started again %d times (ended by a request or its health monitor)" %
+          (replies, runs))
+    finish("control requests against a live run")
+
+
+# ---- checkpoints ----
+def fnv1a(data):
+    h = 0xcbf29ce484222325
+    for byte in data:
+        h = ((h ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def make_base_runs(kind):
+    """Short runs whose checkpoint (or snapshots) seed the mutations: a fluid scene and a scene with boulders."""
+    bases = []
+    for name, case, extra in (("tank", "still_tank.ini", ["-s", "numerics.dp_m=0.01"]),
+                              ("boulders", "boulder_settling.ini", [])):
+        out = os.path.join(WORK, kind, "base_" + name)
+        shutil.rmtree(out, ignore_errors=True)
+        args = [SURGE, "run", os.path.join(SOURCE, "cases", case), "-o", out, "--threads", "1",
+                "-s", "time.end_s=0.004", "-s", "output.snapshot_interval_s=0.002",
+                "-s", "output.progress_interval_s=0"] + extra
+        rc, stderr, timed_out = run(args, 300)
+        if rc != 0:
+            print("FAILED to make the base run %s: %s\n%s" % (name, " ".join(args), stderr[-3000:]))
+            sys.exit(1)
+        bases.append(out)
+    return bases
+
+
+def mutate_checkpoint(data):
+    """A mutated checkpoint; usually with its closing FNV-1a checksum recomputed, so the reader sees the change."""
+    body = data[:-8]
+    choice = rng.randrange(4)
+    if choice == 0:  # a value in the parameter block, with its length field kept right
+        length = struct.unpack_from("<Q", body, 16)[0]
+        text = body[24:24 + length]
+        text = mutate_case(text)
+        body = body[:16] + struct.pack("<Q", len(text)) + text + body[24 + length:]
+    elif choice == 1:  # a field of the header or the state
+        for _ in range(rng.randint(1, 4)):
+            body = mutate_bytes(body)
+    elif choice == 2:  # one 8-byte word set to a special value
+        at = rng.randrange(0, max(1, len(body) - 8)) & ~7
+        word = rng.choice([struct.pack("<d", v) for v in (0.0, -1.0, float("nan"), float("inf"), 1e300, 5e-324)] +
+                          [struct.pack("<Q", v) for v in (0, 1 << 63, 0xFFFFFFFFFFFFFFFF, 1 << 32)])
+        body = body[:at] + word + body[at + 8:]
+    else:  # a 4-byte count or flag
+        at = rng.randrange(0, max(1, len(body) - 4))
+        body = body[:at] + struct.pack("<I", rng.choice([0, 1, 2, 0xFFFFFFFF, 1 << 31, 4, 5])) + body[at + 4:]
+    if rng.random() < 0.8:
+        return body + struct.pack("<Q", fnv1a(body))
+    return body + data[-8:]
+
+
+def group_checkpoints():
+    bases = make_base_runs("checkpoints")
+    corpus = [open(os.path.join(b, "checkpoint.bin"), "rb").read() for b in bases]
+    folder = os.path.join(WORK, "checkpoints")
+    path, out = os.path.join(folder, "input.bin"), os.path.join(folder, "restarted")
+    outcomes = {}
+    for i in range(COUNT):
+        data = mutate_checkpoint(rng.choice(corpus))
+        with open(path, "wb") as f:
+            f.write(data)
+        args = [SURGE, "run", "--restart", path, "-o", out, "--overwrite", "--threads", "1",
+                "-s", "time.end_s=0.0045", "-s", "output.progress_interval_s=0"]
+        rc, stderr, timed_out = run(args, 120)
+        outcomes[rc] = outcomes.get(rc, 0) + 1
+        problem = verdict(rc, stderr, timed_out)
+        if problem:
+            record("checkpoint %d" % i, data, " ".join(args), problem, stderr)
+    print("exit statuses: %s" % outcomes)
+    finish("checkpoints through surge run --restart")
+
+
+# ---- snapshots ----
+def group_snapshots():
+    bases = make_base_runs("snapshots")
+    folder = os.path.join(WORK, "snapshots")
+    target, frames = os.path.join(folder, "run"), os.path.join(folder, "frames")
+    outcomes = {}
+    for i in range(COUNT):
+        base = rng.choice(bases)
+        shutil.rmtree(target, ignore_errors=True)
+        shutil.copytree(base, target)
+        files = sorted(f for f in os.listdir(target) if f.endswith((".vtp", ".pvd")) or f == "params.ini")
+        name = rng.choice(files)
+        with open(os.path.join(target, name), "rb") as f:
+            data = f.read()
+        for _ in range(rng.randint(1, 4)):
+            data = mutate_case(data) if name.endswith(".ini") or rng.random() < 0.3 else mutate_bytes(data)
+        with open(os.path.join(target, name), "wb") as f:
+            f.write(data)
+        args = [SURGE, "render", target, "--frames", frames, "--overwrite"]
+        rc, stderr, timed_out = run(args, 120)
+        outcomes[rc] = outcomes.get(rc, 0) + 1
+        problem = verdict(rc, stderr, timed_out)
+        if problem:
+            record("%s mutated (input %d)" % (name, i), data, " ".join(args), problem, stderr)
+    print("exit statuses: %s" % outcomes)
+    finish("snapshots, run.pvd and params.ini through surge render")
+
+
+os.makedirs(WORK, exist_ok=True)
+{"cases": group_cases, "control": group_control, "checkpoints": group_checkpoints,
+ "snapshots": group_snapshots}[GROUP]()
