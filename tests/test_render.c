@@ -224,6 +224,77 @@ static void group_colours(const char *work)
     surge_snapshot_free(&s);
 }
 
+/* Automatic colour ranges and frame heights (issue #24, pictures): round ranges that grow but never shrink while a run
+ * renders, and a frame fitted to a long thin scene. */
+static void group_ranges(const char *work)
+{
+    (void)work;
+    char detail[256], err[512];
+    double lo = 0.000433, hi = 0.0805;
+    surge_render_round_range(&lo, &hi);
+    double lo2 = -0.37, hi2 = 1.2e5, lo3 = 997.2, hi3 = 1003.9;
+    surge_render_round_range(&lo2, &hi2);
+    surge_render_round_range(&lo3, &hi3);
+    snprintf(detail, sizeof detail, "%g..%g, %g..%g, %g..%g", lo, hi, lo2, hi2, lo3, hi3);
+    check("ranges: a range widens to its round tick step (0.000433..0.0805 -> 0..0.1)",
+          lo == 0 && fabs(hi - 0.1) < 1e-12 && lo2 == -2e4 && fabs(hi2 - 1.2e5) < 1e-6 && fabs(lo3 - 997) < 1e-9 &&
+              fabs(hi3 - 1004) < 1e-9, detail);
+
+    surge_snapshot s = {0};
+    synthetic(&s); /* fluid speeds 0..1 m/s */
+    surge_params p = synthetic_params();
+    p.render.color_min = p.render.color_max = 0;
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
+    if (!canvas) {
+        check("ranges: canvas", 0, err);
+        return;
+    }
+    double ranges[3][2];
+    const float scale[3] = {0.083f, 0.05f, 0.13f}; /* the flow speeds up, slows, speeds up past the range */
+    for (int frame = 0; frame < 3; frame++) {
+        for (int k = 0; k < 40; k++)
+            s.vx_mps[k] = (float)(scale[frame] * k / 39.0);
+        surge_canvas_draw(canvas, &s, &p);
+        ranges[frame][0] = surge_canvas_last_layout(canvas)->color_min;
+        ranges[frame][1] = surge_canvas_last_layout(canvas)->color_max;
+    }
+    snprintf(detail, sizeof detail, "%g..%g, %g..%g, %g..%g", ranges[0][0], ranges[0][1], ranges[1][0], ranges[1][1],
+             ranges[2][0], ranges[2][1]);
+    check("ranges: a live automatic range is round, holds when the flow slows and grows when it leaves it",
+          ranges[0][0] == 0 && fabs(ranges[0][1] - 0.1) < 1e-12 && ranges[1][0] == 0 &&
+              ranges[1][1] == ranges[0][1] && ranges[2][0] == 0 && fabs(ranges[2][1] - 0.14) < 1e-12, detail);
+    surge_canvas_destroy(canvas);
+
+    /* a bed 100 dp long and 3 dp deep under a block 4 dp deep: a flat frame, the same with or without the fluid */
+    surge_snapshot bed = {0};
+    surge_snapshot_reserve(&bed, 300 + 40);
+    int n = 0;
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 100; i++, n++) {
+            bed.x_m[n] = (i + 0.5) * 0.01;
+            bed.y_m[n] = -(j + 0.5) * 0.01;
+            bed.kind[n] = SURGE_KIND_WALL;
+        }
+    const int walls_only = surge_render_fitted_height_px(1280, &bed, &p);
+    for (int k = 0; k < 40; k++, n++) {
+        bed.x_m[n] = s.x_m[k];
+        bed.y_m[n] = s.y_m[k] + 0.5; /* fluid thrown high above the bed does not change the frame */
+        bed.kind[n] = SURGE_KIND_FLUID;
+    }
+    bed.count = n;
+    const int with_fluid = surge_render_fitted_height_px(1280, &bed, &p);
+    p.render.view = SURGE_VIEW_FIXED;
+    p.render.view_x0_m = 0;
+    p.render.view_x1_m = 0.1;
+    const int fixed_window = surge_render_fitted_height_px(1280, &bed, &p);
+    snprintf(detail, sizeof detail, "whole %d px (walls only %d), fixed 0.1 m window %d px", with_fluid, walls_only,
+             fixed_window);
+    check("ranges: a long thin scene gets a flat frame (a fifth of the width), a short window a taller one, "
+          "even heights", walls_only == 256 && with_fluid == 256 && fixed_window > 256 && fixed_window % 2 == 0, detail);
+    surge_snapshot_free(&bed);
+    surge_snapshot_free(&s);
+}
+
 /* true_slope: the bed descends to the right by the slope angle. */
 static void group_slope(const char *work)
 {
@@ -340,7 +411,9 @@ int main(int argc, char **argv)
         fprintf(stderr, "usage: test_render colours|slope|errors|boulders WORK_DIR\n");
         return 2;
     }
-    if (!strcmp(argv[1], "colours"))
+    if (!strcmp(argv[1], "ranges"))
+        group_ranges(argv[2]);
+    else if (!strcmp(argv[1], "colours"))
         group_colours(argv[2]);
     else if (!strcmp(argv[1], "slope"))
         group_slope(argv[2]);

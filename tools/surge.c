@@ -421,6 +421,23 @@ static int at_step_boundary(surge_sim *sim, void *user)
     return requests;
 }
 
+/* render.height_px = 0: the height fitted to the scene, from the run's state (sim) or a saved snapshot (path). */
+static int fit_frame_height(surge_params *p, const surge_sim *sim, const char *path, char *err, size_t err_len)
+{
+    if (p->render.height_px > 0)
+        return 0;
+    surge_snapshot snap = {0};
+    const int rc = sim ? (surge_sim_snapshot(sim, &snap) == 0 ? 0 : (snprintf(err, err_len, "out of memory"), -1))
+                       : surge_vtp_read(path, &snap, err, err_len);
+    if (rc == 0) {
+        p->render.height_px = surge_render_fitted_height_px(p->render.width_px, &snap, p);
+        fprintf(stderr, "surge: frames %d x %d px (height fitted to the scene; render.height_px sets it)\n",
+                p->render.width_px, p->render.height_px);
+    }
+    surge_snapshot_free(&snap);
+    return rc;
+}
+
 static int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, live_links *l)
 {
     char err[1024], path[4200];
@@ -464,7 +481,9 @@ static int open_live_links(const cli *c, const char *outdir, const surge_sim *si
             def.on_frame = publish_rendered_frame;
             def.user = l->publisher;
         }
-        if (!(l->renderer = surge_renderer_start(&def, surge_sim_params(sim), err, sizeof err)))
+        surge_params render_params = *surge_sim_params(sim);
+        if (fit_frame_height(&render_params, sim, NULL, err, sizeof err) != 0 ||
+            !(l->renderer = surge_renderer_start(&def, &render_params, err, sizeof err)))
             goto fail;
         l->movie_path = c->movie_path;
     }
@@ -867,6 +886,14 @@ static int command_render(int argc, char **argv)
         surge_pvd_close(pvd);
         return EXIT_IO;
     }
+    if (surge_pvd_count(pvd) > 0) {
+        snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, 0));
+        if (fit_frame_height(&p, NULL, path, err, sizeof err) != 0) {
+            fprintf(stderr, "surge: %s\n", err);
+            surge_pvd_close(pvd);
+            return EXIT_USAGE;
+        }
+    }
     surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, c.font_path, err, sizeof err);
     surge_movie *movie = NULL;
     if (!canvas || (c.movie_path && !(movie = surge_movie_open(c.movie_path, p.render.width_px, p.render.height_px,
@@ -898,6 +925,7 @@ static int command_render(int argc, char **argv)
                 low = fmin(low, l->field_min), high = fmax(high, l->field_max);
         }
         if (high > low) {
+            surge_render_round_range(&low, &high);
             p.render.color_min = low;
             p.render.color_max = high;
             fprintf(stderr, "surge: colour range %.4g .. %.4g over all %zu frames (set render.color_min and "

@@ -61,6 +61,7 @@ struct surge_canvas {
     int instance_capacity;
     surge_text *text;
     surge_canvas_layout layout;
+    double grown_min, grown_max; /* an automatic colour range so far (NaN: none yet); it only grows */
 };
 
 static const char *vertex_shader =
@@ -163,8 +164,9 @@ surge_canvas *surge_canvas_create(int width_px, int height_px, const char *font_
     }
     c->width = width_px;
     c->height = height_px;
+    c->grown_min = c->grown_max = NAN;
     c->pixels = malloc((size_t)width_px * (size_t)height_px * 4);
-    c->text = c->pixels ? surge_text_open(font_path ? font_path : SURGE_DEFAULT_FONT, height_px, err, err_len) : NULL;
+    c->text = c->pixels ? surge_text_open(font_path ? font_path : SURGE_DEFAULT_FONT, width_px, height_px, err, err_len) : NULL;
     if (!c->text) {
         if (!c->pixels)
             snprintf(err, err_len, "out of memory for a %d x %d frame", width_px, height_px);
@@ -225,6 +227,30 @@ void surge_colormap_rgb(int colormap, double value, double min, double max, uint
     const int k = (int)lround(u * 255.0);
     const unsigned char(*table)[3] = surge_colormap_table((surge_colormap)colormap);
     memcpy(rgb, table[k], 3);
+}
+
+/* ---- round numbers ---- */
+
+/* The 1, 2 or 5 times a power of ten nearest to x > 0 (on a log scale). */
+static double nice_step(double x)
+{
+    const double decade = pow(10.0, floor(log10(x))), f = x / decade;
+    return decade * (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10);
+}
+
+/* The tick spacing for a range: a round step giving about five intervals. */
+static double tick_step(double lo, double hi)
+{
+    return nice_step((hi - lo) / 5.0);
+}
+
+void surge_render_round_range(double *lo, double *hi)
+{
+    if (!(*hi > *lo) || !isfinite(*hi - *lo))
+        return;
+    const double step = tick_step(*lo, *hi);
+    *lo = floor(*lo / step * (1 + 1e-12)) * step;
+    *hi = ceil(*hi / step * (1 - 1e-12)) * step;
 }
 
 /* ---- the view ---- */
@@ -324,8 +350,15 @@ static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_par
         l->color_min = p->render.color_min;
         l->color_max = p->render.color_max;
     } else if (vmax > vmin) {
-        l->color_min = vmin;
-        l->color_max = vmax;
+        /* while a run renders, the range grows to round numbers and never shrinks, so a colour keeps its
+         * meaning except when the flow leaves the range (surge render instead takes all frames' range) */
+        if (!(c->grown_max > c->grown_min) || vmin < c->grown_min || vmax > c->grown_max) {
+            c->grown_min = c->grown_max > c->grown_min ? fmin(vmin, c->grown_min) : vmin;
+            c->grown_max = c->grown_max > c->grown_min ? fmax(vmax, c->grown_max) : vmax;
+            surge_render_round_range(&c->grown_min, &c->grown_max);
+        }
+        l->color_min = c->grown_min;
+        l->color_max = c->grown_max;
     } else { /* one value everywhere (a fluid at rest): a unit range from it, not below zero for a speed */
         const double low = !isfinite(vmin) ? 0 : p->render.field == SURGE_FIELD_SPEED ? vmin : vmin - 0.5;
         l->color_min = low;
@@ -416,14 +449,19 @@ static void draw_colorbar(surge_canvas *c, const surge_params *p)
     }
     outline_rect(c, l->colorbar_x0, l->colorbar_y0, l->colorbar_x1, l->colorbar_y1);
     const int size = surge_text_size(c->text);
-    for (int k = 0; k <= 4; k++) {
-        double value = l->color_min + (l->color_max - l->color_min) * k / 4.0;
-        if (fabs(value) < 1e-9 * (l->color_max - l->color_min)) /* round-off of a range across zero: 0, not 2.3e-10 */
-            value = 0;
-        const int y = l->colorbar_y1 - (int)lround(k / 4.0 * h);
+    /* ticks at round values inside the range, labelled with as many decimals as the step needs */
+    const double span = l->color_max - l->color_min, step = tick_step(l->color_min, l->color_max);
+    const int decimals = step >= 1 ? 0 : (int)ceil(-log10(step) - 1e-9);
+    const int plain = step >= 1e-4 && step < 1e6;
+    for (double k = ceil(l->color_min / step - 1e-9); k * step <= l->color_max + 1e-9 * span; k++) {
+        const double value = fabs(k) < 0.5 ? 0 : k * step; /* 0, not 2.3e-10 */
+        const int y = l->colorbar_y1 - (int)lround((value - l->color_min) / span * h);
         fill_rect(c, l->colorbar_x1, y, l->colorbar_x1 + size / 3, y + 1, ink_rgb);
         char label[32];
-        snprintf(label, sizeof label, "%.3g", value);
+        if (plain)
+            snprintf(label, sizeof label, "%.*f", decimals, value);
+        else
+            snprintf(label, sizeof label, "%.2g", value);
         surge_text_draw(c->text, c->pixels, c->width, c->height, l->colorbar_x1 + size / 2, y + size / 3, label,
                         ink_rgb);
     }
@@ -462,6 +500,37 @@ static double snapshot_belt_mps(const surge_snapshot *s)
             belt_y_m = s->y_m[i];
         }
     return belt_mps;
+}
+
+int surge_render_fitted_height_px(int width_px, const surge_snapshot *s, const surge_params *p)
+{
+    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
+    const double cos_t = cos(slope), sin_t = sin(slope);
+    double wx0, wx1;
+    view_window(s, p, &wx0, &wx1);
+    if (p->render.view == SURGE_VIEW_FOLLOW)
+        wx0 = -INFINITY, wx1 = INFINITY; /* the window moves: its height is the walls' along the whole bed */
+    double X0 = INFINITY, X1 = -INFINITY, Y0 = INFINITY, Y1 = -INFINITY;
+    for (int pass = 0; pass < 2 && !(X1 > X0); pass++) /* the fixed walls; every particle when there are none */
+        for (int i = 0; i < s->count; i++) {
+            const int fixed_wall = s->kind[i] == SURGE_KIND_WALL || s->kind[i] == SURGE_KIND_MOVING_WALL;
+            if ((pass == 0 && !fixed_wall) || s->x_m[i] < wx0 || s->x_m[i] > wx1)
+                continue;
+            double X, Y;
+            world_position(s, i, cos_t, sin_t, &X, &Y);
+            X0 = fmin(X0, X), X1 = fmax(X1, X), Y0 = fmin(Y0, Y), Y1 = fmax(Y1, Y);
+        }
+    if (p->render.view != SURGE_VIEW_WHOLE && !p->render.true_slope) {
+        X0 = p->render.view == SURGE_VIEW_FIXED ? p->render.view_x0_m : 0;
+        X1 = p->render.view == SURGE_VIEW_FIXED ? p->render.view_x1_m : p->render.view_width_m;
+    }
+    const double margin = 2 * p->numerics.dp_m;
+    const double aspect = (X1 > X0 && Y1 >= Y0) ? (Y1 - Y0 + margin) / (X1 - X0 + margin) : 0.5625;
+    /* the plot is 83 % of the width and 76 % of the height (layout_view); a fifth of the width at least, for the
+     * colour bar and its labels, and square at most */
+    const double height = fmin(fmax(0.83 * width_px * aspect / 0.76, 0.2 * width_px), width_px);
+    const int even = 2 * (int)lround(0.5 * height); /* video encoders want even sizes */
+    return even < 16 ? 16 : even > 8192 ? 8192 : even;
 }
 
 const surge_canvas_layout *surge_canvas_layout_only(surge_canvas *c, const surge_snapshot *s, const surge_params *p)

@@ -12,14 +12,17 @@ struct surge_text {
     int size_px;
 };
 
-surge_text *surge_text_open(const char *font_path, int image_height_px, char *err, size_t err_len)
+surge_text *surge_text_open(const char *font_path, int image_width_px, int image_height_px, char *err, size_t err_len)
 {
     surge_text *t = calloc(1, sizeof *t);
     if (!t) {
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
-    t->size_px = image_height_px / 36 < 12 ? 12 : image_height_px / 36;
+    /* a 36th of the height; in a flat frame (a long, thin scene) up to an 80th of the width, a 12th of the height */
+    const int flat = image_width_px / 80 < image_height_px / 12 ? image_width_px / 80 : image_height_px / 12;
+    const int size = image_height_px / 36 > flat ? image_height_px / 36 : flat;
+    t->size_px = size < 12 ? 12 : size;
     if (FT_Init_FreeType(&t->library) != 0) {
         snprintf(err, err_len, "cannot start FreeType");
         free(t);

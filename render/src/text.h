@@ -7,8 +7,9 @@
 
 typedef struct surge_text surge_text;
 
-/* A font at a pixel size suited to an image image_height_px tall. NULL with err. */
-surge_text *surge_text_open(const char *font_path, int image_height_px, char *err, size_t err_len);
+/* A font at a pixel size suited to an image of that size. NULL with err. */
+surge_text *surge_text_open(const char *font_path, int image_width_px, int image_height_px, char *err,
+                            size_t err_len);
 void surge_text_close(surge_text *text);
 int surge_text_size(const surge_text *text); /* pixel size of the font */
 /* Draws UTF-8 text with its baseline starting at (x, baseline_y), blended over the image. */

@@ -50,6 +50,13 @@ const uint8_t *surge_canvas_pixels(const surge_canvas *canvas);
 /* The last image as PNG in a malloc'd buffer. Returns 0, or -1 with err. */
 int surge_canvas_png(const surge_canvas *canvas, uint8_t **png, size_t *png_len, char *err, size_t err_len);
 
+/* The frame height for render.height_px = 0 (fitted): the view's extent across the bed, taken from the fixed walls
+ * (so a restarted run gets the same size), at width_px, between a fifth of the width and the width. */
+int surge_render_fitted_height_px(int width_px, const surge_snapshot *snap, const surge_params *params);
+
+/* Widens [lo, hi] to multiples of its tick step (1, 2 or 5 times a power of ten, about five intervals). */
+void surge_render_round_range(double *lo, double *hi);
+
 /* The colour a field value gets: RGB of the map's entry for (value - min) / (max - min), clamped. */
 void surge_colormap_rgb(int colormap, double value, double min, double max, uint8_t rgb[3]);
 
