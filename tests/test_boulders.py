@@ -21,6 +21,7 @@ Each check prints "name: ok" or "name: FAILED" with details; the script exits 1 
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 
@@ -151,6 +152,25 @@ def group_restart():
     check("restart: restarted run (2 threads) ends in the uninterrupted run's state hash",
           r.returncode == 0 and h_whole and h_restart and h_whole.group(1) == h_restart.group(1),
           r.stderr[-1500:] + "\nwhole: %s" % (h_whole.group(1) if h_whole else None))
+    # a wall particle's build position far outside the domain, the checksum made right again (the fuzz pass found
+    # 2.9e260 there overflowing a cell index): refused with the reason
+    with open(os.path.join(half, "checkpoint.bin"), "rb") as f:
+        data = f.read()
+    walls = int(re.search(r"(\d+) wall particles", subprocess.run(
+        [SURGE, "check", os.path.join(SOURCE, "cases", args[0])] + args[1:], capture_output=True, text=True).stdout
+        ).group(1))
+    body = bytearray(data[:-8])
+    struct.pack_into("<d", body, len(body) - 8 - 16 * walls, 2.9e260)
+    checksum = 0xcbf29ce484222325
+    for byte in body:
+        checksum = ((checksum ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    corrupt = os.path.join(WORK, "corrupt_build_position.bin")
+    with open(corrupt, "wb") as f:
+        f.write(bytes(body) + struct.pack("<Q", checksum))
+    c = subprocess.run([SURGE, "run", "--restart", corrupt, "-o", os.path.join(WORK, "corrupt_restart"),
+                        "--overwrite", "-s", "time.end_s=0.2"], capture_output=True, text=True, timeout=300, env=ENV)
+    check("restart: a wall build position outside the domain (checksum right) is refused with the reason",
+          c.returncode == 2 and "corrupt wall build positions" in c.stderr, c.stderr[-800:])
     series = boulder_series(whole)
     check("restart: boulders.pvd lists a boulders file per snapshot, two discs each",
           len(series) == len(vtp.read_pvd(os.path.join(whole, "run.pvd"))) and

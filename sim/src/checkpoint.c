@@ -79,11 +79,16 @@ static int read_wall_build_positions(FILE *f, surge_sim *sim)
         free(by_id);
         return -1;
     }
+    /* outside the state hash: each must lie where a wall particle can be, the cell grid's extent give or take its
+     * own size (boulder particles may sit a period away from the grid between builds) */
+    const cell_grid *g = &sim->grid;
+    const double width = g->ncx * g->cell_w, height = g->ncy * g->cell_h;
     int rc = 0;
     for (size_t k = 0; k < w; k++) {
-        sim->neighbours.x_build[k] = by_id[sim->id[k]];
-        sim->neighbours.y_build[k] = by_id[w + (size_t)sim->id[k]];
-        rc |= !isfinite(sim->neighbours.x_build[k]) || !isfinite(sim->neighbours.y_build[k]);
+        const double x = by_id[sim->id[k]], y = by_id[w + (size_t)sim->id[k]];
+        sim->neighbours.x_build[k] = x;
+        sim->neighbours.y_build[k] = y;
+        rc |= !(x >= g->x0 - width && x <= g->x0 + 2 * width && y >= g->y0 - height && y <= g->y0 + 2 * height);
     }
     free(by_id);
     return rc ? -1 : 0;

@@ -49,16 +49,22 @@ void grid_free(cell_grid *grid)
     grid->fluid_start = grid->wall_start = NULL;
 }
 
+/* Clamped in floating point before the conversion, so that a position far outside (or NaN, which goes to cell 0)
+ * never overflows an int. */
+static int clamped_cell(double u, int n)
+{
+    const double c = floor(u);
+    return !(c > 0) ? 0 : (c >= n ? n - 1 : (int)c);
+}
+
 int grid_cell_x(const cell_grid *g, double x)
 {
-    int c = (int)floor((x - g->x0) / g->cell_w);
-    return c < 0 ? 0 : (c >= g->ncx ? g->ncx - 1 : c);
+    return clamped_cell((x - g->x0) / g->cell_w, g->ncx);
 }
 
 int grid_cell_y(const cell_grid *g, double y)
 {
-    int c = (int)floor((y - g->y0) / g->cell_h);
-    return c < 0 ? 0 : (c >= g->ncy ? g->ncy - 1 : c);
+    return clamped_cell((y - g->y0) / g->cell_h, g->ncy);
 }
 
 int grid_row_spans(const cell_grid *g, int cx, cell_span spans[2])
