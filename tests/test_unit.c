@@ -373,6 +373,75 @@ static int test_corner_continuity(void)
     return failures;
 }
 
+/* The wall treatment's contact and shift rules (docs/method.md, Walls; issue #22): a fluid particle put 0.1 dp above
+ * the bed face and thrown at it at 0.5 m/s leaves the step with no velocity toward the face, and a shift that would
+ * carry it further in stops at the repulsion's reach. Without the rules (reach 0) the same particle keeps
+ * approaching. */
+static double contact_rule_case(double reach_dp, double *shift_room_m, double *shift_y_m, double *gap_m)
+{
+    surge_params p = surge_default_params();
+    p.domain.length_m = 0.1;
+    p.domain.height_m = 0.05;
+    p.domain.periodic_x = true;
+    p.walls.left = p.walls.right = p.walls.top = p.walls.upstream = false;
+    p.walls.bottom = true;
+    p.fluid.x0_m = 0;
+    p.fluid.x1_m = 0.1;
+    p.fluid.depth_m = 0.02;
+    p.numerics.dp_m = 0.005;
+    p.walls.face_repulsion_reach_dp = reach_dp;
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return NAN;
+    }
+    int bed = -1, a = -1; /* the top bed particle nearest x = 0.05 m, and the lowest fluid particle above it */
+    for (int b = 0; b < sim->wall_count; b++)
+        if (bed < 0 || sim->y[b] > sim->y[bed] + 1e-9 ||
+            (fabs(sim->y[b] - sim->y[bed]) < 1e-9 && fabs(sim->x[b] - 0.05) < fabs(sim->x[bed] - 0.05)))
+            bed = b;
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (fabs(sim->x[f] - sim->x[bed]) < 1e-9 && (a < 0 || sim->y[f] < sim->y[a]))
+            a = f;
+    const double dp = p.numerics.dp_m; /* the bed's face is y = 0, its top row at -dp/2 */
+    sim->y[a] = 0.1 * dp;
+    sim->vy[a] = -0.5f;
+    const int32_t id = sim->id[a];
+    surge_sim_step(sim);
+    for (int f = sim->wall_count; f < sim->count; f++) /* the build may have re-sorted the fluid */
+        if (sim->id[f] == id)
+            a = f;
+    const double vy = sim->vy[a];
+    *gap_m = sim->face_gap_m[a];
+    /* a shift toward the bed as large as shifting allows: set the concentration gradient and shift again */
+    sim->near_surface[a] = 0;
+    sim->div_r[a] = 2;
+    sim->grad_c_x[a] = 0;
+    sim->grad_c_y[a] = 1e6f;
+    shifting_compute(sim, sim->dt_s);
+    *shift_room_m = fmax(0.0, sim->face_gap_m[a] - reach_dp * dp);
+    *shift_y_m = sim->shift_y[a];
+    surge_sim_destroy(sim);
+    return vy;
+}
+
+static int test_wall_contact_rules(void)
+{
+    double room, shift_y, gap, room_off, shift_off, gap_off;
+    const double vy = contact_rule_case(0.25, &room, &shift_y, &gap);
+    const double vy_off = contact_rule_case(0.0, &room_off, &shift_off, &gap_off);
+    printf("wall_contact_rules: thrown at the bed at 0.5 m/s from 0.1 dp: with the rules vy = %.3g m/s after the "
+           "step (gap %.3g m), the largest shift toward the bed %.3g m (room %.3g m); without: vy = %.3g m/s, "
+           "shift %.3g m\n", vy, gap, shift_y, room, vy_off, shift_off);
+    expect_below("wall_contact_rules: velocity toward the face after the step (m/s)", -vy, 1e-6);
+    expect_below("wall_contact_rules: a shift goes no closer than the reach (m past the room)", -shift_y - room, 1e-9);
+    expect_below("wall_contact_rules: the particle stays outside the face (m inside)", -gap, 0);
+    expect_below("wall_contact_rules: without the rules it keeps approaching (1 = it does not)", vy_off < -0.1 ? 0 : 1,
+                 0.5);
+    return failures;
+}
+
 /* A layer at rest whose density varies linearly with depth, but not hydrostatically (twice the hydrostatic
  * gradient): Antuono's diffusion term must vanish at every fluid particle, the free-surface and bed rows included
  * (its renormalised gradient is exact for a linear field), while Fourtakas' term, which subtracts only the
@@ -434,6 +503,8 @@ int main(int argc, char **argv)
         return test_set_param() ? 1 : 0;
     if (!strcmp(argv[1], "corner_continuity"))
         return test_corner_continuity() ? 1 : 0;
+    if (!strcmp(argv[1], "wall_contact_rules"))
+        return test_wall_contact_rules() ? 1 : 0;
     if (!strcmp(argv[1], "diffusion_linear"))
         return test_diffusion_linear() ? 1 : 0;
     return 2;
