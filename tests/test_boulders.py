@@ -265,5 +265,26 @@ def group_inputs():
 
 
 os.makedirs(WORK, exist_ok=True)
-{"settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
+def group_scene():
+    """The debris surge with graded boulders (issue #25): the run writes its discs to boulders.csv, and a case that
+    loads that file (placement = file) is the same run, state hash for state hash."""
+    args = ["debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s", "time.end_s=0.01", "-s", "boulders.density_ratio=0.9"]
+    graded, p, cmd = surge("scene_graded", ["run"] + args + ["-s", "boulders.placement=graded",
+                                                             "-s", "boulders.count=10", "-s", "boulders.seed=4"])
+    csv_path = os.path.join(graded, "boulders.csv")
+    rows = open(csv_path).read().split("\n")[1:-1] if os.path.exists(csv_path) else []
+    check("scene: a graded run writes its 10 discs to boulders.csv", p.returncode == 0 and len(rows) == 10,
+          cmd + "\n" + p.stderr[-1500:])
+    again, q, cmd_file = surge("scene_file", ["run"] + args + ["-s", "boulders.placement=file",
+                                                               "-s", "boulders.file=" + csv_path])
+    h1 = re.search(r"state hash ([0-9a-f]{16})", p.stderr)
+    h2 = re.search(r"state hash ([0-9a-f]{16})", q.stderr)
+    check("scene: the same case loading boulders.csv repeats the run's state hash",
+          q.returncode == 0 and h1 and h2 and h1.group(1) == h2.group(1), cmd_file + "\n" + q.stderr[-1500:])
+    _, bad, _ = surge("scene_bad", ["check"] + args + ["-s", "boulders.placement=file",
+                                                       "-s", "boulders.file=" + os.path.join(WORK, "missing.csv")])
+    check("scene: a missing disc file is named", bad.returncode == 2 and "missing.csv" in bad.stderr, bad.stderr)
+
+
+{"scene": group_scene, "settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
 sys.exit(finish())

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "surge/boulder_scene.h"
 #include "pair_terms.h"
 #include "sim_internal.h"
 
@@ -200,6 +201,28 @@ static int place_random(boulder_set *b, const surge_params *q, double period, ch
     return 0;
 }
 
+/* The discs of the graded placement or of the CSV file (surge/boulder_scene.h). */
+static int adopt_discs(boulder_set *b, const surge_params *p, char *err, size_t err_len)
+{
+    surge_disc *discs = NULL;
+    const int n = p->boulders.placement == SURGE_BOULDERS_GRADED
+                      ? surge_boulders_generate(p, &discs, err, err_len)
+                      : surge_discs_read_csv(p->boulders.file, &discs, err, err_len);
+    if (n < 0)
+        return -1;
+    if (allocate_discs(b, n) != 0) {
+        free(discs);
+        snprintf(err, err_len, "out of memory for %d boulders", n);
+        return -1;
+    }
+    for (int i = 0; i < n; i++) {
+        b->x[i] = discs[i].x_m, b->y[i] = discs[i].y_m, b->radius[i] = discs[i].r_m;
+        b->vx[i] = discs[i].vx_mps, b->vy[i] = discs[i].vy_mps, b->omega[i] = discs[i].omega_radps;
+    }
+    free(discs);
+    return 0;
+}
+
 int boulders_define(surge_sim *sim, char *err, size_t err_len)
 {
     const surge_params *p = &sim->params;
@@ -210,6 +233,8 @@ int boulders_define(surge_sim *sim, char *err, size_t err_len)
         rc = parse_list(b, p->boulders.list_m, err, err_len);
     else if (p->boulders.placement == SURGE_BOULDERS_RANDOM)
         rc = place_random(b, p, period, err, err_len);
+    else if (p->boulders.placement == SURGE_BOULDERS_GRADED || p->boulders.placement == SURGE_BOULDERS_FILE)
+        rc = adopt_discs(b, p, err, err_len);
     if (rc != 0 || b->count == 0)
         return rc;
     const double dp = p->numerics.dp_m;

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "surge/boulder_scene.h"
 #include "surge/vtk_output.h"
 
 typedef struct run_outputs {
@@ -184,6 +185,31 @@ static int call_boundary(const surge_run_options *opt, surge_sim *sim, double *h
     return requests;
 }
 
+/* boulders.csv: the discs at the start, which a case reloads with boulders.placement = file (surge/boulder_scene.h) */
+static int write_initial_discs(const surge_sim *sim, const run_outputs *o, char *err, size_t err_len)
+{
+    surge_snapshot snap = {0};
+    if (surge_sim_snapshot(sim, &snap) != 0) {
+        snprintf(err, err_len, "out of memory");
+        return -1;
+    }
+    const surge_boulder_state *b = &snap.boulders;
+    surge_disc *discs = malloc(sizeof *discs * (size_t)(b->count > 0 ? b->count : 1));
+    int rc = -1;
+    if (discs) {
+        for (int i = 0; i < b->count; i++)
+            discs[i] = (surge_disc){b->x_m[i], b->y_m[i], b->radius_m[i], b->vx_mps[i], b->vy_mps[i], b->omega_radps[i]};
+        char path[4096];
+        join(path, sizeof path, o->dir, "boulders.csv");
+        rc = surge_discs_write_csv(path, discs, b->count, err, err_len);
+    } else {
+        snprintf(err, err_len, "out of memory");
+    }
+    free(discs);
+    surge_snapshot_free(&snap);
+    return rc;
+}
+
 surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
 {
     run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1,
@@ -223,7 +249,8 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         goto done;
     }
     if (!opt->restarted &&
-        (write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0))
+        (write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0 ||
+         (surge_sim_derived(sim)->boulder_count > 0 && write_initial_discs(sim, &o, err, err_len) != 0)))
         goto done;
     output_schedule snapshots = schedule_from(surge_sim_time(sim), p->output.snapshot_interval_s);
     output_schedule diagnostics = schedule_from(surge_sim_time(sim), p->output.diagnostics_interval_s);

@@ -41,6 +41,8 @@ typedef enum surge_boulder_placement {
     SURGE_BOULDERS_NONE = 0,   /* no boulders */
     SURGE_BOULDERS_LIST = 1,   /* the discs of boulders.list_m */
     SURGE_BOULDERS_RANDOM = 2, /* random non-overlapping discs up to boulders.solid_fraction of the region */
+    SURGE_BOULDERS_GRADED = 3, /* sizes from a grading curve, more discs near the front (surge/boulder_scene.h) */
+    SURGE_BOULDERS_FILE = 4,   /* the discs of the CSV boulders.file (as a run writes to boulders.csv) */
 } surge_boulder_placement;
 
 /* Longest value of a text parameter, terminating NUL included. */
@@ -106,6 +108,13 @@ typedef struct surge_params {
         double min_gap_m;        /* random: smallest gap between discs and from walls */
         int seed;
         double density_ratio;    /* rho_body / rho0 */
+        char grading_file[SURGE_TEXT_PARAM_BYTES]; /* graded: CSV diameter_m,fraction_passing; "": built-in */
+        int count;                      /* graded: number of discs (0: up to solid_fraction of the fluid block) */
+        double diameter_min_m;          /* graded: sizes below are not drawn (the paper's truncation, 0.2 m) */
+        double diameter_max_m;          /* graded: nor above (0: the fluid depth less two gaps) */
+        double front_median_m;          /* graded: median distance of a centre behind the front (log-normal) */
+        double front_sigma;             /* graded: the log-normal's sigma (of ln distance) */
+        char file[SURGE_TEXT_PARAM_BYTES]; /* file: CSV x_m,y_m,r_m[,vx_mps,vy_mps,omega_radps] */
     } boulders;
     struct {
         double friction;         /* Coulomb coefficient mu */
