@@ -3,7 +3,9 @@
  *              distance below its 5 % critical value at a fixed seed); bad curve files are refused with file:line
  *   placement  graded discs never overlap, stay inside the block with the gap, lie log-normally behind the front,
  *              repeat with their seed; an impossible request is refused
- *   csv        the disc list reads back exactly; bad lists are refused with file:line */
+ *   csv        the disc list reads back exactly; bad lists are refused with file:line
+ *   flow       eq. 21 (flow.csv) on a synthetic surge with known answers: a block 1.3 m high moving 2 m/s against
+ *              the belt, a disc riding 2 m behind its front, fluid splashed next to the wall left out */
 #define _DEFAULT_SOURCE /* erand48 */
 #include <math.h>
 #include <stdio.h>
@@ -11,6 +13,7 @@
 #include <string.h>
 
 #include "surge/boulder_scene.h"
+#include "surge/flow_metrics.h"
 
 static int failures = 0;
 
@@ -216,6 +219,45 @@ static void group_csv(const char *work)
     check("csv: malformed disc lists are refused naming the line", wrong == 0, wrong ? detail : "");
 }
 
+static void group_flow(void)
+{
+    surge_params p = surge_scene(0, 1);
+    p.walls.upstream_x_m = 1.5;
+    p.numerics.dp_m = 0.1;
+    p.fluid.viscosity_m2ps = 0.28;
+    p.body.slope_deg = 10.1;
+    surge_snapshot s = {0};
+    surge_snapshot_reserve(&s, 200 * 13 + 330 + 1);
+    int n = 0;
+    for (int i = 0; i < 200; i++) /* the block: 20 m from the wall's face, 13 rows */
+        for (int j = 0; j < 13; j++, n++) {
+            s.x_m[n] = 1.5 + (i + 0.5) * 0.1, s.y_m[n] = (j + 0.5) * 0.1;
+            s.vx_mps[n] = -3.5f + 2.0f, s.vy_mps[n] = 0, s.kind[n] = SURGE_KIND_FLUID;
+        }
+    s.x_m[n] = 3.0, s.y_m[n] = 3.0, s.vx_mps[n] = 50, s.kind[n++] = SURGE_KIND_FLUID; /* within 5 m: left out */
+    for (int i = 0; i < 330; i++, n++) /* the belt */
+        s.x_m[n] = (i + 0.5) * 0.1, s.y_m[n] = -0.05, s.vx_mps[n] = -3.5f, s.vy_mps[n] = 0,
+        s.kind[n] = SURGE_KIND_MOVING_WALL;
+    s.count = n;
+    surge_snapshot_reserve_boulders(&s, 1);
+    s.boulders.count = 1;
+    s.boulders.x_m[0] = 1.5 + 18, s.boulders.y_m[0] = 1.2, s.boulders.radius_m[0] = 0.3;
+    surge_flow_metrics m;
+    const int rc = surge_flow_metrics_compute(&s, &p, &m);
+    const double g = 9.81, slope = 10.1 * 3.14159265358979323846 / 180;
+    const double fr = 2.0 / sqrt(g * 1.3), mu = g * sin(slope) * 1.3 * 1.3 / (3 * 2.0 * 0.28);
+    char detail[512];
+    snprintf(detail, sizeof detail, "h_max %.6g (1.3), with boulders %.6g (1.5), u_bar %.6g (2), Fr %.6g (%.6g), "
+             "mu_eq/mu0 %.6g (%.6g), front %.6g m (20), boulders %.6g m behind (2), %d fluid (1950: the block past 5 m)", m.h_max_m,
+             m.h_max_with_boulders_m, m.u_bar_mps, m.froude, fr, m.mu_eq_over_mu0, mu, m.front_from_wall_m,
+             m.boulders_behind_front_m, m.fluid_counted);
+    check("flow: eq. 21 on a synthetic surge gives the known numbers", rc == 0 && fabs(m.h_max_m - 1.3) < 1e-9 &&
+          fabs(m.h_max_with_boulders_m - 1.5) < 1e-9 && fabs(m.u_bar_mps - 2) < 1e-6 && fabs(m.froude - fr) < 1e-6 &&
+          fabs(m.mu_eq_over_mu0 - mu) < 1e-6 && fabs(m.front_from_wall_m - 20) < 1e-9 &&
+          fabs(m.boulders_behind_front_m - 2) < 1e-9 && m.fluid_counted == 1950, detail);
+    surge_snapshot_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     if (argc != 3)
@@ -226,6 +268,8 @@ int main(int argc, char **argv)
         group_placement();
     else if (!strcmp(argv[1], "csv"))
         group_csv(argv[2]);
+    else if (!strcmp(argv[1], "flow"))
+        group_flow();
     else
         return 2;
     return failures ? 1 : 0;

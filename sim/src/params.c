@@ -207,6 +207,14 @@ static const surge_param_info registry[] = {
      "Simulated time between rows of diagnostics.csv (0: every step).", OFF(output.diagnostics_interval_s)},
     {"output", "checkpoint_interval_s", SURGE_PARAM_REAL, "s", 0, 0, 1e7, true, NULL,
      "Simulated time between checkpoints (0: only the final one).", OFF(output.checkpoint_interval_s)},
+    {"output", "flow_interval_s", SURGE_PARAM_REAL, "s", 0, 0, 1e7, false, NULL,
+     "Simulated time between rows of flow.csv, a belt surge's flow height, mean velocity, Froude number and "
+     "equivalent viscosity (GMD 2025 eq. 21; docs/validation/drift.md) (0: no flow.csv).", OFF(output.flow_interval_s)},
+    {"output", "flow_ignore_m", SURGE_PARAM_REAL, "m", 5, 0, 1e4, false, NULL,
+     "flow.csv leaves out the fluid this close downstream of the upstream wall (the paper's 5 m).",
+     OFF(output.flow_ignore_m)},
+    {"output", "flow_column_m", SURGE_PARAM_REAL, "m", 0.5, 1e-6, 1e4, false, NULL,
+     "flow.csv: width of the columns whose tops give the flow height.", OFF(output.flow_column_m)},
     {"output", "progress_interval_s", SURGE_PARAM_REAL, "s (wall)", 2, 0, 1e5, true, NULL,
      "Wall-clock seconds between progress lines on stderr (0: silent).", OFF(output.progress_interval_s)},
 

@@ -11,6 +11,7 @@
 #include <time.h>
 
 #include "surge/boulder_scene.h"
+#include "surge/flow_metrics.h"
 #include "surge/vtk_output.h"
 
 typedef struct run_outputs {
@@ -18,6 +19,7 @@ typedef struct run_outputs {
     surge_pvd *pvd;
     surge_pvd *boulder_pvd; /* boulders.pvd, when the scene has boulders */
     FILE *csv;
+    FILE *flow_csv;         /* flow.csv, when output.flow_interval_s > 0 */
     surge_snapshot snap;
     int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
     int64_t last_checkpoint_step;  /* the step of the checkpoint on disk (-1: none written by this run) */
@@ -107,6 +109,25 @@ static int write_diagnostics(const surge_sim *sim, run_outputs *o, char *err, si
     return 0;
 }
 
+/* A row of flow.csv (surge/flow_metrics.h); a snapshot without fluid past the ignored zone gives NaN numbers. */
+static int write_flow(const surge_sim *sim, run_outputs *o, char *err, size_t err_len)
+{
+    if (surge_sim_snapshot(sim, &o->snap) != 0) {
+        snprintf(err, err_len, "out of memory taking a snapshot");
+        return -1;
+    }
+    surge_flow_metrics m;
+    surge_flow_metrics_compute(&o->snap, surge_sim_params(sim), &m);
+    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d\n", m.time_s,
+                (long long)surge_sim_step_count(sim), m.h_max_m, m.h_max_with_boulders_m, m.u_bar_mps, m.froude,
+                m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted) < 0 ||
+        fflush(o->flow_csv) != 0) {
+        snprintf(err, err_len, "cannot write %s/flow.csv: %s", o->dir, strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
 static int write_checkpoint(const surge_sim *sim, run_outputs *o, char *err, size_t err_len)
 {
     char path[4096];
@@ -132,6 +153,30 @@ static int row_at_or_before_step(const char *line, void *checkpoint_step)
     char *end = NULL;
     const long long step = comma ? strtoll(comma + 1, &end, 10) : 0;
     return !comma || end == comma + 1 || step <= *(const long long *)checkpoint_step;
+}
+
+/* A time series (diagnostics.csv, flow.csv) opened for this run: on a restart the rows up to the checkpoint's step
+ * are kept and new rows appended; a new file gets the header. NULL with err. */
+static FILE *open_series(const run_outputs *o, const char *name, const char *header, const surge_sim *sim,
+                         int restarted, char *err, size_t err_len)
+{
+    char path[4096];
+    join(path, sizeof path, o->dir, name);
+    long long checkpoint_step = (long long)surge_sim_step_count(sim);
+    if (restarted && surge_file_keep_lines(path, row_at_or_before_step, &checkpoint_step, err, err_len) != 0)
+        return NULL;
+    FILE *f = fopen(path, restarted ? "a" : "w");
+    if (!f) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        return NULL;
+    }
+    const int empty = fseek(f, 0, SEEK_END) == 0 && ftell(f) == 0; /* a restart into a new folder */
+    if (empty && fprintf(f, "%s\n", header) < 0) {
+        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+        fclose(f);
+        return NULL;
+    }
+    return f;
 }
 
 /* When an output is next due. The interval is a live parameter: a change (from the control socket) re-schedules
@@ -232,29 +277,26 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
             return SURGE_RUN_IO_ERROR;
         }
     }
-    join(path, sizeof path, o.dir, "diagnostics.csv");
-    long long checkpoint_step = (long long)surge_sim_step_count(sim);
-    if (opt->restarted && surge_file_keep_lines(path, row_at_or_before_step, &checkpoint_step, err, err_len) != 0)
-        goto done;
-    o.csv = fopen(path, opt->restarted ? "a" : "w");
-    if (!o.csv) {
-        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
-        goto done;
-    }
     const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
-    const int csv_empty = fseek(o.csv, 0, SEEK_END) == 0 && ftell(o.csv) == 0; /* a restart into a new folder */
-    if (csv_empty && fprintf(o.csv, "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,"
-                                    "fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps\n") < 0) {
-        snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));
+    o.csv = open_series(&o, "diagnostics.csv", "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,"
+                        "max_density_deviation,fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps", sim, opt->restarted,
+                        err, err_len);
+    if (!o.csv)
         goto done;
-    }
+    if (p->output.flow_interval_s > 0 &&
+        !(o.flow_csv = open_series(&o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
+                                   "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted", sim,
+                                   opt->restarted, err, err_len)))
+        goto done;
     if (!opt->restarted &&
         (write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0 ||
+         (o.flow_csv && write_flow(sim, &o, err, err_len) != 0) ||
          (surge_sim_derived(sim)->boulder_count > 0 && write_initial_discs(sim, &o, err, err_len) != 0)))
         goto done;
     output_schedule snapshots = schedule_from(surge_sim_time(sim), p->output.snapshot_interval_s);
     output_schedule diagnostics = schedule_from(surge_sim_time(sim), p->output.diagnostics_interval_s);
     output_schedule checkpoints = schedule_from(surge_sim_time(sim), p->output.checkpoint_interval_s);
+    output_schedule flows = schedule_from(surge_sim_time(sim), p->output.flow_interval_s);
     const double start_wall = surge_wall_clock_s(), start_time = surge_sim_time(sim);
     const int64_t start_step = surge_sim_step_count(sim);
     double next_progress = start_wall + p->output.progress_interval_s;
@@ -300,6 +342,8 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         }
         if (output_due(&snapshots, t, p->output.snapshot_interval_s, 0) && write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
             goto done;
+        if (o.flow_csv && output_due(&flows, t, p->output.flow_interval_s, 0) && write_flow(sim, &o, err, err_len) != 0)
+            goto done;
         if (output_due(&checkpoints, t, p->output.checkpoint_interval_s, 0) && write_checkpoint(sim, &o, err, err_len) != 0)
             goto done;
         if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= next_progress) {
@@ -324,6 +368,10 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
 done:
     if (o.csv && fclose(o.csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
         snprintf(err, err_len, "cannot write diagnostics.csv: %s", strerror(errno));
+        result = SURGE_RUN_IO_ERROR;
+    }
+    if (o.flow_csv && fclose(o.flow_csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
+        snprintf(err, err_len, "cannot write flow.csv: %s", strerror(errno));
         result = SURGE_RUN_IO_ERROR;
     }
     surge_pvd_close(o.pvd);

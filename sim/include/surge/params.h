@@ -140,6 +140,9 @@ typedef struct surge_params {
         double diagnostics_interval_s; /* 0: every step */
         double checkpoint_interval_s;  /* 0: only the final checkpoint */
         double progress_interval_s;    /* wall-clock seconds between progress lines; 0: none */
+        double flow_interval_s;        /* between rows of flow.csv, a belt surge's eq. 21 numbers; 0: none */
+        double flow_ignore_m;          /* flow.csv leaves out this much next to the upstream wall */
+        double flow_column_m;          /* column width for the flow height */
     } output;
     struct { /* read by the renderer (render/); the solver ignores them */
         double frame_interval_s;  /* simulated time between rendered frames */
