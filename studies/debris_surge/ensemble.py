@@ -1,0 +1,262 @@
+#!/usr/bin/python3
+"""The boulder-laden debris surge (GMD 2025 Sect. 3.3, Table 3, Fig. 7) as an ensemble: N seeds per boulder count,
+each a run of cases/debris_surge.ini with graded boulders (docs/boulders.md), and the statistics of their Froude
+number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validation/debris_surge.md says more.
+
+  studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--seeds 5] [--dp 0.05] [--end-s 75]
+        [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge]
+  studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
+        [--png FILE]
+  studies/debris_surge/ensemble.py list [--counts ...] [--seeds ...] [--dp ...]
+
+run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
+1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
+from its checkpoint, a finished one is skipped). --member K runs only the K-th member of `list` (0-based), for a
+job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
+density ratio 0.9.
+collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
+25 s is averaged over its second half, and the window used is written); a table (--csv) and box plots of Fr and
+mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
+whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png).
+"""
+import argparse
+import csv
+import math
+import os
+import sys
+import threading
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+import cli_checks  # noqa: E402
+import study  # noqa: E402
+from run_params import ParamsError, RunParams  # noqa: E402
+
+TOOL = "ensemble"
+CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
+COLUMNS = ["count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
+           "h_max_m", "u_bar_mps", "boulders_behind_front_m", "end_s", "wall_s", "status"]
+
+
+def fail(message):
+    study.fail(TOOL, message)
+
+
+def counts_list(text):
+    try:
+        values = [int(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected comma-separated whole numbers, got '%s'" % text)
+    if not values or any(v < 0 or v > 20000 for v in values) or len(set(values)) != len(values):
+        raise argparse.ArgumentTypeError("expected distinct disc counts in [0, 20000], got '%s'" % text)
+    return values
+
+
+def members(args):
+    """[(count, seed)] in a fixed order: count 0 once, every other count with seeds 1..N."""
+    return [(c, s) for c in args.counts for s in ([1] if c == 0 else range(1, args.seeds + 1))]
+
+
+def folder_of(args, count, seed):
+    return os.path.join(args.runs_dir, "n%d_s%d_dp%g" % (count, seed, args.dp))
+
+
+def run_member(args, count, seed, deadline):
+    folder = folder_of(args, count, seed)
+    try:
+        progress = study.read_progress(folder) if os.path.isdir(folder) else {"status": "new"}
+    except ValueError as e:
+        fail(str(e))
+    if progress["status"] == "done":
+        print("%s: %s: done already" % (TOOL, folder), flush=True)
+        return
+    fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite", "-s", "numerics.dp_m=%g" % args.dp]
+    if count > 0:
+        fresh += ["-s", "boulders.placement=graded", "-s", "boulders.count=%d" % count, "-s", "boulders.seed=%d" % seed,
+                  "-s", "boulders.density_ratio=0.9"]
+    common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
+              "-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
+    rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common, deadline)
+    if rc != 4:
+        progress["status"] = "done" if rc == 0 else "unhealthy"
+        study.write_progress(folder, progress)
+
+
+def command_run(args):
+    todo = members(args)
+    if args.member is not None:
+        if not 0 <= args.member < len(todo):
+            fail("--member %d: the ensemble has members 0..%d (see the list command)" % (args.member, len(todo) - 1))
+        todo = [todo[args.member]]
+    deadline = time.time() + args.budget_s if args.budget_s > 0 else None
+    os.makedirs(args.runs_dir, exist_ok=True)
+    queue, lock = list(todo), threading.Lock()
+
+    def worker():
+        while True:
+            with lock:
+                if not queue:
+                    return
+                count, seed = queue.pop(0)
+            if deadline and time.time() > deadline:
+                return
+            run_member(args, count, seed, deadline)
+
+    workers = [threading.Thread(target=worker) for _ in range(min(args.jobs, len(todo)))]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    return 0
+
+
+def window_means(flow_csv, window):
+    """Means over the window of flow.csv's rows; (start, end, rows, {column: mean}). A run that ends before
+    window start + 5 s is averaged over its second half."""
+    columns = ("time_s", "froude", "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m")
+    rows = [{k: float(r[k]) for k in columns}
+            for r in study.read_rows(TOOL, flow_csv, {k: float for k in columns})]
+    end = rows[-1]["time_s"]
+    start, stop = (window[0], min(window[1], end)) if end >= window[0] + 5 else (0.5 * end, end)
+    chosen = [r for r in rows if start <= r["time_s"] <= stop + 1e-9]
+    if not chosen:
+        fail("%s: no rows between %g and %g s" % (flow_csv, start, stop))
+    means = {k: sum(r[k] for r in chosen) / len(chosen)
+             for k in ("froude", "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m")}
+    return start, stop, len(chosen), means, end
+
+
+def solid_fraction(folder):
+    """Disc area (boulders.csv) over the initial fluid block's area (params.ini); 0 without discs."""
+    path = os.path.join(folder, "boulders.csv")
+    if not os.path.isfile(path):
+        return 0.0
+    try:
+        p = RunParams(folder)
+        block = (p.real("fluid", "x1_m") - p.real("fluid", "x0_m")) * p.positive("fluid", "depth_m")
+    except ParamsError as e:
+        fail(str(e))
+    rows = study.read_rows(TOOL, path, {"r_m": float})
+    return sum(math.pi * float(r["r_m"]) ** 2 for r in rows) / block
+
+
+def uniform_flow(folder):
+    """(Fr, mu_eq/mu0) of the uniform flow at the belt speed: depth h_n = sqrt(3 nu u_b / (g sin theta))."""
+    p = RunParams(folder)
+    nu, g = p.positive("fluid", "viscosity_m2ps"), p.positive("body", "gravity_mps2")
+    u_b, theta = abs(p.real("walls", "bottom_speed_mps")), math.radians(p.real("body", "slope_deg"))
+    h_n = math.sqrt(3 * nu * u_b / (g * math.sin(theta)))
+    return u_b / math.sqrt(g * h_n), 1.0
+
+
+def command_collect(args):
+    if not os.path.isdir(args.runs_dir):
+        fail("--runs-dir %s: no such folder" % args.runs_dir)
+    table = []
+    for name in sorted(os.listdir(args.runs_dir)):
+        folder = os.path.join(args.runs_dir, name)
+        flow = os.path.join(folder, "flow.csv")
+        if not (name.startswith("n") and os.path.isfile(flow)):
+            continue
+        try:
+            parts = dict((part[0], part[1:]) for part in name.split("_"))
+            count, seed, dp = int(parts["n"]), int(parts["s"]), float(parts["d"][1:])
+        except (KeyError, ValueError):
+            continue
+        try:
+            progress = study.read_progress(folder)
+        except ValueError as e:
+            fail(str(e))
+        start, stop, n_rows, means, end = window_means(flow, args.window)
+        table.append({"count": count, "seed": seed, "dp_m": dp, "phi": solid_fraction(folder),
+                      "window_start_s": start, "window_end_s": stop, "rows": n_rows, "froude": means["froude"],
+                      "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
+                      "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
+                      "end_s": end, "wall_s": progress["wall_s"], "status": progress["status"]})
+    if not table:
+        fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
+    table.sort(key=lambda r: (r["dp_m"], r["count"], r["seed"]))
+    print("%6s %5s %7s %6s %13s %7s %7s %7s %7s" % ("count", "seed", "dp (m)", "phi", "window (s)", "Fr", "mu/mu0",
+                                                   "end (s)", "status"))
+    for r in table:
+        print("%6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s" % (
+            r["count"], r["seed"], r["dp_m"], r["phi"], r["window_start_s"], r["window_end_s"], r["froude"],
+            r["mu_eq_over_mu0"], r["end_s"], r["status"][:7]))
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            w.writeheader()
+            for r in table:
+                w.writerow(r)
+    if args.png:
+        fr0, mu0 = uniform_flow(os.path.join(args.runs_dir, sorted(
+            n for n in os.listdir(args.runs_dir) if os.path.isfile(os.path.join(args.runs_dir, n, "params.ini")))[0]))
+        box_plots(table, args.png, fr0, mu0)
+    return 0
+
+
+def box_plots(table, png, fr_uniform, mu_uniform):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    groups = {}
+    for r in table:
+        groups.setdefault((r["dp_m"], r["count"]), []).append(r)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    for ax, key, label, reference in ((axes[0], "froude", "Fr", fr_uniform),
+                                      (axes[1], "mu_eq_over_mu0", "mu_eq / mu0", mu_uniform)):
+        positions, data, means = [], [], []
+        for (dp, count), rows in sorted(groups.items()):
+            positions.append(sum(r["phi"] for r in rows) / len(rows))
+            data.append([r[key] for r in rows])
+            means.append(sum(data[-1]) / len(data[-1]))
+        ax.boxplot(data, positions=positions, widths=0.04, whis=(0, 100), manage_ticks=False)
+        ax.plot(positions, means, "o", color="C1", label="mean over seeds")
+        ax.axhline(reference, ls="--", color="grey", label="uniform flow, phi = 0")
+        ax.set_xlabel("solid fraction phi")
+        ax.set_ylabel(label)
+        ax.set_xlim(-0.05, max(positions) + 0.1)
+        ax.legend(fontsize=8)
+    dps = sorted({r["dp_m"] for r in table})
+    fig.suptitle("debris surge ensemble (dp %s m; boxes: quartiles, whiskers: extremes)"
+                 % ", ".join("%g" % d for d in dps))
+    fig.tight_layout()
+    fig.savefig(png, dpi=100)
+    print("%s: wrote %s" % (TOOL, png))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in ("run", "list"):
+        p = sub.add_parser(name)
+        p.add_argument("--counts", type=counts_list, default=[0, 50, 100, 154])
+        p.add_argument("--seeds", type=cli_checks.positive_int, default=5)
+        p.add_argument("--dp", type=cli_checks.positive, default=0.05)
+        p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"))
+        if name == "run":
+            p.add_argument("--end-s", type=cli_checks.positive, default=75.0)
+            p.add_argument("--threads", type=cli_checks.positive_int, default=1)
+            p.add_argument("--jobs", type=cli_checks.positive_int, default=1)
+            p.add_argument("--member", type=int, default=None)
+            p.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
+            p.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+    c = sub.add_parser("collect")
+    c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"))
+    c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0])
+    c.add_argument("--csv")
+    c.add_argument("--png", type=cli_checks.png_file)
+    args = parser.parse_args()
+    if args.command == "list":
+        for k, (count, seed) in enumerate(members(args)):
+            print("%d %d %d %s" % (k, count, seed, folder_of(args, count, seed)))
+        return 0
+    if args.command == "collect" and not args.window[1] > args.window[0]:
+        fail("--window: the end must come after the start")
+    return command_run(args) if args.command == "run" else command_collect(args)
+
+
+if __name__ == "__main__":
+    sys.exit(cli_checks.run(main))
