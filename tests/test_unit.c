@@ -442,6 +442,58 @@ static int test_wall_contact_rules(void)
     return failures;
 }
 
+/* The same rules at a disc's face (issue #22: no fluid into a boulder either): a fluid particle put 0.1 dp outside a
+ * disc and thrown at its centre at 0.5 m/s leaves the step with no velocity toward the disc's face, still outside
+ * it, and the disc takes the push's reaction. */
+static int test_disc_contact_rules(void)
+{
+    surge_params p = surge_default_params();
+    char err[256];
+    if (surge_params_load(&p, SURGE_SOURCE_DIR "/cases/boulder_settling.ini", err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    const boulder_set *b = &sim->boulders;
+    const double dp = p.numerics.dp_m, cx = b->x[0], cy = b->y[0], r = b->radius[0];
+    int a = -1; /* the fluid particle nearest the point 1 dp above the disc's top */
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (a < 0 || hypot(sim->x[f] - cx, sim->y[f] - cy - r - dp) < hypot(sim->x[a] - cx, sim->y[a] - cy - r - dp))
+            a = f;
+    sim->x[a] = cx;
+    sim->y[a] = cy + r + 0.1 * dp;
+    sim->vy[a] = -0.5f;
+    const int32_t id = sim->id[a];
+    surge_sim_step(sim);
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (sim->id[f] == id)
+            a = f;
+    const double gap = hypot(sim->x[a] - b->x[0], sim->y[a] - b->y[0]) - b->radius[0];
+    const double approach = sim->vy[a] - b->vy[0]; /* the particle is straight above the centre */
+    /* the reaction: the disc's force with and without the particle's push */
+    const int pushed = sim->face_disc[a] == 0;
+    boulders_fluid_forces(sim);
+    const double fy_with = b->fy[0];
+    sim->face_disc[a] = -1;
+    boulders_fluid_forces(sim);
+    const double reaction = fy_with - b->fy[0], expected = -sim->mass * sim->face_push_y[a];
+    printf("disc_contact_rules: thrown at a disc at 0.5 m/s from 0.1 dp: after the step vy - v_disc = %.3g m/s, "
+           "gap %.3g m (%.2f dp); push %.3g m/s2 outward, reaction on the disc %.4g N/m (expected %.4g)\n",
+           approach, gap, gap / dp, (double)sim->face_push_y[a], reaction, expected);
+    expect_below("disc_contact_rules: velocity toward the disc's face after the step (m/s)", -approach, 1e-6);
+    expect_below("disc_contact_rules: the particle stays outside the disc (m inside)", -gap, 0);
+    expect_below("disc_contact_rules: the disc pushes it (1 = no push recorded)", pushed && sim->face_push_y[a] > 0 ? 0 : 1,
+                 0.5);
+    expect_below("disc_contact_rules: the disc takes the reaction (relative error)",
+                 fabs(reaction - expected) / fabs(expected), 1e-9);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 /* A layer at rest whose density varies linearly with depth, but not hydrostatically (twice the hydrostatic
  * gradient): Antuono's diffusion term must vanish at every fluid particle, the free-surface and bed rows included
  * (its renormalised gradient is exact for a linear field), while Fourtakas' term, which subtracts only the
@@ -503,6 +555,8 @@ int main(int argc, char **argv)
         return test_set_param() ? 1 : 0;
     if (!strcmp(argv[1], "corner_continuity"))
         return test_corner_continuity() ? 1 : 0;
+    if (!strcmp(argv[1], "disc_contact_rules"))
+        return test_disc_contact_rules() ? 1 : 0;
     if (!strcmp(argv[1], "wall_contact_rules"))
         return test_wall_contact_rules() ? 1 : 0;
     if (!strcmp(argv[1], "diffusion_linear"))

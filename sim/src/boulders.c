@@ -479,6 +479,12 @@ void boulders_fluid_forces(surge_sim *sim)
     }
     for (int i = 0; i < b->count; i++)
         b->spin_damping[i] *= b->inv_inertia[i];
+    /* the reaction to the face repulsion of fluid particles too close to a disc (interaction.c); radial, no torque */
+    for (int a = sim->wall_count; a < sim->count; a++)
+        if (sim->face_disc[a] >= 0) {
+            b->fx[sim->face_disc[a]] -= sim->mass * sim->face_push_x[a];
+            b->fy[sim->face_disc[a]] -= sim->mass * sim->face_push_y[a];
+        }
 }
 
 void boulders_predict(surge_sim *sim, double half_dt_s)

@@ -183,19 +183,19 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
 }
 
 /* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
- * nearest wall face within search_m straight below the particle (the wall particle within dp/2 of its normal line),
- * not a boulder's, whose disc would have to take the reaction: its distance (search_m when none), normal and wall
- * particle (-1: none). */
+ * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal
+ * line): its distance (search_m when none), normal, the wall's velocity along it, and the wall particle (-1: none).
+ * disc_face then looks for a nearer disc face. */
 typedef struct wall_face {
-    real gap_m, nx, ny;
-    int wall;
+    real gap_m, nx, ny, vn_mps;
+    int wall, disc;
 } wall_face;
 
 static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *near_boulder)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
-    wall_face face = {search_m, 0, 0, -1};
+    wall_face face = {search_m, 0, 0, 0, -1, -1};
     const int i = a - sim->wall_count;
     for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
         const int b = nl->wall_index[e];
@@ -210,9 +210,29 @@ static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *
         }
         const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
         if (search_m > 0 && r2 - along * along < half_dp * half_dp && along - sim->wall_depth_m[b] < face.gap_m)
-            face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b], b};
+            face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b],
+                               sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
     }
     return face;
+}
+
+/* The face of a disc nearer to fluid particle a than face: the disc's circle, its outward normal through the
+ * particle, and the disc's velocity along it (turning adds none). */
+static void disc_face(const surge_sim *sim, int a, wall_face *face)
+{
+    const boulder_set *b = &sim->boulders;
+    const double period = sim->grid.period_m;
+    for (int i = 0; i < b->count; i++) {
+        double dx = sim->x[a] - b->x[i];
+        if (period > 0)
+            dx -= period * floor(dx / period + 0.5);
+        const double dy = sim->y[a] - b->y[i], distance = sqrt(dx * dx + dy * dy);
+        const double gap = distance - b->radius[i];
+        if (gap < face->gap_m && distance > 0) {
+            const double nx = dx / distance, ny = dy / distance;
+            *face = (wall_face){(real)gap, (real)nx, (real)ny, (real)(b->vx[i] * nx + b->vy[i] * ny), -1, i};
+        }
+    }
 }
 
 void interaction_compute(surge_sim *sim, int corrector)
@@ -252,16 +272,22 @@ void interaction_compute(surge_sim *sim, int corrector)
             wall_pairs(sim, &c, a, 0, &s);
         }
         s.near_surface |= sim->surface[a];
-        const wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
+        wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
+        if (s.near_boulder && face_search_m > 0)
+            disc_face(sim, a, &face);
+        sim->face_disc[a] = -1;
         if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
                                           * its normal; the step's update takes away any velocity toward it (sim.c) */
             const real depth = (face_reach_m - face.gap_m) / face_reach_m;
-            s.acc_x += face_stiffness * depth * depth * face.nx;
-            s.acc_y += face_stiffness * depth * depth * face.ny;
+            const real push_x = face_stiffness * depth * depth * face.nx, push_y = face_stiffness * depth * depth * face.ny;
+            s.acc_x += push_x;
+            s.acc_y += push_y;
+            if (face.disc >= 0) /* the disc takes the reaction (boulders.c) */
+                sim->face_disc[a] = face.disc, sim->face_push_x[a] = push_x, sim->face_push_y[a] = push_y;
         }
         if (corrector) {
             sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
-            sim->face_vn_mps[a] = face.wall >= 0 ? sim->vx[face.wall] * face.nx + sim->vy[face.wall] * face.ny : 0;
+            sim->face_vn_mps[a] = face.vn_mps;
         }
         sim->ax[a] = s.acc_x + gx;
         sim->ay[a] = s.acc_y + gy;

@@ -54,7 +54,7 @@ static const surge_param_info registry[] = {
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
     {"walls", "face_repulsion_reach_dp", SURGE_PARAM_REAL, "dp", 0.25, 0, 0.5, true, NULL,
-     "A fluid particle closer than this to the face of the wall particle straight below it (not a boulder's) is "
+     "A fluid particle closer than this to the face of the wall particle straight below it, or to a disc's circle, is "
      "pushed back along the wall normal, 0.1 c0^2/dp (1 - d/reach)^2, and loses its velocity toward the face; no "
      "shift brings a particle closer than this (0: off; docs/method.md).", OFF(walls.face_repulsion_reach_dp)},
     {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,

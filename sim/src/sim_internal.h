@@ -91,7 +91,9 @@ struct surge_sim {
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
     real *face_gap_m;          /* the particle's distance from that face (negative past it) */
-    real *face_vn_mps;         /* that wall's velocity along the normal */
+    real *face_vn_mps;         /* that wall's (or disc's) velocity along the normal */
+    int32_t *face_disc;        /* the disc whose face pushes the particle this evaluation (-1: none) */
+    real *face_push_x, *face_push_y; /* and the push, an acceleration; the disc takes the reaction */
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
     real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
     real *div_r;
