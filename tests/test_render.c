@@ -263,6 +263,30 @@ static void group_ranges(const char *work)
     check("ranges: a live automatic range is round, holds when the flow slows and grows when it leaves it",
           ranges[0][0] == 0 && fabs(ranges[0][1] - 0.1) < 1e-12 && ranges[1][0] == 0 &&
               ranges[1][1] == ranges[0][1] && ranges[2][0] == 0 && fabs(ranges[2][1] - 0.14) < 1e-12, detail);
+
+    /* what drives the flow, drawn: a gravity arrow in the plot's top right corner, a belt arrow under its right end;
+     * neither without gravity and belt */
+    int ink_with[2] = {0, 0}, ink_without[2] = {0, 0};
+    for (int drivers = 1; drivers >= 0; drivers--) {
+        p.body.gravity_mps2 = drivers ? 9.81 : 0;
+        p.body.slope_deg = 10;
+        p.walls.bottom = true;
+        p.walls.bottom_speed_mps = drivers ? -1 : 0;
+        const uint8_t *rgba = surge_canvas_draw(canvas, &s, &p);
+        const surge_canvas_layout *l = surge_canvas_last_layout(canvas);
+        const int size = p.render.height_px / 36, w = p.render.width_px;
+        int *ink = drivers ? ink_with : ink_without;
+        for (int y = l->plot_y0 + 2; y < l->plot_y0 + 3 * size && rgba; y++)
+            for (int x = l->plot_x1 - 5 * size; x < l->plot_x1 - 2; x++)
+                ink[0] += rgba[4 * ((size_t)y * w + x)] < 60;
+        for (int y = p.render.height_px - 2 * size; y < p.render.height_px && rgba; y++)
+            for (int x = l->plot_x1 - 6 * size; x < l->plot_x1; x++)
+                ink[1] += rgba[4 * ((size_t)y * w + x)] < 60;
+    }
+    snprintf(detail, sizeof detail, "dark pixels: gravity corner %d (%d without), belt corner %d (%d without)",
+             ink_with[0], ink_without[0], ink_with[1], ink_without[1]);
+    check("ranges: gravity and belt arrows are drawn when they drive the flow, not otherwise",
+          ink_with[0] > 10 && ink_with[1] > 10 && ink_without[0] == 0 && ink_without[1] == 0, detail);
     surge_canvas_destroy(canvas);
 
     /* a bed 100 dp long and 3 dp deep under a block 4 dp deep: a flat frame, the same with or without the fluid */

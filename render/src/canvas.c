@@ -429,6 +429,48 @@ static void outline_rect(surge_canvas *c, int x0, int y0, int x1, int y1)
     fill_rect(c, x1, y0, x1 + 1, y1, ink_rgb);
 }
 
+/* A line of the given width in pixels, and an arrow: the line with a head at (x1, y1). */
+static void draw_line(surge_canvas *c, double x0, double y0, double x1, double y1, int width)
+{
+    const int steps = 1 + (int)fmax(fabs(x1 - x0), fabs(y1 - y0));
+    for (int k = 0; k <= steps; k++) {
+        const int x = (int)lround(x0 + (x1 - x0) * k / steps), y = (int)lround(y0 + (y1 - y0) * k / steps);
+        fill_rect(c, x - width / 2, y - width / 2, x - width / 2 + width, y - width / 2 + width, ink_rgb);
+    }
+}
+
+static void draw_arrow(surge_canvas *c, double x0, double y0, double x1, double y1, int width)
+{
+    const double length = hypot(x1 - x0, y1 - y0), ux = (x1 - x0) / length, uy = (y1 - y0) / length;
+    const double head = 0.3 * length;
+    draw_line(c, x0, y0, x1, y1, width);
+    for (int side = -1; side <= 1; side += 2)
+        draw_line(c, x1, y1, x1 - head * (ux * 0.87 - side * uy * 0.5), y1 - head * (uy * 0.87 + side * ux * 0.5), width);
+}
+
+/* What drives the flow, drawn: gravity (its direction in the picture, the bed along x unless true_slope) in the
+ * plot's top right corner, and the belt's direction under the plot's right end. */
+static void draw_drivers(surge_canvas *c, const surge_params *p)
+{
+    const surge_canvas_layout *l = &c->layout;
+    const int size = surge_text_size(c->text), width = size / 8 > 1 ? size / 8 : 1;
+    const double slope = p->body.slope_deg * pi / 180.0, arrow = 2.0 * size;
+    if (p->body.gravity_mps2 > 0) {
+        const double gx = p->render.true_slope ? 0 : sin(slope), gy = p->render.true_slope ? 1 : cos(slope);
+        const double x0 = l->plot_x1 - 1.5 * size - fmax(0, gx) * arrow, y0 = l->plot_y0 + 0.5 * size;
+        draw_arrow(c, x0, y0, x0 + gx * arrow, y0 + gy * arrow, width);
+        surge_text_draw(c->text, c->pixels, c->width, c->height, (int)(x0 - 1.2 * size), (int)(y0 + size), "g",
+                        ink_rgb);
+    }
+    if (p->walls.bottom && p->walls.bottom_speed_mps != 0) {
+        const double direction = p->walls.bottom_speed_mps > 0 ? 1 : -1, y = c->height - 1.25 * size;
+        const double x_mid = l->plot_x1 - 3 * size;
+        draw_arrow(c, x_mid - direction * arrow / 2, y, x_mid + direction * arrow / 2, y, width);
+        surge_text_draw(c->text, c->pixels, c->width, c->height, (int)(x_mid - arrow / 2 - 3.2 * size),
+                        (int)(y + size / 3), "belt", ink_rgb);
+    }
+}
+
 static const char *field_label(int field)
 {
     static const char *const labels[] = {"speed (m/s)", "vx - belt (m/s)", "vx (m/s)", "pressure (Pa)",
@@ -569,13 +611,23 @@ const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const
     outline_rect(c, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1);
     draw_colorbar(c, p);
     draw_length_scale(c);
+    draw_drivers(c, p);
     char label[160];
     /* the time, and what drives the flow: the slope and the belt (issue #24) */
     int used = snprintf(label, sizeof label, "t = %.3f s", s->time_s);
     if (p->body.slope_deg != 0 && used > 0 && used < (int)sizeof label)
         used += snprintf(label + used, sizeof label - (size_t)used, "   slope %.3g deg", p->body.slope_deg);
     if (p->walls.bottom && p->walls.bottom_speed_mps != 0 && used > 0 && used < (int)sizeof label)
-        snprintf(label + used, sizeof label - (size_t)used, "   belt %.3g m/s", p->walls.bottom_speed_mps);
+        used += snprintf(label + used, sizeof label - (size_t)used, "   belt %.3g m/s", p->walls.bottom_speed_mps);
+    /* the discs and their solid fraction, over the initial fluid block's area (docs/validation/debris_surge.md) */
+    const double block_m2 = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m;
+    if (s->boulders.count > 0 && block_m2 > 0 && used > 0 && used < (int)sizeof label) {
+        double area = 0;
+        for (int k = 0; k < s->boulders.count; k++)
+            area += pi * s->boulders.radius_m[k] * s->boulders.radius_m[k];
+        snprintf(label + used, sizeof label - (size_t)used, "   %d discs, phi %.2g", s->boulders.count,
+                 area / block_m2);
+    }
     const int size = surge_text_size(c->text);
     surge_text_draw(c->text, c->pixels, c->width, c->height, l->plot_x0, l->plot_y0 - size / 2, label, ink_rgb);
     return c->pixels;
