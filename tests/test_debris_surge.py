@@ -1,12 +1,12 @@
 #!/usr/bin/python3
 """The debris-surge ensemble end to end (studies/debris_surge/ensemble.py; issue #25), small and coarse: the fluid
-alone and 10 graded discs on the belt at dp = 0.066 m for 1.5 s of flow.
+alone and 6 graded discs on the belt at dp = 0.066 m for 1.5 s of flow.
 
 Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `list` numbers the members; a --member out of range is refused;
   - a run stopped by its budget is interrupted with a checkpoint, and the next `run` finishes it: its flow.csv
     then has one row every 0.5 s from 0 to the end, none twice;
-  - the discs ride in the flow: each run's boulders.csv lists 10 discs, the health monitor stays quiet, and every
+  - the discs ride in the flow: each run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m);
   - `collect` writes one table row per member and the box plots, and the fluid-alone member's Fr is within 10 % of
     the uniform flow's (0.977) over its second half; drift_conservation holds the same surge to 5 % over 8 s.
@@ -25,7 +25,7 @@ from checks import check, finish  # noqa: E402
 
 TOOL = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
 RUNS = os.path.join(WORK, "runs")
-COMMON = ["--counts", "0,10", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS]
+COMMON = ["--counts", "0,6", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS]
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
 
 
@@ -39,20 +39,20 @@ shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 rc, out, err = tool("list", *COMMON)
 check("list: the fluid alone once, then each count with each seed", rc == 0 and out.split("\n")[:2] == [
-    "0 0 1 %s/n0_s1_dp0.066" % RUNS, "1 10 1 %s/n10_s1_dp0.066" % RUNS], out + err)
+    "0 0 1 %s/n0_s1_dp0.066" % RUNS, "1 6 1 %s/n6_s1_dp0.066" % RUNS], out + err)
 rc, out, err = tool("run", *COMMON, "--member", "2", "--surge", SURGE)
 check("run: a member out of range is refused", rc == 2 and "members 0..1" in err, err[-500:])
 
 run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE]
 rc, out, err = tool("run", *run_args, "--member", "1", "--budget-s", "4")
-progress = open(os.path.join(RUNS, "n10_s1_dp0.066", "progress.json")).read()
+progress = open(os.path.join(RUNS, "n6_s1_dp0.066", "progress.json")).read()
 check("run: a member past its budget stops with a checkpoint", rc == 0 and '"interrupted"' in progress, err[-1500:])
 rc, out, err = tool("run", *run_args)
 check("run: the next run finishes every member", rc == 0 and all(
-    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n10_s1_dp0.066")),
+    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066")),
     err[-2000:])
 
-for member in ("n0_s1_dp0.066", "n10_s1_dp0.066"):
+for member in ("n0_s1_dp0.066", "n6_s1_dp0.066"):
     with open(os.path.join(RUNS, member, "flow.csv")) as f:
         rows = list(csv.DictReader(f))
     times = [float(r["time_s"]) for r in rows]
@@ -62,12 +62,12 @@ for member in ("n0_s1_dp0.066", "n10_s1_dp0.066"):
     later = rows[1:]
     finite = all(math.isfinite(float(r[k])) for r in later for k in ("h_max_m", "u_bar_mps", "froude",
                                                                       "mu_eq_over_mu0"))
-    if member.startswith("n10"):
+    if member.startswith("n6"):
         with open(os.path.join(RUNS, member, "boulders.csv")) as f:
             discs = len(f.read().strip().split("\n")) - 1
         behind = [float(r["boulders_behind_front_m"]) for r in rows]
-        check("n10: 10 discs written to boulders.csv, riding within the surge",
-              discs == 10 and all(0 < b < 20 for b in behind), "%d discs, behind the front %s" % (discs, behind))
+        check("n6: 6 discs written to boulders.csv, riding within the surge",
+              discs == 6 and all(0 < b < 20 for b in behind), "%d discs, behind the front %s" % (discs, behind))
     check("%s: every flow.csv row after the start is finite" % member, finite, str(later))
 
 table, png = os.path.join(WORK, "ensemble.csv"), os.path.join(WORK, "ensemble.png")
