@@ -281,6 +281,20 @@ def group_scene():
     h2 = re.search(r"state hash ([0-9a-f]{16})", q.stderr)
     check("scene: the same case loading boulders.csv repeats the run's state hash",
           q.returncode == 0 and h1 and h2 and h1.group(1) == h2.group(1), cmd_file + "\n" + q.stderr[-1500:])
+    # the contact margin: a heavy disc let down onto the bed rests a margin above it, where no sub-dp gap traps fluid
+    gaps = {}
+    for margin in (0, 1):
+        settle, r, cmd_m = surge("scene_margin%d" % margin, [
+            "run", "boulder_settling.ini", "-s", "boulders.list_m=0.05 0.0175 0.0125", "-s", "boulders.density_ratio=10",
+            "-s", "time.end_s=0.4", "-s", "output.snapshot_interval_s=0.1", "-s", "contacts.margin_dp=%d" % margin])
+        last = boulder_series(settle)[-1][1] if r.returncode == 0 else None
+        gaps[margin] = (last["points"][0][1] - last["radius_m"][0]) / 0.0025 if last is not None else float("nan")
+    check("scene: a disc rests on the bed at its surface without a margin and 1 dp above it with margin_dp = 1 "
+          "(gaps %.2f and %.2f dp)" % (gaps[0], gaps[1]), abs(gaps[0]) < 0.1 and abs(gaps[1] - 1) < 0.02, cmd_m)
+    _, near, _ = surge("scene_margin_refused", ["check", "boulder_settling.ini", "-s",
+                                                "boulders.list_m=0.05 0.0135 0.0125", "-s", "contacts.margin_dp=1"])
+    check("scene: a listed disc closer to the bed than the contact margin is refused",
+          near.returncode == 2 and "closer than contacts.margin_dp" in near.stderr, near.stderr)
     _, bad, _ = surge("scene_bad", ["check"] + args + ["-s", "boulders.placement=file",
                                                        "-s", "boulders.file=" + os.path.join(WORK, "missing.csv")])
     check("scene: a missing disc file is named", bad.returncode == 2 and "missing.csv" in bad.stderr, bad.stderr)

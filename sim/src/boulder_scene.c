@@ -233,7 +233,7 @@ int surge_boulders_generate(const surge_params *p, surge_disc **out, char *err, 
 {
     *out = NULL;
     const double dp = p->numerics.dp_m, depth = p->fluid.depth_m, x0 = p->fluid.x0_m, x1 = p->fluid.x1_m;
-    const double gap = p->boulders.min_gap_m > 0 ? p->boulders.min_gap_m : dp;
+    const double gap = fmax(p->boulders.min_gap_m > 0 ? p->boulders.min_gap_m : dp, p->contacts.margin_dp * dp);
     const double period = p->domain.periodic_x ? p->domain.length_m : 0;
     const double d_min = p->boulders.diameter_min_m;
     const double d_max = p->boulders.diameter_max_m > 0 ? p->boulders.diameter_max_m : depth - 2 * gap;

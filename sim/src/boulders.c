@@ -24,7 +24,7 @@ static int allocate_discs(boulder_set *b, int n)
     ALLOC(b->x_n); ALLOC(b->y_n); ALLOC(b->angle_n); ALLOC(b->vx_n); ALLOC(b->vy_n); ALLOC(b->omega_n);
     ALLOC(b->radius); ALLOC(b->mass); ALLOC(b->inv_mass); ALLOC(b->inv_inertia);
     ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
-    ALLOC(b->spin_damping); ALLOC(b->omega_forces); ALLOC(b->angle_build);
+    ALLOC(b->spin_damping); ALLOC(b->omega_forces); ALLOC(b->angle_build); ALLOC(b->contact_radius);
 #undef ALLOC
     return ok ? 0 : -1;
 }
@@ -34,7 +34,7 @@ void boulders_free(boulder_set *b)
     void *arrays[] = {b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->x_n, b->y_n, b->angle_n, b->vx_n, b->vy_n,
                       b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
                       b->ay, b->alpha, b->spin_damping, b->omega_forces, b->spin_coupling, b->of_wall,
-                      b->local_x, b->local_y, b->angle_build};
+                      b->local_x, b->local_y, b->angle_build, b->contact_radius};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     contact_solver_destroy(b->contacts);
@@ -105,7 +105,8 @@ static int place_random(boulder_set *b, const surge_params *q, double period, ch
         x0 = q->fluid.x0_m, x1 = q->fluid.x1_m;
     if (y1 <= y0)
         y0 = 0, y1 = q->fluid.depth_m;
-    const double gap = q->boulders.min_gap_m > 0 ? q->boulders.min_gap_m : q->numerics.dp_m;
+    const double gap = fmax(q->boulders.min_gap_m > 0 ? q->boulders.min_gap_m : q->numerics.dp_m,
+                            q->contacts.margin_dp * q->numerics.dp_m);
     const double r_min = q->boulders.radius_m;
     const double r_max = fmax(q->boulders.radius_max_m, r_min);
     const double target_area = q->boulders.solid_fraction * (x1 - x0) * (y1 - y0);
@@ -253,20 +254,34 @@ int boulders_define(surge_sim *sim, char *err, size_t err_len)
         }
         if (period > 0)
             b->x[i] -= period * floor(b->x[i] / period);
+        b->contact_radius[i] = r + 0.5 * p->contacts.margin_dp * dp;
         b->mass[i] = p->boulders.density_ratio * sim->rho0 * SURGE_PI * r * r;
         b->inv_mass[i] = 1.0 / b->mass[i];
         b->inv_inertia[i] = 1.0 / (0.5 * b->mass[i] * r * r);
     }
-    for (int i = 0; i < b->count; i++) /* listed discs must not overlap (random ones never do) */
+    /* listed discs must not overlap (random ones never do), nor start closer than the contact margin, which the
+     * contact solver would open at once, squeezing the fluid between */
+    const double margin = p->contacts.margin_dp * dp;
+    for (int i = 0; i < b->count; i++) {
         for (int j = 0; j < i; j++) {
             const double dx = wrap_dx(b->x[i] - b->x[j], period), dy = b->y[i] - b->y[j];
-            const double reach = b->radius[i] + b->radius[j];
+            const double reach = b->radius[i] + b->radius[j] + margin;
             if (dx * dx + dy * dy < reach * reach * (1 - 1e-12)) {
-                snprintf(err, err_len, "boulders %d and %d overlap: centres %.4g m apart, radii add up to %.4g m", j + 1,
-                         i + 1, sqrt(dx * dx + dy * dy), reach);
+                snprintf(err, err_len, "boulders %d and %d %s: centres %.4g m apart, radii%s add up to %.4g m", j + 1,
+                         i + 1, margin > 0 ? "are closer than contacts.margin_dp" : "overlap",
+                         sqrt(dx * dx + dy * dy), margin > 0 ? " and margin" : "", reach);
                 return -1;
             }
         }
+        const double r = b->radius[i];
+        const int near_wall = (p->walls.bottom && b->y[i] - r < margin * (1 - 1e-9)) ||
+                              (p->walls.top && p->domain.height_m - b->y[i] - r < margin * (1 - 1e-9));
+        if (margin > 0 && near_wall) {
+            snprintf(err, err_len, "boulder %d at (%g, %g) m with radius %g m is closer than contacts.margin_dp "
+                     "(%g m) to the bed or lid", i + 1, b->x[i], b->y[i], r, margin);
+            return -1;
+        }
+    }
     b->contacts = contact_solver_create();
     if (!b->contacts) {
         snprintf(err, err_len, "out of memory for the contact solver");
@@ -521,20 +536,22 @@ void boulders_restore(surge_sim *sim)
     boulders_place_particles(sim);
 }
 
-/* The walls discs can touch: the bed (moving with the belt), the lid, the box sides and the upstream wall. */
+/* The walls discs can touch: the bed (moving with the belt), the lid, the box sides and the upstream wall; planes
+ * stand half the contact margin in front of the wall faces (the discs' contact radii carry the other half). */
 static int contact_walls(const surge_sim *sim, contact_wall walls[5])
 {
     const surge_params *p = &sim->params;
+    const double half_margin = 0.5 * p->contacts.margin_dp * p->numerics.dp_m;
     int n = 0;
     if (p->walls.bottom)
-        walls[n++] = (contact_wall){CONTACT_PLANE, 0, 1, 0, 0, 0, 0, 0, sim->wall_speed[WALL_BOTTOM], 0};
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, 1, half_margin, 0, 0, 0, 0, sim->wall_speed[WALL_BOTTOM], 0};
     if (p->walls.top)
-        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m, 0, 0, 0, 0, sim->wall_speed[WALL_TOP],
-                                    0};
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m + half_margin, 0, 0, 0, 0,
+                                    sim->wall_speed[WALL_TOP], 0};
     if (p->walls.left)
-        walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, 0, 0, 0, 0, 0, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, half_margin, 0, 0, 0, 0, 0, 0};
     if (p->walls.right)
-        walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m, 0, 0, 0, 0, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m + half_margin, 0, 0, 0, 0, 0, 0};
     if (p->walls.upstream)
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, p->walls.upstream_x_m, 0, p->walls.upstream_x_m,
                                     p->walls.upstream_height_m, 0, 0};
@@ -557,7 +574,7 @@ int boulders_correct(surge_sim *sim, double dt_s)
     }
     contact_wall walls[5];
     const int wall_count = contact_walls(sim, walls);
-    contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->radius, b->inv_mass,
+    contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
                            b->inv_inertia, b->spin_damping};
     const contact_settings settings = {p->contacts.friction, p->contacts.restitution, p->contacts.restitution_min_mps,
                                        p->contacts.substeps, p->contacts.iterations, p->contacts.erp,

@@ -14,6 +14,7 @@ typedef struct boulder_set {
     double *x, *y, *angle, *vx, *vy, *omega;
     double *x_n, *y_n, *angle_n, *vx_n, *vy_n, *omega_n; /* at the start of the step */
     double *radius, *mass, *inv_mass, *inv_inertia;       /* per metre of width */
+    double *contact_radius;  /* radius + contacts.margin_dp dp / 2: where the contact solver sees the disc's surface */
     double *fx, *fy, *torque;                             /* fluid force and torque on each disc (eq. 10) */
     double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
     double *spin_damping;   /* -d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit */

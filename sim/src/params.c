@@ -180,6 +180,10 @@ static const surge_param_info registry[] = {
      "Projected Gauss-Seidel sweeps over all contacts per sub-step.", OFF(contacts.iterations)},
     {"contacts", "erp", SURGE_PARAM_REAL, "-", 0.2, 0, 1, true, NULL,
      "Fraction of an overlap removed per sub-step (error reduction).", OFF(contacts.erp)},
+    {"contacts", "margin_dp", SURGE_PARAM_REAL, "dp", 0, 0, 2, false, NULL,
+     "Discs touch each other and the walls this far apart, in dp (0: at their surfaces): a gap narrower than the "
+     "particle spacing holds fluid particles the SPH cannot resolve (docs/validation/debris_surge.md).",
+     OFF(contacts.margin_dp)},
 
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",

@@ -123,6 +123,7 @@ typedef struct surge_params {
         int substeps;            /* contact sub-steps per SPH step */
         int iterations;          /* projected Gauss-Seidel sweeps per sub-step */
         double erp;              /* fraction of an overlap removed per sub-step */
+        double margin_dp;        /* discs touch each other and walls this far apart (dp): fluid gaps below dp */
     } contacts;
     struct {
         int form;                    /* surge_shifting_form */
