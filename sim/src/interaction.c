@@ -184,18 +184,36 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
 
 /* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
  * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal
- * line): its distance (search_m when none), normal, the wall's velocity along it, and the wall particle (-1: none).
- * disc_face then looks for a nearer disc face. */
+ * line), or the nearest face of a disc among them: its distance (search_m when none), normal, the wall's velocity
+ * along it, and the wall particle or the disc (-1: none). */
 typedef struct wall_face {
     real gap_m, nx, ny, vn_mps;
     int wall, disc;
 } wall_face;
+
+/* The face of disc i if it is nearer to fluid particle a than face: the disc's circle, its outward normal through
+ * the particle, and the disc's velocity along it (turning adds none). */
+static void disc_face(const surge_sim *sim, int a, int i, wall_face *face)
+{
+    const boulder_set *b = &sim->boulders;
+    const double period = sim->grid.period_m;
+    double dx = sim->x[a] - b->x[i];
+    if (period > 0)
+        dx -= period * floor(dx / period + 0.5);
+    const double dy = sim->y[a] - b->y[i], distance = sqrt(dx * dx + dy * dy);
+    const double gap = distance - b->radius[i];
+    if (gap < face->gap_m && distance > 0) {
+        const double nx = dx / distance, ny = dy / distance;
+        *face = (wall_face){(real)gap, (real)nx, (real)ny, (real)(b->vx[i] * nx + b->vy[i] * ny), -1, i};
+    }
+}
 
 static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *near_boulder)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
     wall_face face = {search_m, 0, 0, 0, -1, -1};
+    int last_disc = -1;
     const int i = a - sim->wall_count;
     for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
         const int b = nl->wall_index[e];
@@ -204,8 +222,12 @@ static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *
         const real r2 = dx * dx + dy * dy;
         if (r2 >= support2)
             continue;
-        if (sim->wall_of[b] == WALL_BOULDER) {
+        if (sim->wall_of[b] == WALL_BOULDER) { /* the discs among the neighbours, each once per run of its particles */
             *near_boulder = 1;
+            const int disc = sim->boulders.of_wall[sim->id[b]];
+            if (search_m > 0 && disc != last_disc)
+                disc_face(sim, a, disc, &face);
+            last_disc = disc;
             continue;
         }
         const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
@@ -214,25 +236,6 @@ static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *
                                sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
     }
     return face;
-}
-
-/* The face of a disc nearer to fluid particle a than face: the disc's circle, its outward normal through the
- * particle, and the disc's velocity along it (turning adds none). */
-static void disc_face(const surge_sim *sim, int a, wall_face *face)
-{
-    const boulder_set *b = &sim->boulders;
-    const double period = sim->grid.period_m;
-    for (int i = 0; i < b->count; i++) {
-        double dx = sim->x[a] - b->x[i];
-        if (period > 0)
-            dx -= period * floor(dx / period + 0.5);
-        const double dy = sim->y[a] - b->y[i], distance = sqrt(dx * dx + dy * dy);
-        const double gap = distance - b->radius[i];
-        if (gap < face->gap_m && distance > 0) {
-            const double nx = dx / distance, ny = dy / distance;
-            *face = (wall_face){(real)gap, (real)nx, (real)ny, (real)(b->vx[i] * nx + b->vy[i] * ny), -1, i};
-        }
-    }
 }
 
 void interaction_compute(surge_sim *sim, int corrector)
@@ -272,9 +275,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             wall_pairs(sim, &c, a, 0, &s);
         }
         s.near_surface |= sim->surface[a];
-        wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
-        if (s.near_boulder && face_search_m > 0)
-            disc_face(sim, a, &face);
+        const wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
         sim->face_disc[a] = -1;
         if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
                                           * its normal; the step's update takes away any velocity toward it (sim.c) */

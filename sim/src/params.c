@@ -213,12 +213,12 @@ static const surge_param_info registry[] = {
      "Simulated time between checkpoints (0: only the final one).", OFF(output.checkpoint_interval_s)},
     {"output", "flow_interval_s", SURGE_PARAM_REAL, "s", 0, 0, 1e7, false, NULL,
      "Simulated time between rows of flow.csv, a belt surge's flow height, mean velocity, Froude number and "
-     "equivalent viscosity (GMD 2025 eq. 21; docs/validation/drift.md) (0: no flow.csv).", OFF(output.flow_interval_s)},
+     "equivalent viscosity (GMD 2025 eq. 21; docs/validation/debris_surge.md) (0: no flow.csv).", OFF(output.flow_interval_s)},
     {"output", "flow_ignore_m", SURGE_PARAM_REAL, "m", 5, 0, 1e4, false, NULL,
      "flow.csv leaves out the fluid this close downstream of the upstream wall (the paper's 5 m).",
      OFF(output.flow_ignore_m)},
     {"output", "flow_column_m", SURGE_PARAM_REAL, "m", 0.5, 1e-6, 1e4, false, NULL,
-     "flow.csv: width of the columns whose tops give the flow height.", OFF(output.flow_column_m)},
+     "flow.csv: width of the columns whose tops give the flow height (at least dp/2).", OFF(output.flow_column_m)},
     {"output", "progress_interval_s", SURGE_PARAM_REAL, "s (wall)", 2, 0, 1e5, true, NULL,
      "Wall-clock seconds between progress lines on stderr (0: silent).", OFF(output.progress_interval_s)},
 
@@ -668,6 +668,11 @@ int surge_params_wall_layers(const surge_params *p)
 
 int surge_params_validate(const surge_params *p, char *err, size_t err_len)
 {
+    if (p->output.flow_interval_s > 0 && p->output.flow_column_m < 0.5 * p->numerics.dp_m) {
+        fail(err, err_len, "output.flow_column_m (%g m) must be at least half of numerics.dp_m (%g m): a column "
+             "narrower holds no particle column", p->output.flow_column_m, 0.5 * p->numerics.dp_m);
+        return -1;
+    }
     if (p->render.view_x1_m <= p->render.view_x0_m) {
         fail(err, err_len, "render.view_x1_m (%g) must be greater than render.view_x0_m (%g)", p->render.view_x1_m,
              p->render.view_x0_m);

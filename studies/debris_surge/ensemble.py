@@ -85,14 +85,14 @@ def run_member(args, count, seed, deadline):
 
 
 def command_run(args):
-    todo = members(args)
+    chosen = members(args)
     if args.member is not None:
-        if not 0 <= args.member < len(todo):
-            fail("--member %d: the ensemble has members 0..%d (see the list command)" % (args.member, len(todo) - 1))
-        todo = [todo[args.member]]
+        if not 0 <= args.member < len(chosen):
+            fail("--member %d: the ensemble has members 0..%d (see the list command)" % (args.member, len(chosen) - 1))
+        chosen = [chosen[args.member]]
     deadline = time.time() + args.budget_s if args.budget_s > 0 else None
     os.makedirs(args.runs_dir, exist_ok=True)
-    queue, lock = list(todo), threading.Lock()
+    queue, lock = list(chosen), threading.Lock()
 
     def worker():
         while True:
@@ -104,7 +104,7 @@ def command_run(args):
                 return
             run_member(args, count, seed, deadline)
 
-    workers = [threading.Thread(target=worker) for _ in range(min(args.jobs, len(todo)))]
+    workers = [threading.Thread(target=worker) for _ in range(min(args.jobs, len(chosen)))]
     for w in workers:
         w.start()
     for w in workers:
