@@ -33,7 +33,7 @@ SEED = int(OPTIONS.get("--seed", 1))
 DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120}
 COUNT = int(OPTIONS.get("--count", DEFAULT_COUNT[GROUP]))
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
-import surge_client  # noqa: E402
+from surgepy import client as surge_client  # noqa: E402
 
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE", OMP_NUM_THREADS="1",
            ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:allocator_may_return_null=1",

@@ -31,7 +31,7 @@ SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
-import vtp  # noqa: E402
+from surgepy import vtp  # noqa: E402
 
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
 
@@ -191,7 +191,7 @@ def group_restart():
 
 def group_stream():
     import zmq
-    import surge_client
+    from surgepy import client as surge_client
     out = os.path.join(WORK, "stream")
     shutil.rmtree(out, ignore_errors=True)
     os.makedirs(out)

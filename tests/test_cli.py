@@ -575,8 +575,7 @@ def read_csv_rows(path):
 
 
 def group_blowup():
-    sys.path.insert(0, os.path.join(SOURCE, "tools"))
-    import vtp
+    from surgepy import vtp
 
     case = os.path.join(SOURCE, "cases", "still_tank.ini")
     out = os.path.join(WORK, "blowup")
@@ -671,8 +670,7 @@ def group_blowup():
 
 
 def group_restart():
-    sys.path.insert(0, os.path.join(SOURCE, "tools"))
-    import vtp
+    from surgepy import vtp
 
     case = os.path.join(SOURCE, "cases", "demo.ini")
     quiet = ["-s", "output.progress_interval_s=0"]
@@ -881,6 +879,7 @@ def main():
     SURGE = os.path.abspath(sys.argv[1])
     SOURCE = os.path.abspath(sys.argv[2])
     WORK = os.path.abspath(sys.argv[3])
+    sys.path.insert(0, os.path.join(SOURCE, "tools"))  # surgepy
     if os.path.isdir(WORK):
         shutil.rmtree(WORK)
     os.makedirs(WORK)

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Checks tools/freydier_metrics.py (and the writer in tools/vtp.py) on synthetic run folders.
+"""Checks tools/freydier_metrics.py (and the writer in tools/surgepy/vtp.py) on synthetic run folders.
 
 Usage: test_freydier_metrics.py OUT_DIR [--keep]
 
@@ -40,7 +40,7 @@ TOOLS = os.path.join(HERE, "..", "tools")
 sys.path.insert(0, TOOLS)
 import checks  # noqa: E402
 import freydier_metrics as fm  # noqa: E402
-import vtp  # noqa: E402
+from surgepy import vtp  # noqa: E402
 
 SCRIPT = os.path.join(TOOLS, "freydier_metrics.py")
 

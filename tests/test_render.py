@@ -33,7 +33,7 @@ SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
-import surge_client  # noqa: E402
+from surgepy import client as surge_client  # noqa: E402
 
 TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
 COMMON = ["-s", "time.end_s=0.2", "-s", "render.width_px=640", "-s", "render.height_px=360",

@@ -14,7 +14,7 @@ source, work = sys.argv[1], sys.argv[2]
 sys.path.insert(0, os.path.join(source, "tools"))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
-import study  # noqa: E402
+from surgepy import study  # noqa: E402
 
 os.makedirs(work, exist_ok=True)
 
@@ -97,7 +97,7 @@ check("poiseuille_loaded reference --phi 0.9 refused", r.returncode == 2 and "--
 
 # wall_contact: a synthetic belt run with one particle 0.4 dp behind the upstream wall's face and a bed layer
 # at 0.25 dp over 12-112 mm
-import vtp  # noqa: E402
+from surgepy import vtp  # noqa: E402
 contact_dir = os.path.join(work, "wall_contact")
 shutil.rmtree(contact_dir, ignore_errors=True)  # a rerun must not see the broken snapshot written below
 os.makedirs(contact_dir)

@@ -29,7 +29,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 import freydier_convergence  # noqa: E402
 import poiseuille_loaded  # noqa: E402
-import vtp  # noqa: E402
+from surgepy import vtp  # noqa: E402
 
 
 
@@ -149,7 +149,7 @@ no_offset = damaged("no_offset", lambda b: b.replace(b'offset="0"', b'offzet="0"
 non_finite = rewritten("non_finite", density_kgpm3=lambda s: np.where(s["kind"] == 0, np.nan, s["density_kgpm3"]))
 no_fluid = rewritten("no_fluid", kind=lambda s: np.ones_like(s["kind"]))
 
-# ---- 1. tools/vtp.py: one error class, naming the file, for every malformed input ----
+# ---- 1. tools/surgepy/vtp.py: one error class, naming the file, for every malformed input ----
 for name, d in (("no <Points>", no_points), ("malformed XML", bad_xml), ("no offset attribute", no_offset)):
     try:
         vtp.read_vtp(os.path.join(d, SNAPS[0]))

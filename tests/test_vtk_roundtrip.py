@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Decodes DIR/synthetic.vtp written by tests/test_vtk_output.c with tools/vtp.py and checks that
+"""Decodes DIR/synthetic.vtp written by tests/test_vtk_output.c with tools/surgepy/vtp.py and checks that
 every value equals the known one exactly.
 
 Usage: test_vtk_roundtrip.py DIR/synthetic.vtp
@@ -22,7 +22,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
-import vtp  # noqa: E402
+from surgepy import vtp  # noqa: E402
 
 X = [-1.25, 0.1, 1e-300, -123456.789, 3.0]
 Y = [0.5, -2.75, 2.5e-8, 7.0e10, -1e-5]

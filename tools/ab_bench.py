@@ -20,9 +20,9 @@ import statistics
 import subprocess
 import sys
 
+from surgepy import cli_checks
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-import cli_checks  # noqa: E402
 
 LINE = re.compile(r"([0-9.]+) million particle-steps/s.*velocity error vs analytic start-up ([0-9.]+)")
 

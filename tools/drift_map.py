@@ -14,11 +14,9 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import cli_checks  # noqa: E402
-import vtp  # noqa: E402
-from operator_check import kernel_sum_ratio, read_run  # noqa: E402
-from run_params import ParamsError  # noqa: E402
+from surgepy import cli_checks, vtp
+from surgepy.run_params import ParamsError
+from operator_check import kernel_sum_ratio, read_run
 
 COLUMN_M = 0.02
 LOWER_FRACTION = 0.35

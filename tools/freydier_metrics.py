@@ -24,10 +24,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import cli_checks  # noqa: E402
-import vtp  # noqa: E402
-from run_params import ParamsError, RunParams  # noqa: E402
+from surgepy import cli_checks, vtp
+from surgepy.run_params import ParamsError, RunParams
 
 PROG = "freydier_metrics"
 TOE_FRACTION = 0.1          # toe: where h drops below this fraction of h_n

@@ -8,7 +8,7 @@ import sys
 
 import matplotlib
 
-import cli_checks
+from surgepy import cli_checks
 
 MAPS = ["viridis", "cividis"]
 

@@ -13,7 +13,7 @@ For fluid particles in the box [x0, x1] x [y0, y1] (metres; choose it away from 
   nu_eff = -g sin(theta) / (2 b) against the run's nu; and the vertical pressure gradient against hydrostatic
   rho0 g cos(theta). In a uniform film both ratios are 1.
 
-Reads the run's params.ini and .vtp files (tools/vtp.py); numpy only.
+Reads the run's params.ini and .vtp files (tools/surgepy/vtp.py); numpy only.
 """
 import argparse
 import glob
@@ -23,10 +23,8 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import cli_checks  # noqa: E402
-import vtp  # noqa: E402
-from run_params import ParamsError, RunParams  # noqa: E402
+from surgepy import cli_checks, vtp
+from surgepy.run_params import ParamsError, RunParams
 
 
 def fail(message):

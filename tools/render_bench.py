@@ -20,9 +20,9 @@ import subprocess
 import sys
 import time
 
+from surgepy import cli_checks
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-import cli_checks  # noqa: E402
 
 
 def fail(message):

@@ -14,7 +14,7 @@ and the small still tank (1,472 particles) with fast-all, where the solver is fa
 limit. Each run starts paused with a control socket and is resumed once the subscriber is connected, so all
 rates cover the same span. The configurations are run in turn --repeat times (interleaved, so a slow spell of
 the machine does not fall on one of them only) and the table gives the median of each: solver steps/s, its
-ratio to "alone", states received per second and MB/s. The subscriber is Python (tools/surge_client.py) decoding every field with numpy.
+ratio to "alone", states received per second and MB/s. The subscriber is Python (tools/surgepy/client.py) decoding every field with numpy.
 """
 import argparse
 import os
@@ -28,10 +28,10 @@ import time
 
 import zmq
 
+from surgepy import cli_checks
+from surgepy import client as surge_client
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-import cli_checks  # noqa: E402
-import surge_client  # noqa: E402
 
 
 class Subscriber(threading.Thread):

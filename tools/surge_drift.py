@@ -14,7 +14,7 @@ For each --every-th snapshot (and the last), over the fluid more than --ignore-m
   their column's top; 1 when the particles sit as far apart as their densities say (tools/operator_check.py);
 - the toe: the downstream end of the last column whose top exceeds 10 % of h_max;
 - the lowest fluid particle's height above the bed face (negative: inside the wall).
-Reads params.ini and the run's snap_*.vtp (tools/vtp.py); numpy only.
+Reads params.ini and the run's snap_*.vtp (tools/surgepy/vtp.py); numpy only.
 """
 import argparse
 import glob
@@ -24,11 +24,9 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import cli_checks  # noqa: E402
-import vtp  # noqa: E402
-from operator_check import wendland  # noqa: E402
-from run_params import ParamsError, RunParams  # noqa: E402
+from surgepy import cli_checks, vtp
+from surgepy.run_params import ParamsError, RunParams
+from operator_check import wendland
 
 COLUMNS = ("t_s", "h_max_m", "h_vol_m", "u_bar_mps", "froude", "mu_eq_over_mu0", "kernel_sum_over_density",
            "body_particles", "toe_from_wall_m", "lowest_fluid_y_m")

@@ -17,9 +17,8 @@ import time
 
 import zmq
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import cli_checks  # noqa: E402
-import surge_client  # noqa: E402
+from surgepy import cli_checks
+from surgepy import client as surge_client
 
 FIELDS = {  # colour field: (label, unit, state fields needed)
     "speed": ("speed", "m/s", ["vx_mps", "vy_mps"]),

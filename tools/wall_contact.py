@@ -20,9 +20,9 @@ import sys
 
 import numpy as np
 
-import cli_checks
-from run_params import ParamsError, RunParams
-from vtp import VtpError, read_vtp
+from surgepy import cli_checks
+from surgepy.run_params import ParamsError, RunParams
+from surgepy.vtp import VtpError, read_vtp
 
 
 def fail(message):

@@ -30,9 +30,8 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 sys.path.insert(0, os.path.join(ROOT, "tools"))
-import cli_checks  # noqa: E402
-import study  # noqa: E402
-from run_params import ParamsError, RunParams  # noqa: E402
+from surgepy import cli_checks, study  # noqa: E402
+from surgepy.run_params import ParamsError, RunParams  # noqa: E402
 
 TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")

@@ -15,9 +15,9 @@ import threading
 import time
 import zlib
 
-import vtp
-from cli_checks import fail
-from run_params import ParamsError, RunParams
+from . import vtp
+from .cli_checks import fail
+from .run_params import ParamsError, RunParams
 
 
 def positive_numbers(program, text, option):

@@ -114,7 +114,7 @@ def add_curve_options(parser):
 
 def curve_of(parser, args):
     """The keys of add_curve_options' options for surge_client, or None when neither is given."""
-    import surge_client
+    from . import client as surge_client
     if (args.server_key is None) != (args.key is None):
         parser.error("--server-key and --key go together")
     if args.server_key is None:

@@ -1,6 +1,7 @@
 """Client side of surge's live stream and control socket (the wire format is docs/protocol.md).
 
-    import zmq, surge_client
+    import zmq
+    from surgepy import client as surge_client
     sub = surge_client.subscribe("tcp://127.0.0.1:5555", ["state", "stats"])
     topic, header, arrays = surge_client.receive(sub)        # arrays["x_m"] is a numpy array
     ctl = surge_client.Control("tcp://127.0.0.1:5556")
