@@ -20,7 +20,6 @@ import subprocess
 import sys
 
 SURGE, SOURCE, WORK = sys.argv[1:4]
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 
 TOOL = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")

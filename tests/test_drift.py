@@ -17,8 +17,7 @@ import os
 import subprocess
 import sys
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from checks import check, finish  # noqa: E402
+from checks import check, finish
 
 SURGE, SOURCE, OUT, GROUP = sys.argv[1:5]
 UNIFORM_FROUDE = 0.977  # u_b / sqrt(g h_n), h_n = sqrt(3 nu0 u_b / (g sin theta)) = 1.307 m (cases/debris_surge.ini)

@@ -31,7 +31,6 @@ import numpy as np
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 from surgepy import client as surge_client  # noqa: E402
 

@@ -34,7 +34,6 @@ import zmq
 
 SURGE, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
 sys.path.insert(0, os.path.join(SOURCE, "tools"))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 from surgepy import client as surge_client  # noqa: E402
 from surgepy import vtp  # noqa: E402

@@ -12,7 +12,6 @@ import sys
 
 source, work = sys.argv[1], sys.argv[2]
 sys.path.insert(0, os.path.join(source, "tools"))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 from surgepy import study  # noqa: E402
 

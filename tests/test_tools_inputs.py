@@ -25,7 +25,6 @@ import zmq
 SURGE, SOURCE, WORK = sys.argv[1:4]
 TOOLS = os.path.join(SOURCE, "tools")
 sys.path.insert(0, TOOLS)
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from checks import check, finish  # noqa: E402
 import freydier_convergence  # noqa: E402
 import poiseuille_loaded  # noqa: E402
