@@ -1,6 +1,8 @@
 /* Physics tests against analytic references (docs/references.md). Each runs a shipped case, made cheaper through
  * overrides where that keeps the check meaningful, and prints the measured errors next to their bounds.
- * usage: test_physics NAME [profile.csv]   NAME: hydrostatic | poiseuille | couette | film | restart */
+ * usage: test_physics NAME [profile.csv | restart DIR [CASE]] [-s section.key=value ...]
+ *   NAME: hydrostatic | poiseuille | couette | film | restart | solver_failure; each -s is applied after the test's own overrides
+ *   (-s numerics.scheme=implicit runs a test with the implicit scheme, against the same bounds). */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>
@@ -12,6 +14,8 @@
 #define PI 3.14159265358979323846
 
 static int failures = 0;
+static const char *extra[16];  /* the command line's -s overrides */
+static int extra_count = 0;
 
 static void expect_below(const char *what, double value, double bound)
 {
@@ -31,6 +35,12 @@ static surge_sim *load(const char *case_name, const char *const *overrides, int 
     }
     for (int i = 0; i < n; i++) {
         if (surge_params_override(&p, overrides[i], false, err, sizeof err) != 0) {
+            fprintf(stderr, "%s\n", err);
+            exit(2);
+        }
+    }
+    for (int i = 0; i < extra_count; i++) {
+        if (surge_params_override(&p, extra[i], false, err, sizeof err) != 0) {
             fprintf(stderr, "%s\n", err);
             exit(2);
         }
@@ -226,14 +236,14 @@ static int test_film(void)
 }
 
 /* A run checkpointed half-way and restarted from the file ends bit-identical to the uninterrupted run. */
-static int test_restart(const char *dir)
+static int test_restart(const char *dir, const char *case_name)
 {
     const char *overrides[] = {"time.end_s=0.2"};
-    surge_sim *straight = load("demo.ini", overrides, 1);
+    surge_sim *straight = load(case_name, overrides, 1);
     for (int i = 0; i < 200; i++)
         if (surge_sim_step(straight) != 0)
             return ++failures;
-    surge_sim *first = load("demo.ini", overrides, 1);
+    surge_sim *first = load(case_name, overrides, 1);
     for (int i = 0; i < 85; i++)
         if (surge_sim_step(first) != 0)
             return ++failures;
@@ -264,13 +274,45 @@ static int test_restart(const char *dir)
     return failures;
 }
 
+/* A linear solve of the implicit scheme that cannot converge in the iterations allowed stops the step with the
+ * solver check, naming the solve, and leaves the state as it was (the film, one iteration allowed). */
+static int test_solver_failure(void)
+{
+    const char *overrides[] = {"numerics.dp_m=0.0125", "domain.length_m=0.25", "fluid.x1_m=0.25", "numerics.ch=1.3",
+                               "walls.layers=0", "numerics.scheme=implicit", "implicit.max_iterations=1"};
+    surge_sim *sim = load("incline_film.ini", overrides, 7);
+    const uint64_t before = surge_sim_state_hash(sim);
+    const int rc = surge_sim_step(sim);
+    const surge_health *h = surge_sim_health(sim);
+    printf("solver failure: step returned %d, check '%s': %s\n", rc, surge_health_check_name(h->check), h->message);
+    expect_below("solver failure: the step was not refused (1 = not refused)", rc == 0, 0);
+    expect_below("solver failure: the check is not the solver's (1 = another)", h->check != SURGE_CHECK_SOLVER, 0);
+    expect_below("solver failure: the message names no solve (1 = none)",
+                 !strstr(h->message, "pressure solve") && !strstr(h->message, "viscous solve"), 0);
+    expect_below("solver failure: the state changed (1 = changed)", surge_sim_state_hash(sim) != before, 0);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
-    if (argc < 2) {
-        fprintf(stderr, "usage: test_physics hydrostatic|poiseuille|couette|film|restart [file]\n");
+    const char *positional[3] = {NULL, NULL, NULL};
+    int npos = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "-s") && i + 1 < argc && extra_count < 16)
+            extra[extra_count++] = argv[++i];
+        else if (npos < 3 && strcmp(argv[i], "-s"))
+            positional[npos++] = argv[i];
+        else {
+            fprintf(stderr, "test_physics: unexpected argument '%s'\n", argv[i]);
+            return 2;
+        }
+    }
+    if (npos < 1) {
+        fprintf(stderr, "usage: test_physics hydrostatic|poiseuille|couette|film|restart [file] [-s key=value ...]\n");
         return 2;
     }
-    const char *name = argv[1], *arg = argc > 2 ? argv[2] : NULL;
+    const char *name = positional[0], *arg = positional[1];
     if (!strcmp(name, "hydrostatic"))
         return test_hydrostatic() ? 1 : 0;
     if (!strcmp(name, "poiseuille"))
@@ -279,8 +321,10 @@ int main(int argc, char **argv)
         return test_channel(0, arg) ? 1 : 0;
     if (!strcmp(name, "film"))
         return test_film() ? 1 : 0;
+    if (!strcmp(name, "solver_failure"))
+        return test_solver_failure() ? 1 : 0;
     if (!strcmp(name, "restart"))
-        return test_restart(arg ? arg : ".") ? 1 : 0;
+        return test_restart(arg ? arg : ".", positional[2] ? positional[2] : "demo.ini") ? 1 : 0;
     fprintf(stderr, "test_physics: unknown test '%s'\n", name);
     return 2;
 }

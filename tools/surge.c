@@ -670,6 +670,19 @@ static void report_resolution(const surge_sim *sim, int verbose)
             dt = fmin(dt, h * h / p->fluid.viscosity_m2ps);
         dt *= p->numerics.cfl;
     }
+    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT) {
+        /* the implicit scheme's step follows the flow's speed; its cost per step follows the solves' iterations */
+        const double g = p->body.gravity_mps2, u = d->expected_speed_mps;
+        double dt_implicit = p->numerics.dt_fixed_s;
+        if (!(dt_implicit > 0))
+            dt_implicit = p->implicit.cfl * fmin(g > 0 ? sqrt(h / g) : INFINITY, u > 0 ? h / u : INFINITY);
+        if (verbose || bytes > 4e9)
+            fprintf(out, "%sestimated memory %.3g MB (%.0f list entries per fluid particle); implicit scheme: dt = %.3g "
+                    "s at the scene's expected speed %.3g m/s (it follows the flow's own speed: longer where the flow "
+                    "is slower); the cost per step follows the linear solves' iterations (diagnostics.csv), not "
+                    "estimated here\n", verbose ? "  " : "surge: ", bytes / 1e6, entries, dt_implicit, u);
+        return;
+    }
     /* seconds per particle-step on 2 threads of the 2-core EPYC VM, fitted to the benchmark at C_h 1.0 and 1.8 */
     const double per_particle_step_s = 1.37e-7 + 4.43e-9 * entries;
     const double particle_steps = d->fluid_count / dt;

@@ -10,6 +10,7 @@
  *             (version 4) angle at the last neighbour-list build [f64 each] |
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
+ *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
  * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
@@ -25,7 +26,7 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 4u
+#define CHECKPOINT_VERSION 5u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 
@@ -92,6 +93,27 @@ static int read_wall_build_positions(FILE *f, surge_sim *sim)
     }
     free(by_id);
     return rc ? -1 : 0;
+}
+
+/* The implicit scheme's pressure by particle id: its next step starts from it */
+static int write_implicit_pressure(FILE *f, const surge_sim *sim)
+{
+    if (!sim->implicit_pressure_by_id)
+        return 0;
+    return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double));
+}
+
+/* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit */
+static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
+{
+    if (!sim->implicit_pressure_by_id || version < 5)
+        return 0;
+    if (read_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)))
+        return -1;
+    for (int i = 0; i < sim->count; i++) /* outside the state hash: finite and not absurd (1e12 Pa) */
+        if (!(fabs(sim->implicit_pressure_by_id[i]) < 1e12))
+            return -1;
+    return 0;
 }
 
 static int write_boulders(FILE *f, const boulder_set *b)
@@ -195,7 +217,8 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
              write_all(f, &lists_built, 4) | write_all(f, sim->neighbours.x_build + w, nf * sizeof(double)) |
              write_all(f, sim->neighbours.y_build + w, nf * sizeof(double)) |
-             write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) | write_all(f, &hash, 8);
+             write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) | write_implicit_pressure(f, sim) |
+             write_all(f, &hash, 8);
     free(params_text);
     uint64_t checksum = 0;
     const long length = rc == 0 && fflush(f) == 0 ? ftell(f) : -1;
@@ -289,6 +312,10 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     }
     if (version >= 3 && read_wall_build_positions(f, sim)) {
         snprintf(err, err_len, "%s: truncated or corrupt wall build positions", path);
+        goto fail;
+    }
+    if (read_implicit_pressure(f, sim, version)) {
+        snprintf(err, err_len, "%s: truncated or corrupt implicit-scheme pressure", path);
         goto fail;
     }
     if (read_all(f, &hash, 8)) {

@@ -49,6 +49,7 @@ const char *surge_health_check_name(surge_health_check c)
     case SURGE_CHECK_CROSSED_WALL: return "particle crossed a wall";
     case SURGE_CHECK_DT_COLLAPSE: return "time step collapsed";
     case SURGE_CHECK_OUT_OF_MEMORY: return "out of memory";
+    case SURGE_CHECK_SOLVER: return "linear solve did not converge";
     }
     return "?";
 }

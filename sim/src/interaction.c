@@ -182,15 +182,6 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     s->g_yy += g_yy;
 }
 
-/* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
- * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal
- * line), or the nearest face of a disc among them: its distance (search_m when none), normal, the wall's velocity
- * along it, and the wall particle or the disc (-1: none). */
-typedef struct wall_face {
-    real gap_m, nx, ny, vn_mps;
-    int wall, disc;
-} wall_face;
-
 /* The face of disc i if it is nearer to fluid particle a than face: the disc's circle, its outward normal through
  * the particle, and the disc's velocity along it (turning adds none). */
 static void disc_face(const surge_sim *sim, int a, int i, wall_face *face)
@@ -208,7 +199,7 @@ static void disc_face(const surge_sim *sim, int a, int i, wall_face *face)
     }
 }
 
-static wall_face wall_contacts(const surge_sim *sim, int a, real search_m, int *near_boulder)
+wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int *near_boulder)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
@@ -275,7 +266,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             wall_pairs(sim, &c, a, 0, &s);
         }
         s.near_surface |= sim->surface[a];
-        const wall_face face = wall_contacts(sim, a, face_search_m, &s.near_boulder);
+        const wall_face face = interaction_wall_face(sim, a, face_search_m, &s.near_boulder);
         sim->face_disc[a] = -1;
         if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
                                           * its normal; the step's update takes away any velocity toward it (sim.c) */

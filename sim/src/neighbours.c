@@ -211,15 +211,14 @@ int neighbours_adopt_build_positions(surge_sim *sim)
     return build_lists(sim);
 }
 
-/* The farthest any particle can be from its build position at the corrector's evaluation of the coming step:
- * its distance now plus half the largest time step (dt <= C_CFL h / c0) at its speed (a boulder's particles: the
- * disc's speed plus omega times its radius). */
+/* The farthest any particle can be from its build position at the last force evaluation of the coming step: its
+ * distance now plus the scheme's look-ahead at its speed (the explicit scheme's corrector: half the largest time
+ * step, dt <= C_CFL h / c0; the implicit scheme evaluates at the step's start: none); a boulder's particles: the
+ * disc's speed plus omega times its radius. */
 static double largest_excursion(const surge_sim *sim)
 {
     const neighbour_lists *nl = &sim->neighbours;
-    const surge_params *p = &sim->params;
-    const double half_dt = 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
-                                                            : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
+    const double half_dt = sim->list_lookahead_s;
     double largest = 0;
     #pragma omp parallel for schedule(static) reduction(max : largest)
     for (int a = sim->wall_count; a < sim->count; a++) {

@@ -117,6 +117,31 @@ static const surge_param_info registry[] = {
      "Fixed time step instead of the variable one (0: variable). For tests of the health monitor.",
      OFF(numerics.dt_fixed_s)},
 
+    {"numerics", "scheme", SURGE_PARAM_ENUM, "-", SURGE_SCHEME_EXPLICIT, 0, 1, false, "explicit|implicit",
+     "Time stepping: explicit (weakly-compressible SPH, time step at the speed of sound; the paper's) or implicit "
+     "(incompressible projection with implicit viscosity, time step at the flow's own speed; for slow viscous "
+     "flows; no boulders yet; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
+
+    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.25, 1e-4, 2, false, NULL,
+     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)).", OFF(implicit.cfl)},
+    {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
+     "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
+     OFF(implicit.pressure_tolerance)},
+    {"implicit", "viscous_tolerance", SURGE_PARAM_REAL, "-", 1e-8, 1e-14, 0.1, true, NULL,
+     "Implicit scheme: relative residual at which the implicit viscous solve stops.",
+     OFF(implicit.viscous_tolerance)},
+    {"implicit", "max_iterations", SURGE_PARAM_INT, "-", 2000, 1, 1000000, true, NULL,
+     "Implicit scheme: iterations allowed per linear solve; a solve that needs more fails the run (health).",
+     OFF(implicit.max_iterations)},
+    {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 0.1, 0, 1, true, NULL,
+     "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (1 - rho_kernel/rho0)/dt^2 in the "
+     "pressure equation, which holds the particles' spacing at the rest density against drift (0: off).",
+     OFF(implicit.density_correction)},
+    {"implicit", "surface_threshold", SURGE_PARAM_REAL, "-", 1.35, 0, 2, true, NULL,
+     "Implicit scheme: a particle whose div r (2 in the bulk) is below this is on the free surface and holds p = 0. "
+     "On a square lattice the top row reads 1.15-1.25 and the second 1.49-1.85 for C_h 1.0-1.8 (docs/method.md).",
+     OFF(implicit.surface_threshold)},
+
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "
      "(sizes from a grading curve, centres log-normally behind the front; docs/boulders.md), or the CSV in file.",
@@ -681,6 +706,11 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
     if (p->render.color_max < p->render.color_min) {
         fail(err, err_len, "render.color_max (%g) must not be below render.color_min (%g)", p->render.color_max,
              p->render.color_min);
+        return -1;
+    }
+    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->boulders.placement != SURGE_BOULDERS_NONE) {
+        fail(err, err_len, "numerics.scheme = implicit does not take boulders yet (boulders.placement must be none); "
+             "use numerics.scheme = explicit for scenes with boulders");
         return -1;
     }
     const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;

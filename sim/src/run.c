@@ -99,10 +99,13 @@ static int write_diagnostics(const surge_sim *sim, run_outputs *o, char *err, si
 {
     surge_diagnostics d = surge_sim_diagnostics(sim);
     /* flushed row by row: a run that dies still leaves its time series */
-    if (fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g\n", d.time_s, (long long)d.step, d.dt_s,
+    if (fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g", d.time_s, (long long)d.step, d.dt_s,
                 d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
                 d.bottom_wall_speed_mps) < 0 ||
-        fflush(o->csv) != 0) {
+        (surge_sim_params(sim)->numerics.scheme == SURGE_SCHEME_IMPLICIT &&
+         fprintf(o->csv, ",%d,%.3g,%d,%.3g", d.pressure_iterations, d.pressure_residual, d.viscous_iterations,
+                 d.viscous_residual) < 0) ||
+        fputc('\n', o->csv) == EOF || fflush(o->csv) != 0) {
         snprintf(err, err_len, "cannot write %s/diagnostics.csv: %s", o->dir, strerror(errno));
         return -1;
     }
@@ -278,9 +281,12 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         }
     }
     const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
-    o.csv = open_series(&o, "diagnostics.csv", "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,"
-                        "max_density_deviation,fluid_volume_m2,mean_vx_mps,bottom_wall_speed_mps", sim, opt->restarted,
-                        err, err_len);
+    o.csv = open_series(&o, "diagnostics.csv", p->numerics.scheme == SURGE_SCHEME_IMPLICIT
+                        ? "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
+                          "mean_vx_mps,bottom_wall_speed_mps,pressure_iterations,pressure_residual,"
+                          "viscous_iterations,viscous_residual"
+                        : "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
+                          "mean_vx_mps,bottom_wall_speed_mps", sim, opt->restarted, err, err_len);
     if (!o.csv)
         goto done;
     if (p->output.flow_interval_s > 0 &&

@@ -205,10 +205,15 @@ static int allocate_state(surge_sim *s, int n)
 /* Row r (from the bed) of a fluid column of `rows` particles at rest: returns its hydrostatic density, the weight
  * of the rows above (rho0 g_n dp per row, half for its own) through the Tait inverse, and moves *y from row
  * r - 1's height (0 before row 0) to row r's. Rows sit dp rho0 / rho apart, so that each particle's area m / rho
- * is the area the lattice gives it and the kernel sum starts consistent with the density (docs/method.md). */
+ * is the area the lattice gives it and the kernel sum starts consistent with the density (docs/method.md). The
+ * implicit scheme's fluid is incompressible: rows dp apart at rho0. */
 static double fluid_row(const surge_sim *s, long rows, long r, double g_normal, double *y)
 {
     const double dp = s->params.numerics.dp_m;
+    if (s->params.numerics.scheme == SURGE_SCHEME_IMPLICIT) { /* incompressible: every row at rho0, dp apart */
+        *y = r == 0 ? 0.5 * dp : *y + dp;
+        return s->rho0;
+    }
     const double rho = tait_density(s->rho0 * g_normal * dp * (double)(rows - r - 0.5), s->rho0, s->b_pa);
     if (r == 0) {
         *y = 0.5 * dp * s->rho0 / rho;
@@ -293,6 +298,8 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
             s->x[i] = p->fluid.x0_m + (c + 0.5) * dp;
             s->y[i] = y;
             s->rho[i] = (real)rho;
+            /* the pressure at rest (the implicit scheme starts from it): the weight of the column above */
+            s->pressure[i] = (real)(s->rho0 * g_normal * dp * ((double)rows[c] - 0.5 - (double)r));
             s->id[i] = i;
             s->kind[i] = SURGE_KIND_FLUID;
             i++;

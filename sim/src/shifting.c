@@ -19,10 +19,14 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
         coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
                sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
         break;
-    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
+    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer; the implicit
+                            * scheme has no speed of sound and takes the velocity form's A h |u| dt */
         if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
             return;
-        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
+        coef = p->numerics.scheme == SURGE_SCHEME_IMPLICIT
+                   ? p->shifting.velocity_coefficient * sim->derived.h_m * dt *
+                         sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a])
+                   : 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
         break;
     default: return;
     }

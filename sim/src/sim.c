@@ -1,5 +1,5 @@
-/* The solver: scene set-up, symplectic position-Verlet stepping with a variable time step, shifting, the
- * boulders' coupling, snapshots, diagnostics and the state hash. */
+/* The solver: scene set-up, the choice of time-stepping scheme (step_explicit.c, step_implicit.c), snapshots,
+ * diagnostics and the state hash. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -59,6 +59,9 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->eta2 = 0.01 * sim->derived.h_m * sim->derived.h_m;
     sim->kernel = kernel2d_make(sim->derived.h_m);
     sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp);
+    sim->list_lookahead_s = p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
+                            : 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
+                                                                : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
     update_body_force(sim);
     if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0 ||
         neighbours_init(sim, err, err_len) != 0) {
@@ -67,6 +70,15 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     }
     sim->derived.wall_count = sim->wall_count;
     sim->derived.fluid_count = sim->count - sim->wall_count;
+    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT) {
+        if (!(sim->implicit_pressure_by_id = calloc((size_t)sim->count, sizeof *sim->implicit_pressure_by_id))) {
+            snprintf(err, err_len, "out of memory for the implicit scheme's pressure");
+            surge_sim_destroy(sim);
+            return NULL;
+        }
+        for (int a = sim->wall_count; a < sim->count; a++) /* ids are the indices until the first sort */
+            sim->implicit_pressure_by_id[sim->id[a]] = sim->pressure[a];
+    }
     sim->derived.boulder_count = sim->boulders.count;
     sim->derived.smallest_boulder_radius_m = INFINITY;
     for (int i = 0; i < sim->boulders.count; i++)
@@ -91,35 +103,15 @@ void surge_sim_destroy(surge_sim *sim)
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
+    step_implicit_free(sim);
+    free(sim->implicit_pressure_by_id);
     grid_free(&sim->grid);
     neighbours_free(&sim->neighbours);
     boulders_free(&sim->boulders);
     free(sim);
 }
 
-/* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7) */
-static double variable_dt(const surge_sim *sim)
-{
-    const surge_params *p = &sim->params;
-    if (p->numerics.dt_fixed_s > 0)
-        return p->numerics.dt_fixed_s;
-    const double h = sim->derived.h_m, c0 = sim->derived.c0_mps;
-    double max_acc2 = 0, max_visc_mps = 0;
-    #pragma omp parallel for schedule(static) reduction(max : max_acc2, max_visc_mps)
-    for (int a = sim->wall_count; a < sim->count; a++) {
-        double acc2 = (double)sim->ax[a] * sim->ax[a] + (double)sim->ay[a] * sim->ay[a];
-        max_acc2 = acc2 > max_acc2 ? acc2 : max_acc2;
-        max_visc_mps = sim->visc_speed_mps[a] > max_visc_mps ? sim->visc_speed_mps[a] : max_visc_mps;
-    }
-    double dt = h / (c0 + max_visc_mps);             /* dt_cv */
-    if (max_acc2 > 0)
-        dt = fmin(dt, sqrt(h / sqrt(max_acc2)));     /* dt_f */
-    if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)
-        dt = fmin(dt, h * h / p->fluid.viscosity_m2ps); /* dt_nu */
-    return p->numerics.cfl * dt;
-}
-
-static void restore_step_start(surge_sim *sim)
+void sim_restore_step_start(surge_sim *sim)
 {
     const size_t nf = (size_t)(sim->count - sim->wall_count), w = (size_t)sim->wall_count;
     memcpy(sim->x + w, sim->x_n + w, nf * sizeof *sim->x);
@@ -131,92 +123,7 @@ static void restore_step_start(surge_sim *sim)
 
 int surge_sim_step(surge_sim *sim)
 {
-    const int first = sim->wall_count, n = sim->count;
-    const double t_n = sim->time_s;
-
-    const int boulders = sim->boulders.count > 0;
-    if (neighbours_update(sim) != 0) {
-        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
-                                     .time_s = t_n};
-        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the neighbour lists");
-        return -1;
-    }
-    boundary_wall_speeds(sim, t_n);
-    neighbours_track(sim);
-    boundary_update(sim);
-    interaction_compute(sim, 0);
-    boulders_fluid_forces(sim);
-    const double dt = variable_dt(sim);
-    if (sim->step == 0 && sim->first_dt_s == 0)
-        sim->first_dt_s = dt;
-
-    /* predictor: half step (workshop paper eq. 5a-b) */
-    const double half = 0.5 * dt;
-    #pragma omp parallel for schedule(static)
-    for (int a = first; a < n; a++) {
-        sim->x_n[a] = sim->x[a];
-        sim->y_n[a] = sim->y[a];
-        sim->vx_n[a] = sim->vx[a];
-        sim->vy_n[a] = sim->vy[a];
-        sim->rho_n[a] = sim->rho[a];
-        sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
-        sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
-        sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
-        sim->x[a] = sim->x_n[a] + half * sim->vx_n[a]; /* wrapped into the period at list builds */
-        sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
-    }
-
-    if (boulders)
-        boulders_predict(sim, half);
-
-    /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
-    boundary_wall_speeds(sim, t_n + half);
-    neighbours_track(sim);
-    boundary_update(sim);
-    interaction_compute(sim, 1);
-    boulders_fluid_forces(sim);
-    if (boulders && boulders_correct(sim, dt) != 0) {
-        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
-                                     .time_s = t_n + dt};
-        snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
-        restore_step_start(sim);
-        boulders_restore(sim);
-        return -1;
-    }
-    shifting_compute(sim, dt);
-    const double face_reach_m = sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m;
-    #pragma omp parallel for schedule(static)
-    for (int a = first; a < n; a++) {
-        double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
-        /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md) */
-        const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0) {
-            vx1 -= approach_mps * sim->face_nx[a];
-            vy1 -= approach_mps * sim->face_ny[a];
-        }
-        /* eps = div(v) dt (+ div(dr) of the shift) */
-        const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
-        const double sx = sim->shift_x[a], sy = sim->shift_y[a];
-        sim->vx[a] = (real)vx1;
-        sim->vy[a] = (real)vy1;
-        sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));
-        sim->x[a] = sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx;
-        sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
-    }
-    sim->time_s = t_n + dt;
-    sim->dt_s = dt;
-    sim->step++;
-    boundary_wall_speeds(sim, sim->time_s);
-
-    if (health_check(sim) != 0) {
-        restore_step_start(sim);
-        boulders_restore(sim);
-        sim->time_s = t_n;
-        sim->step--;
-        boundary_wall_speeds(sim, t_n);
-        return -1;
-    }
-    return 0;
+    return sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT ? step_implicit(sim) : step_explicit(sim);
 }
 
 double surge_sim_time(const surge_sim *sim) { return sim->time_s; }
@@ -256,6 +163,7 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
     snap->time_s = sim->time_s;
     snap->dt_s = sim->dt_s;
     const real rho0 = (real)sim->rho0, b_pa = (real)sim->b_pa;
+    const int implicit = sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT;
     for (int i = 0; i < sim->count; i++) {
         const int k = sim->id[i];
         snap->x_m[k] = surge_sim_wrapped_x(sim, sim->x[i]);
@@ -263,7 +171,8 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
         snap->vx_mps[k] = (float)sim->vx[i];
         snap->vy_mps[k] = (float)sim->vy[i];
         snap->density_kgpm3[k] = (float)sim->rho[i];
-        snap->pressure_pa[k] = (float)tait_pressure(sim->rho[i], rho0, b_pa);
+        /* the implicit scheme's pressure is its solve's (walls: their mirror), not the equation of state's */
+        snap->pressure_pa[k] = implicit ? (float)sim->pressure[i] : (float)tait_pressure(sim->rho[i], rho0, b_pa);
         snap->kind[k] = sim->kind[k];
         snap->id[k] = k;
     }
@@ -306,6 +215,8 @@ surge_diagnostics surge_sim_diagnostics(const surge_sim *sim)
     d.max_density_deviation = dev;
     d.fluid_volume_m2 = vol;
     d.mean_vx_mps = sim->count > sim->wall_count ? sum_vx / (sim->count - sim->wall_count) : 0;
+    d.pressure_iterations = sim->pressure_iterations, d.viscous_iterations = sim->viscous_iterations;
+    d.pressure_residual = sim->pressure_residual, d.viscous_residual = sim->viscous_residual;
     return d;
 }
 

@@ -123,6 +123,12 @@ struct surge_sim {
     double time_s, dt_s, first_dt_s;
     int64_t step;
     surge_health health;
+
+    double list_lookahead_s;       /* how far ahead of a step's start its force evaluations reach (neighbours.c) */
+    struct implicit_work *implicit; /* the implicit scheme's arrays (step_implicit.c); NULL for the explicit one */
+    double *implicit_pressure_by_id; /* implicit scheme: the fluid's pressure by particle id (checkpointed) */
+    int32_t pressure_iterations, viscous_iterations; /* the implicit scheme's last solves */
+    double pressure_residual, viscous_residual;
 };
 
 /* x wrapped into [0, period) in a periodic domain (positions are wrapped only at neighbour-list builds) */
@@ -171,6 +177,15 @@ void boundary_wall_speeds(surge_sim *sim, double time_s);
 
 /* interaction.c: rates of change of fluid particles */
 void interaction_compute(surge_sim *sim, int corrector);
+/* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
+ * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal
+ * line), or the nearest face of a disc among them: its distance (search_m when none), normal, the wall's velocity
+ * along it, and the wall particle or the disc (-1: none). */
+typedef struct wall_face {
+    real gap_m, nx, ny, vn_mps;
+    int wall, disc;
+} wall_face;
+wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int *near_boulder);
 
 /* boulders.c */
 int boulders_define(surge_sim *sim, char *err, size_t err_len);   /* the discs of the case, before the walls */
@@ -191,6 +206,15 @@ void boulders_free(boulder_set *b);
 
 /* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass) */
 void shifting_compute(surge_sim *sim, double dt_s);
+
+/* sim.c: back to the state saved at the start of the step (x_n, ..., rho_n) */
+void sim_restore_step_start(surge_sim *sim);
+
+/* step_explicit.c, step_implicit.c: one step of each scheme (surge_sim_step); step_implicit_free releases the
+ * implicit scheme's arrays */
+int step_explicit(surge_sim *sim);
+int step_implicit(surge_sim *sim);
+void step_implicit_free(surge_sim *sim);
 
 /* health.c */
 int health_check(surge_sim *sim);

@@ -14,6 +14,11 @@ typedef enum surge_shifting_form {
     SURGE_SHIFT_LIND = 2,     /* Lind et al. 2012: dr = -(A/2) h c0 dt grad C, none in the surface layer */
 } surge_shifting_form;
 
+typedef enum surge_scheme {
+    SURGE_SCHEME_EXPLICIT = 0, /* weakly-compressible SPH, symplectic, time step at the speed of sound */
+    SURGE_SCHEME_IMPLICIT = 1, /* incompressible projection with implicit viscosity (step_implicit.c) */
+} surge_scheme;
+
 typedef enum surge_diffusion_form {
     SURGE_DIFFUSION_FOURTAKAS = 0, /* Fourtakas et al. 2019: density differences less their hydrostatic part */
     SURGE_DIFFUSION_ANTUONO = 1,   /* Antuono et al. 2010 (delta-SPH): less the renormalised density gradient */
@@ -97,7 +102,16 @@ typedef struct surge_params {
         double neighbour_skin_h;    /* neighbour-list skin in units of h (0: rebuilt every step) */
         bool viscous_dt_limit;
         double dt_fixed_s;        /* 0: variable time step */
+        int scheme;               /* surge_scheme */
     } numerics;
+    struct { /* the implicit scheme (numerics.scheme = implicit) */
+        double cfl;                /* dt = cfl min(h / u_max, sqrt(h / |g|)) */
+        double pressure_tolerance; /* relative residual of the pressure Poisson solve */
+        double viscous_tolerance;  /* relative residual of the implicit viscous solve */
+        int max_iterations;        /* per solve; more is a health failure */
+        double density_correction; /* alpha: weight of the rest-density source in the pressure equation */
+        double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
+    } implicit;
     struct {
         int placement;           /* surge_boulder_placement */
         char list_m[SURGE_TEXT_PARAM_BYTES]; /* "x y r [vx vy omega], ...": m, m/s, rad/s */

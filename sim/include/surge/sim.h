@@ -29,6 +29,7 @@ typedef enum surge_health_check {
     SURGE_CHECK_CROSSED_WALL, /* inside a wall, past its first layer */
     SURGE_CHECK_DT_COLLAPSE,  /* dt below health.min_dt_ratio of the first dt */
     SURGE_CHECK_OUT_OF_MEMORY, /* a step could not allocate what it needed (the contact solver's arrays) */
+    SURGE_CHECK_SOLVER,       /* a linear solve of the implicit scheme did not converge */
 } surge_health_check;
 
 typedef struct surge_health {
@@ -77,6 +78,10 @@ typedef struct surge_diagnostics {
     double fluid_volume_m2;        /* sum m/rho (per metre of width) */
     double mean_vx_mps;            /* fluid mean x velocity */
     double bottom_wall_speed_mps;  /* current belt velocity */
+    int32_t pressure_iterations;   /* implicit scheme, last step: iterations of the pressure solve (0: explicit) */
+    int32_t viscous_iterations;    /* and of the viscous solve */
+    double pressure_residual;      /* relative residuals the solves reached */
+    double viscous_residual;
 } surge_diagnostics;
 
 surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);

@@ -1,0 +1,654 @@
+/* The implicit scheme (numerics.scheme = implicit): an incompressible projection with implicit viscosity for slow
+ * viscous flows, whose time step follows the flow's own speed instead of the speed of sound (docs/method.md,
+ * "The implicit scheme"). An incremental pressure-correction step (Goda 1979; Cummins & Rudman 1999 for SPH) from
+ * t_n, everything evaluated at the step's start positions:
+ *  1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure (so a
+ *     fluid at rest stays at rest), no-slip walls by their mDBC mirror 2 v_wall - v_ghost;
+ *  2. -lap phi = -(rho0/dt) div v* + alpha rho0 (rho_k/rho0 - 1)/dt^2, phi = 0 on free-surface particles and, at a
+ *     wall particle, phi_w = phi_ghost - (rho0/dt) (v*_ghost - v_wall).(r_ghost - r_w): the Neumann condition that
+ *     leaves no velocity through the wall (the density source after Asai et al. 2012);
+ *  3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi, r_n+1 = r_n + dt v_n+1 + the shift.
+ * The pair coefficients of a step are computed once into arrays along the neighbour lists; the solves (BiCGSTAB
+ * with a Jacobi preconditioner, matrix-free) then only gather. Every particle gathers in list order and every dot
+ * product sums in fixed blocks, so the results do not depend on the thread count. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pair_terms.h"
+#include "sim_internal.h"
+
+#define DOT_BLOCK 4096        /* dot products: partial sums over fixed blocks, added in order */
+#define MIN_SHEPARD_SUM 0.1   /* a ghost node with less fluid around it is dry (as boundary.c) */
+#define MIN_DETERMINANT 1e-3  /* below it the first-order interpolation falls back to Shepard's (as boundary.c) */
+/* a ghost node with less fluid around it than this (its Shepard sum) is near the free surface: Shepard's
+ * interpolation there, a weighted mean, where the first-order one would extrapolate from a few particles */
+#define MIN_FIRST_ORDER_SUM 0.45
+
+typedef struct implicit_work {
+    size_t fluid_cap, wall_cap, mirror_cap; /* entries the per-entry arrays hold */
+    real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
+    real *wall_w, *wall_gx, *wall_gy;    /* per wall-list entry */
+    real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
+    uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
+    real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
+    double *minv_xx, *minv_xy, *minv_yy; /* per fluid particle: inverse kernel moment matrix (identity if singular) */
+    double *kernel_ratio;                /* sum_b m W_ab / (rho0 lattice sum) */
+    double *weighted_rx, *weighted_ry;   /* sum_b w_ab r_ab: the Laplacian's first-moment error */
+    double *grad_x, *grad_y;             /* scratch: the pressure gradient inside the operator */
+    double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
+    uint8_t *fixed;                      /* free-surface particle: p = 0 */
+    double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
+    double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
+    double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
+    double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
+} implicit_work;
+
+typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
+
+static int grow(void **array, size_t need, size_t size)
+{
+    void *grown = realloc(*array, (need + 1) * size);
+    if (!grown)
+        return -1;
+    *array = grown;
+    return 0;
+}
+
+#define GROW(field, need) (grow((void **)&w->field, need, sizeof *w->field))
+
+/* Sizes the work arrays for the current lists; -1 when out of memory. */
+static int reserve_work(surge_sim *sim)
+{
+    if (!sim->implicit && !(sim->implicit = calloc(1, sizeof *sim->implicit)))
+        return -1;
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const size_t nf = (size_t)(sim->count - sim->wall_count), nw = (size_t)sim->wall_count;
+    const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
+    const size_t me = (size_t)nl->wall_fluid_first[nw];
+    if (fe > w->fluid_cap || !w->fluid_w) {
+        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe))
+            return -1;
+        w->fluid_cap = fe;
+    }
+    if (we > w->wall_cap || !w->wall_w) {
+        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we))
+            return -1;
+        w->wall_cap = we;
+    }
+    if (me > w->mirror_cap || !w->mirror_w) {
+        if (GROW(mirror_w, me))
+            return -1;
+        w->mirror_cap = me;
+    }
+    if (!w->minv_xx) {
+        const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
+        if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
+            GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(fixed, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
+            GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
+            GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
+            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw))
+            return -1;
+    }
+    return 0;
+}
+
+void step_implicit_free(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    if (!w)
+        return;
+    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w, w->dry, w->wetness,
+                      w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
+                      w->grad_y, w->pressure_n, w->fixed, w->wall_x, w->wall_y,
+                      w->neumann_pa, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->z, w->partial};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
+    free(w);
+    sim->implicit = NULL;
+}
+
+/* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
+ * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
+static void geometry(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const kernel2d *k = &sim->kernel;
+    const real grad_coef = k->grad_coef, inv_h = k->inv_h, alpha = k->alpha, support2 = k->support2;
+    const real mass = (real)sim->mass, vol = (real)(sim->mass / sim->rho0), rho0 = (real)sim->rho0;
+    const real eta2 = (real)sim->eta2, four = 4;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
+    const int first = sim->wall_count, n = sim->count;
+    /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
+     * the node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned */
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < sim->wall_count; kw++) {
+        double a[3][3] = {{0}};
+        for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
+            const int j = nl->wall_fluid_index[e];
+            const real dx = nl->wall_fluid_dx0[e] - moved_x[j], dy = nl->wall_fluid_dy0[e] - moved_y[j]; /* r_g - r_j */
+            const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
+            if (r2 >= support2)
+                continue;
+            const double w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
+            const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
+            const double u[3] = {w_vol, f_vol * dx, f_vol * dy}, rel[3] = {1, -(double)dx, -(double)dy};
+            for (int q = 0; q < 3; q++)
+                for (int c = 0; c < 3; c++)
+                    a[q][c] += u[q] * rel[c];
+        }
+        const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                           a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        double row[3] = {0, 0, 0}; /* the first row of a^-1: the value at the node from the sums */
+        if (fabs(det) >= MIN_DETERMINANT && a[0][0] >= MIN_FIRST_ORDER_SUM) {
+            row[0] = (a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det;
+            row[1] = -(a[0][1] * a[2][2] - a[0][2] * a[2][1]) / det;
+            row[2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det;
+        } else if (a[0][0] >= MIN_SHEPARD_SUM) {
+            row[0] = 1.0 / a[0][0];
+        }
+        w->dry[kw] = a[0][0] < MIN_SHEPARD_SUM;
+        /* from 0 at a Shepard sum of 0.25 (a ghost a dp above the free surface) to 1 at 0.5 (one level with it) */
+        w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] - 0.25) / 0.25));
+        for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
+            const int j = nl->wall_fluid_index[e];
+            const real dx = nl->wall_fluid_dx0[e] - moved_x[j], dy = nl->wall_fluid_dy0[e] - moved_y[j];
+            const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
+            double c = 0;
+            if (r2 < support2 && !w->dry[kw]) {
+                const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
+                c = row[0] * kernel2d_w_inside(alpha, inv_h, r) * vol + row[1] * f_vol * dx + row[2] * f_vol * dy;
+            }
+            w->mirror_w[e] = (real)c;
+        }
+    }
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        const int i = a - first;
+        const real mxa = moved_x[a], mya = moved_y[a];
+        real m_xx = 0, m_xy = 0, m_yy = 0, kernel_w = 0, div_r = 0, grad_c_x = 0, grad_c_y = 0;
+        double wrx = 0, wry = 0;
+        for (int pass = 0; pass < 2; pass++) {
+            const int64_t from = pass ? nl->wall_first[i] : nl->fluid_first[i];
+            const int64_t to = pass ? nl->wall_first[i + 1] : nl->fluid_first[i + 1];
+            const int32_t *restrict index = pass ? nl->wall_index : nl->fluid_index;
+            const real *restrict dx0 = pass ? nl->wall_dx0 : nl->fluid_dx0, *restrict dy0 = pass ? nl->wall_dy0 : nl->fluid_dy0;
+            real *restrict lap_w = pass ? w->wall_w : w->fluid_w;
+            real *restrict gx = pass ? w->wall_gx : w->fluid_gx, *restrict gy = pass ? w->wall_gy : w->fluid_gy;
+            for (int64_t e = from; e < to; e++) {
+                const int b = index[e];
+                const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
+                const real r2 = dx * dx + dy * dy;
+                const int inside = r2 < support2 && r2 > 0;
+                const real r = REAL_SQRT(r2);
+                const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
+                const real vf = vol * f;
+                /* the Laplacian's weight: the viscous pair coefficient (eq. 7) per unit viscosity, negated */
+                lap_w[e] = -pair_viscous_coef(mass, four, f, r2, rho0, rho0, eta2);
+                gx[e] = vf * dx, gy[e] = vf * dy;
+                wrx += lap_w[e] * dx, wry += lap_w[e] * dy;
+                m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
+                kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+                /* a wall counts in div r as far as fluid wets it: a wall above the free surface does not hide it */
+                div_r -= (pass ? w->wetness[b] : 1) * vf * r2;
+                grad_c_x += vf * dx, grad_c_y += vf * dy;
+            }
+        }
+        const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
+        if (det > 0.25) {
+            w->minv_xx[i] = m_yy / det, w->minv_xy[i] = -m_xy / det, w->minv_yy[i] = m_xx / det;
+        } else {
+            w->minv_xx[i] = 1, w->minv_xy[i] = 0, w->minv_yy[i] = 1;
+        }
+        w->kernel_ratio[i] = mass * (alpha + kernel_w) * inv_lattice / sim->rho0;
+        w->weighted_rx[i] = wrx, w->weighted_ry[i] = wry;
+        sim->div_r[a] = div_r;
+        sim->inv_rho[a] = (real)(1.0 / sim->rho0);
+        sim->grad_c_x[a] = grad_c_x, sim->grad_c_y[a] = grad_c_y;
+        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold;
+        w->fixed[i] = (uint8_t)sim->surface[a];
+        /* the nearest wall face within dp, for the contact rule and shifting (as the explicit scheme's) */
+        int near_boulder = 0;
+        const wall_face face = interaction_wall_face(sim, a, (real)sim->params.numerics.dp_m, &near_boulder);
+        sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
+        sim->face_vn_mps[a] = face.vn_mps;
+    }
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        const int i = a - first;
+        int near = sim->surface[a];
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1] && !near; e++)
+            near = w->fluid_w[e] != 0 && sim->surface[nl->fluid_index[e]];
+        sim->near_surface[a] = (uint8_t)near;
+    }
+}
+
+/* The interpolated value at wall kw's ghost node of the fluid field x */
+static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const implicit_work *w = sim->implicit;
+    double sum = 0;
+    for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++)
+        sum += w->mirror_w[e] * x[nl->wall_fluid_index[e] - sim->wall_count];
+    return sum;
+}
+
+/* The wall's own velocity that no-slip mirrors about (the belt-wall corner: the fixed upstream wall's) */
+static inline double mirror_wall_vx(const surge_sim *sim, int kw)
+{
+    return sim->wall_of[kw] == WALL_CORNER ? 0.0 : sim->vx[kw];
+}
+
+/* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost; x = (vx | vy). */
+static void viscous_operator(surge_sim *sim, const double *x, double *out)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    const double dt_nu = sim->dt_s * sim->params.fluid.viscosity_m2ps;
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < sim->wall_count; kw++) {
+        const double ux = mirror_wall_vx(sim, kw), uy = sim->vy[kw];
+        const double gx = w->dry[kw] ? ux : ghost_value(sim, kw, x), gy = w->dry[kw] ? uy : ghost_value(sim, kw, x + nf);
+        w->wall_x[kw] = 2.0 * ux - gx, w->wall_y[kw] = 2.0 * uy - gy;
+    }
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const double xa = x[i], ya = x[nf + i];
+        double lx = 0, ly = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int j = nl->fluid_index[e] - sim->wall_count;
+            lx += w->fluid_w[e] * (xa - x[j]), ly += w->fluid_w[e] * (ya - x[nf + j]);
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int kw = nl->wall_index[e];
+            lx += w->wall_w[e] * (xa - w->wall_x[kw]), ly += w->wall_w[e] * (ya - w->wall_y[kw]);
+        }
+        out[i] = xa + dt_nu * lx, out[nf + i] = ya + dt_nu * ly;
+    }
+}
+
+/* The walls' pressure from the fluid pressure x: the value at the ghost plus the Neumann offset; dry walls 0. */
+static void wall_pressures(surge_sim *sim, const double *x)
+{
+    implicit_work *w = sim->implicit;
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < sim->wall_count; kw++)
+        w->wall_x[kw] = w->dry[kw] ? 0.0 : ghost_value(sim, kw, x) + w->neumann_pa[kw];
+}
+
+/* The renormalised gradient of the pressure field x (free-surface particles at 0, walls at wall_x), exact for
+ * a linear field: grad p_a = M^-1 sum_b V_b (p_b - p_a) f r_ab */
+static void pressure_gradient(surge_sim *sim, const double *x)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const double pa = w->fixed[i] ? 0.0 : x[i];
+        double sx = 0, sy = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int j = nl->fluid_index[e] - sim->wall_count;
+            const double dpb = (w->fixed[j] ? 0.0 : x[j]) - pa;
+            sx += dpb * w->fluid_gx[e], sy += dpb * w->fluid_gy[e];
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const double dpb = w->wall_x[nl->wall_index[e]] - pa;
+            sx += dpb * w->wall_gx[e], sy += dpb * w->wall_gy[e];
+        }
+        w->grad_x[i] = w->minv_xx[i] * sx + w->minv_xy[i] * sy;
+        w->grad_y[i] = w->minv_xy[i] * sx + w->minv_yy[i] * sy;
+    }
+}
+
+/* -lap p, corrected for the kernel's truncation: sum_b w_ab (p_a - p_b - r_ab . grad p_a), which is exact (zero)
+ * for a linear field also next to the free surface and the walls, where the plain sum is not; p = 0 held on
+ * free-surface particles (their rows are the identity) */
+static void pressure_operator(surge_sim *sim, const double *x, double *out)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    wall_pressures(sim, x);
+    pressure_gradient(sim, x);
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        if (w->fixed[i]) {
+            out[i] = x[i];
+            continue;
+        }
+        const double pa = x[i];
+        double sum = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int j = nl->fluid_index[e] - sim->wall_count;
+            sum += w->fluid_w[e] * (pa - (w->fixed[j] ? 0.0 : x[j]));
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+            sum += w->wall_w[e] * (pa - w->wall_x[nl->wall_index[e]]);
+        out[i] = sum - (w->weighted_rx[i] * w->grad_x[i] + w->weighted_ry[i] * w->grad_y[i]);
+    }
+}
+
+/* sum_i a_i b_i over n, in fixed blocks added in order: the same for any thread count */
+static double dot(const implicit_work *w, const double *a, const double *b, int n)
+{
+    const int blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
+    #pragma omp parallel for schedule(static)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum = 0;
+        for (int i = from; i < to; i++)
+            sum += a[i] * b[i];
+        w->partial[k] = sum;
+    }
+    double sum = 0;
+    for (int k = 0; k < blocks; k++)
+        sum += w->partial[k];
+    return sum;
+}
+
+/* The linear part of the affine operator: F(x) - F(0) (offset holds F(0)) */
+static void apply_linear(surge_sim *sim, affine_operator op, const double *x, double *out, int n)
+{
+    op(sim, x, out);
+    const double *offset = sim->implicit->offset;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++)
+        out[i] -= offset[i];
+}
+
+/* Solves F(x) = rhs for the affine operator op (n unknowns) by BiCGSTAB with the Jacobi preconditioner diag (van
+ * der Vorst 1992), from the guess in x, to |residual| <= tolerance |rhs - F(0)|. Returns the iterations, or -1 when
+ * max_iterations pass first or the method breaks down; *residual: the relative residual reached. */
+static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, int max_iterations, double *residual)
+{
+    implicit_work *w = sim->implicit;
+    double *x = w->x, *r = w->r, *rhat = w->rhat, *p = w->p, *v = w->v, *s = w->s, *t = w->t, *y = w->y, *z = w->z;
+    const double *diag = w->diag;
+    op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
+    apply_linear(sim, op, x, r, n);
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++) {
+        const double b = w->rhs[i] - w->offset[i];
+        r[i] = b - r[i];
+        rhat[i] = b; /* the shadow residual: the right-hand side (nonzero whenever there is work) */
+        p[i] = v[i] = 0;
+    }
+    const double b_norm = sqrt(dot(w, rhat, rhat, n));
+    double r_norm = sqrt(dot(w, r, r, n));
+    *residual = b_norm > 0 ? r_norm / b_norm : 0;
+    if (b_norm == 0 || r_norm <= tolerance * b_norm)
+        return 0;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < n; i++)
+        rhat[i] = r[i];
+    double rho = 1, alpha = 1, omega = 1;
+    for (int it = 1; it <= max_iterations; it++) {
+        const double rho_new = dot(w, rhat, r, n);
+        if (rho_new == 0 || omega == 0)
+            return -1;
+        const double beta = rho_new / rho * alpha / omega;
+        rho = rho_new;
+        #pragma omp parallel for schedule(static)
+        for (int i = 0; i < n; i++) {
+            p[i] = r[i] + beta * (p[i] - omega * v[i]);
+            y[i] = p[i] / diag[i];
+        }
+        apply_linear(sim, op, y, v, n);
+        const double rv = dot(w, rhat, v, n);
+        if (rv == 0)
+            return -1;
+        alpha = rho / rv;
+        #pragma omp parallel for schedule(static)
+        for (int i = 0; i < n; i++) {
+            x[i] += alpha * y[i];
+            s[i] = r[i] - alpha * v[i];
+        }
+        const double s_norm = sqrt(dot(w, s, s, n));
+        if (s_norm <= tolerance * b_norm) {
+            *residual = s_norm / b_norm;
+            return it;
+        }
+        #pragma omp parallel for schedule(static)
+        for (int i = 0; i < n; i++)
+            z[i] = s[i] / diag[i];
+        apply_linear(sim, op, z, t, n);
+        const double tt = dot(w, t, t, n);
+        omega = tt > 0 ? dot(w, t, s, n) / tt : 0;
+        #pragma omp parallel for schedule(static)
+        for (int i = 0; i < n; i++) {
+            x[i] += omega * z[i];
+            r[i] = s[i] - omega * t[i];
+        }
+        r_norm = sqrt(dot(w, r, r, n));
+        *residual = r_norm / b_norm;
+        if (!isfinite(r_norm))
+            return -1;
+        if (r_norm <= tolerance * b_norm)
+            return it;
+    }
+    return -1;
+}
+
+/* dt = cfl min(h / u_max, sqrt(h / |g|)) from the velocities at the step's start */
+static double implicit_dt(const surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    if (p->numerics.dt_fixed_s > 0)
+        return p->numerics.dt_fixed_s;
+    double max_v2 = 0;
+    #pragma omp parallel for schedule(static) reduction(max : max_v2)
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
+        max_v2 = v2 > max_v2 ? v2 : max_v2;
+    }
+    const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
+    double dt = g > 0 ? sqrt(h / g) : INFINITY;
+    if (max_v2 > 0)
+        dt = fmin(dt, h / sqrt(max_v2));
+    if (!isfinite(dt)) /* no gravity and at rest: the walls' speeds set the scale */
+        dt = h / fmax(fabs(p->walls.bottom_speed_mps) + fabs(p->walls.top_speed_mps), 1e-12);
+    return p->implicit.cfl * dt;
+}
+
+static void fail_solve(surge_sim *sim, const char *what, int iterations, double residual, double t_n)
+{
+    sim->health = (surge_health){.check = SURGE_CHECK_SOLVER, .particle_id = -1, .step = sim->step + 1,
+                                 .time_s = t_n, .value = residual};
+    snprintf(sim->health.message, sizeof sim->health.message,
+             "health check failed: %s at step %lld, t = %.9g s (the %s solve reached a relative residual of %.3g "
+             "in %d iterations; implicit.max_iterations = %d, tolerance %g; try a smaller implicit.cfl)",
+             surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, t_n, what, residual,
+             iterations, sim->params.implicit.max_iterations,
+             what[0] == 'p' ? sim->params.implicit.pressure_tolerance : sim->params.implicit.viscous_tolerance);
+}
+
+int step_implicit(surge_sim *sim)
+{
+    const int first = sim->wall_count, n = sim->count, nf = n - first;
+    const double t_n = sim->time_s;
+    const surge_params *prm = &sim->params;
+    if (neighbours_update(sim) != 0 || reserve_work(sim) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
+        return -1;
+    }
+    implicit_work *w = sim->implicit;
+    const double dt = implicit_dt(sim);
+    sim->dt_s = dt;
+    if (sim->step == 0 && sim->first_dt_s == 0)
+        sim->first_dt_s = dt;
+    boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step */
+    neighbours_track(sim);
+    boundary_update(sim); /* the walls' normals and depths (the contact rule) */
+    geometry(sim);
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        sim->x_n[a] = sim->x[a], sim->y_n[a] = sim->y[a];
+        sim->vx_n[a] = sim->vx[a], sim->vy_n[a] = sim->vy[a], sim->rho_n[a] = sim->rho[a];
+    }
+
+    /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure,
+     * from the guess without viscosity */
+    const double rho0 = sim->rho0, dt_nu = dt * prm->fluid.viscosity_m2ps;
+    const neighbour_lists *nl = &sim->neighbours;
+    double *by_id = sim->implicit_pressure_by_id;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++)
+        w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
+    /* the walls' p_n: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < first; kw++)
+        w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
+    wall_pressures(sim, w->pressure_n);
+    pressure_gradient(sim, w->pressure_n);
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        double sum_w = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+            sum_w += w->fluid_w[e];
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+            sum_w += w->wall_w[e];
+        w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
+        w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
+        w->x[i] = w->rhs[i], w->x[nf + i] = w->rhs[nf + i];
+        w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
+    }
+    double residual = 0;
+    int iterations = 0;
+    if (dt_nu > 0) {
+        iterations = solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance, prm->implicit.max_iterations,
+                           &residual);
+        sim->viscous_iterations = iterations, sim->viscous_residual = residual;
+        if (iterations < 0) {
+            fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, t_n);
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
+    }
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++)
+        sim->vx[first + i] = (real)w->x[i], sim->vy[first + i] = (real)w->x[nf + i];
+
+    /* 2. the correction phi: the walls' Neumann offsets from v* at their ghosts, the source from div v* and the
+     * density */
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < first; kw++) {
+        /* the wall's own velocity: only its normal part matters, and the belt-wall corner's (mirrored through the
+         * corner point, its normal slanted) is the fixed upstream wall's, not the belt's */
+        const double wall_vx = mirror_wall_vx(sim, kw), wall_vy = sim->vy[kw];
+        double gvx = wall_vx, gvy = wall_vy;
+        if (!w->dry[kw]) {
+            gvx = gvy = 0;
+            for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
+                const int j = nl->wall_fluid_index[e];
+                gvx += w->mirror_w[e] * sim->vx[j], gvy += w->mirror_w[e] * sim->vy[j];
+            }
+        }
+        w->neumann_pa[kw] = -rho0 / dt * ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]);
+        w->wall_x[kw] = gvx, w->wall_y[kw] = gvy; /* continuity sees the fluid's own velocity at the wall */
+    }
+    const double alpha = prm->implicit.density_correction;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        const double vxa = sim->vx[a], vya = sim->vy[a];
+        double g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0, sum_w = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int b = nl->fluid_index[e];
+            const double dvx = vxa - sim->vx[b], dvy = vya - sim->vy[b];
+            g_xx -= dvx * w->fluid_gx[e], g_xy -= dvx * w->fluid_gy[e];
+            g_yx -= dvy * w->fluid_gx[e], g_yy -= dvy * w->fluid_gy[e];
+            sum_w += w->fluid_w[e];
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int kw = nl->wall_index[e];
+            const double dvx = vxa - w->wall_x[kw], dvy = vya - w->wall_y[kw];
+            g_xx -= dvx * w->wall_gx[e], g_xy -= dvx * w->wall_gy[e];
+            g_yx -= dvy * w->wall_gx[e], g_yy -= dvy * w->wall_gy[e];
+            sum_w += w->wall_w[e];
+        }
+        /* div v = tr(G M^-1) */
+        const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
+        const double compression = sim->near_surface[a] ? 0.0 : w->kernel_ratio[i] - 1.0;
+        w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v + alpha * rho0 * compression / (dt * dt);
+        w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
+        w->x[i] = 0; /* the correction starts from none */
+    }
+    iterations = solve(sim, pressure_operator, nf, prm->implicit.pressure_tolerance, prm->implicit.max_iterations,
+                       &residual);
+    sim->pressure_iterations = iterations, sim->pressure_residual = residual;
+    if (iterations < 0) {
+        fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
+        sim_restore_step_start(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    wall_pressures(sim, w->x);
+
+    /* 3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi */
+    pressure_gradient(sim, w->x);
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        const double p_new = w->fixed[i] ? 0.0 : w->pressure_n[i] + w->x[i];
+        by_id[sim->id[a]] = p_new;
+        sim->pressure[a] = (real)p_new;
+        w->pressure_n[i] = p_new;
+        w->x[i] = sim->vx[a] - dt / rho0 * w->grad_x[i];
+        w->x[nf + i] = sim->vy[a] - dt / rho0 * w->grad_y[i];
+        /* the density the spacing says in the bulk (an output; the scheme holds rho0) */
+        sim->rho[a] = (real)(sim->near_surface[a] ? rho0 : rho0 * w->kernel_ratio[i]);
+    }
+    /* the walls' pressure for the outputs: p_n+1 continued hydrostatically, as the next step takes it */
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < first; kw++)
+        sim->pressure[kw] = (real)(w->dry[kw] ? 0.0 : ghost_value(sim, kw, w->pressure_n) -
+                                   rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
+    const double face_reach_m = prm->walls.face_repulsion_reach_dp * prm->numerics.dp_m;
+    #pragma omp parallel for schedule(static)
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        double vx1 = w->x[i], vy1 = w->x[nf + i];
+        /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md) */
+        const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
+        if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0)
+            vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
+        sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
+    }
+    shifting_compute(sim, dt);
+    #pragma omp parallel for schedule(static)
+    for (int a = first; a < n; a++) {
+        double dx = dt * sim->vx[a] + sim->shift_x[a], dy = dt * sim->vy[a] + sim->shift_y[a];
+        /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
+         * at the reach (the explicit scheme's face repulsion acts over many small steps; one large step needs the
+         * constraint itself; docs/method.md) */
+        const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -
+                                 dt * sim->face_vn_mps[a];
+        if (sim->face_gap_m[a] < prm->numerics.dp_m && gap_after < face_reach_m)
+            dx += (face_reach_m - gap_after) * sim->face_nx[a], dy += (face_reach_m - gap_after) * sim->face_ny[a];
+        sim->x[a] = sim->x_n[a] + dx;
+        sim->y[a] = sim->y_n[a] + dy;
+    }
+    sim->time_s = t_n + dt;
+    sim->step++;
+    if (health_check(sim) != 0) {
+        sim_restore_step_start(sim);
+        sim->time_s = t_n;
+        sim->step--;
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    return 0;
+}
