@@ -19,18 +19,28 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
         coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
                sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
         break;
-    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer; the implicit
-                            * scheme has no speed of sound and takes the velocity form's A h |u| dt */
+    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
+        if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT) { /* no speed of sound: below */
+            coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.h_m;
+            break;
+        }
         if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
             return;
-        coef = p->numerics.scheme == SURGE_SCHEME_IMPLICIT
-                   ? p->shifting.velocity_coefficient * sim->derived.h_m * dt *
-                         sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a])
-                   : 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
+        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
         break;
     default: return;
     }
     double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
+    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->shifting.form == SURGE_SHIFT_LIND && sim->near_surface[a]) {
+        /* the implicit scheme's Lind form (Lind et al. 2012): dr = -(A_L/2) h^2 grad C per step, and in the free-surface
+         * layer only along the surface (n = -grad C / |grad C|), where nothing else keeps the particles apart (their
+         * pressure is 0) */
+        const double g2 = (double)sim->grad_c_x[a] * sim->grad_c_x[a] + (double)sim->grad_c_y[a] * sim->grad_c_y[a];
+        if (g2 > 0) {
+            const double along = (dx * sim->grad_c_x[a] + dy * sim->grad_c_y[a]) / g2;
+            dx -= along * sim->grad_c_x[a], dy -= along * sim->grad_c_y[a];
+        }
+    }
     const double max_shift = p->shifting.max_shift_dp * p->numerics.dp_m;
     const double len = sqrt(dx * dx + dy * dy);
     if (len > max_shift) {

@@ -32,6 +32,8 @@ typedef struct implicit_work {
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
     uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
     real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
+    double *wall_sum;                    /* per fixed wall: sum of dp^2 W of the walls at its ghost node (fixed) */
+    int wall_sum_ready;
     double *minv_xx, *minv_xy, *minv_yy; /* per fluid particle: inverse kernel moment matrix (identity if singular) */
     double *kernel_ratio;                /* sum_b m W_ab / (rho0 lattice sum) */
     double *weighted_rx, *weighted_ry;   /* sum_b w_ab r_ab: the Laplacian's first-moment error */
@@ -90,7 +92,7 @@ static int reserve_work(surge_sim *sim)
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
-            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw))
+            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw))
             return -1;
     }
     return 0;
@@ -101,7 +103,7 @@ void step_implicit_free(surge_sim *sim)
     implicit_work *w = sim->implicit;
     if (!w)
         return;
-    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w, w->dry, w->wetness,
+    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->wall_x, w->wall_y,
                       w->neumann_pa, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
@@ -110,6 +112,31 @@ void step_implicit_free(surge_sim *sim)
         free(arrays[i]);
     free(w);
     sim->implicit = NULL;
+}
+
+/* The walls' own share of each fixed wall's ghost node's kernel sum, sum_k dp^2 W(r_ghost - r_k): walls do not move
+ * in the scenes this scheme takes, so it is computed once. With the fluid's share it says whether the node lies in
+ * the fluid (about 1, also in a corner, where walls fill three quadrants) or above its surface (less). */
+static void wall_sums(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const kernel2d *k = &sim->kernel;
+    const double vol = sim->mass / sim->rho0;
+    #pragma omp parallel for schedule(static)
+    for (int kw = 0; kw < sim->wall_count; kw++) {
+        const double gx = surge_sim_wrapped_x(sim, sim->x[kw] + sim->ghost_dx[kw]), gy = sim->y[kw] + sim->ghost_dy[kw];
+        neighbour_ranges r;
+        grid_neighbour_ranges(&sim->grid, sim->grid.wall_start, gx, gy, &r);
+        double sum = 0;
+        for (int q = 0; q < r.count; q++)
+            for (int b = r.begin[q]; b < r.end[q]; b++) {
+                const double dx = gx - (sim->x[b] + r.shift_x[q]), dy = gy - sim->y[b], r2 = dx * dx + dy * dy;
+                if (r2 < (double)k->support2)
+                    sum += vol * kernel2d_w_inside(k->alpha, k->inv_h, (real)sqrt(r2));
+            }
+        w->wall_sum[kw] = sum;
+    }
+    w->wall_sum_ready = 1;
 }
 
 /* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
@@ -125,6 +152,8 @@ static void geometry(surge_sim *sim)
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
     const int first = sim->wall_count, n = sim->count;
+    if (!w->wall_sum_ready)
+        wall_sums(sim);
     /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
      * the node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned */
     #pragma omp parallel for schedule(static)
@@ -155,8 +184,9 @@ static void geometry(surge_sim *sim)
             row[0] = 1.0 / a[0][0];
         }
         w->dry[kw] = a[0][0] < MIN_SHEPARD_SUM;
-        /* from 0 at a Shepard sum of 0.25 (a ghost a dp above the free surface) to 1 at 0.5 (one level with it) */
-        w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] - 0.25) / 0.25));
+        /* the node's kernel sum of fluid and walls: 1.00 in the fluid (corners included), 0.77 level with the top
+         * row next to the tank's side wall, 0.58 a dp above it (C_h 1.8); wetness ramps from 0 at 0.6 to 1 at 0.75 */
+        w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.6) / 0.15));
         for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
             const int j = nl->wall_fluid_index[e];
             const real dx = nl->wall_fluid_dx0[e] - moved_x[j], dy = nl->wall_fluid_dy0[e] - moved_y[j];
@@ -175,6 +205,7 @@ static void geometry(surge_sim *sim)
         const real mxa = moved_x[a], mya = moved_y[a];
         real m_xx = 0, m_xy = 0, m_yy = 0, kernel_w = 0, div_r = 0, grad_c_x = 0, grad_c_y = 0;
         double wrx = 0, wry = 0;
+        real wm_xx = 0, wm_xy = 0, wm_yy = 0; /* the moments with walls weighted by their wetness */
         for (int pass = 0; pass < 2; pass++) {
             const int64_t from = pass ? nl->wall_first[i] : nl->fluid_first[i];
             const int64_t to = pass ? nl->wall_first[i + 1] : nl->fluid_first[i + 1];
@@ -196,11 +227,17 @@ static void geometry(surge_sim *sim)
                 wrx += lap_w[e] * dx, wry += lap_w[e] * dy;
                 m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
                 kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
-                /* a wall counts in div r as far as fluid wets it: a wall above the free surface does not hide it */
-                div_r -= (pass ? w->wetness[b] : 1) * vf * r2;
+                /* a wall counts in div r (and in a surface particle's moments) as far as fluid wets it: a wall
+                 * above the free surface does not hide it, nor hold up the surface particle next to it */
+                const real wet = pass ? w->wetness[b] : 1;
+                div_r -= wet * vf * r2;
+                wm_xx += wet * pair_moment(vf, dx, dx), wm_xy += wet * pair_moment(vf, dx, dy);
+                wm_yy += wet * pair_moment(vf, dy, dy);
                 grad_c_x += vf * dx, grad_c_y += vf * dy;
             }
         }
+        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold;
+        m_xx = wm_xx, m_xy = wm_xy, m_yy = wm_yy;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
             w->minv_xx[i] = m_yy / det, w->minv_xy[i] = -m_xy / det, w->minv_yy[i] = m_xx / det;
@@ -212,7 +249,6 @@ static void geometry(surge_sim *sim)
         sim->div_r[a] = div_r;
         sim->inv_rho[a] = (real)(1.0 / sim->rho0);
         sim->grad_c_x[a] = grad_c_x, sim->grad_c_y[a] = grad_c_y;
-        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold;
         w->fixed[i] = (uint8_t)sim->surface[a];
         /* the nearest wall face within dp, for the contact rule and shifting (as the explicit scheme's) */
         int near_boulder = 0;
@@ -302,7 +338,8 @@ static void pressure_gradient(surge_sim *sim, const double *x)
             sx += dpb * w->fluid_gx[e], sy += dpb * w->fluid_gy[e];
         }
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const double dpb = w->wall_x[nl->wall_index[e]] - pa;
+            const int kw = nl->wall_index[e];
+            const double dpb = (w->wall_x[kw] - pa) * w->wetness[kw]; /* dry walls: air, as in geometry() */
             sx += dpb * w->wall_gx[e], sy += dpb * w->wall_gy[e];
         }
         w->grad_x[i] = w->minv_xx[i] * sx + w->minv_xy[i] * sy;
@@ -556,8 +593,12 @@ int step_implicit(surge_sim *sim)
                 gvx += w->mirror_w[e] * sim->vx[j], gvy += w->mirror_w[e] * sim->vy[j];
             }
         }
-        w->neumann_pa[kw] = -rho0 / dt * ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]);
-        w->wall_x[kw] = gvx, w->wall_y[kw] = gvy; /* continuity sees the fluid's own velocity at the wall */
+        /* continuity sees the fluid's tangential velocity and the wall's normal one: flow into the wall is a
+         * convergence the correction removes (the wall's phi mirrors the fluid's, no offset) */
+        const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
+        const double into = ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]) / glen2;
+        w->neumann_pa[kw] = 0;
+        w->wall_x[kw] = gvx - into * sim->ghost_dx[kw], w->wall_y[kw] = gvy - into * sim->ghost_dy[kw];
     }
     const double alpha = prm->implicit.density_correction;
     #pragma omp parallel for schedule(static)
