@@ -7,6 +7,15 @@
 #include "eos.h"
 #include "sim_internal.h"
 
+/* The smallest c0 that keeps the hydrostatic density variation within 1 %: rho0 g_n H / (rho0 c0^2) <= 0.01 over the
+ * fluid's depth (a closed channel: its height). */
+double scene_head_c0(const surge_params *p)
+{
+    const double g_normal = p->body.gravity_mps2 * cos(p->body.slope_deg * SURGE_PI / 180.0);
+    const double head_m = p->walls.top ? p->domain.height_m : p->fluid.depth_m;
+    return 10.0 * sqrt(fabs(g_normal) * head_m);
+}
+
 /* The largest speed the scene can be expected to reach, from its own scales (docs/method.md). */
 double scene_expected_speed(const surge_params *p)
 {
@@ -22,8 +31,10 @@ double scene_expected_speed(const surge_params *p)
     } else {
         /* free surface: collapse of the block (sqrt(2 g h)) and the surface speed of a film of this depth */
         u = fmax(u, sqrt(2.0 * fabs(g_normal) * depth));
+        /* the surface speed of a film of this depth relative to the bed, which a belt carries: in the walls' frame
+         * a surge held on an upstream belt moves at the difference (the debris surge: |-3.5 + 6.0| m/s) */
         if (nu > 0)
-            u = fmax(u, fabs(drive) * depth * depth / (2.0 * nu));
+            u = fmax(u, fabs(p->walls.bottom_speed_mps + drive * depth * depth / (2.0 * nu)));
     }
     return u;
 }
