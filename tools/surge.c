@@ -1000,11 +1000,11 @@ static int command_check(int argc, char **argv)
     const surge_derived *d = surge_sim_derived(sim);
     const surge_params *resolved = surge_sim_params(sim);
     const char *c0_from = resolved->numerics.c0_mps > 0 ? "set by numerics.c0_mps"
-                          : d->c0_mps > resolved->numerics.c0_factor * d->expected_speed_mps ? "the hydrostatic head's"
-                                                                                             : "c0_factor x the speed";
-    printf("%s: ok: %d fluid + %d wall particles, h = %.6g m, c0 = %.6g m/s (%s; expected speed %.4g m/s, the "
-           "hydrostatic head needs %.4g m/s for 1 %% density)\n", c.case_path, d->fluid_count, d->wall_count, d->h_m,
-           d->c0_mps, c0_from, d->expected_speed_mps, d->head_c0_mps);
+                          : d->c0_mps > resolved->numerics.c0_factor * d->expected_speed_mps ? "set by the head"
+                                                                                             : "set by the speed";
+    printf("%s: ok: %d fluid + %d wall particles, h = %.6g m, c0 = %.6g m/s (%s; expected speed %.4g m/s; "
+           "c0_factor x the hydrostatic head's speed sqrt(g H): %.4g m/s, 1 %% density at factor 10)\n", c.case_path,
+           d->fluid_count, d->wall_count, d->h_m, d->c0_mps, c0_from, d->expected_speed_mps, d->head_c0_mps);
     report_resolution(sim, 1);
     warn_diffusive_compressibility(sim);
     surge_sim_destroy(sim);

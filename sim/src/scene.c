@@ -7,13 +7,13 @@
 #include "eos.h"
 #include "sim_internal.h"
 
-/* The smallest c0 that keeps the hydrostatic density variation within 1 %: rho0 g_n H / (rho0 c0^2) <= 0.01 over the
- * fluid's depth (a closed channel: its height). */
-double scene_head_c0(const surge_params *p)
+/* The hydrostatic head's speed sqrt(g_n H) over the fluid's depth (a closed channel: its height): c0 = 10 times it
+ * keeps the hydrostatic density variation rho0 g_n H / (rho0 c0^2) within 1 %. */
+double scene_head_speed(const surge_params *p)
 {
     const double g_normal = p->body.gravity_mps2 * cos(p->body.slope_deg * SURGE_PI / 180.0);
     const double head_m = p->walls.top ? p->domain.height_m : p->fluid.depth_m;
-    return 10.0 * sqrt(fabs(g_normal) * head_m);
+    return sqrt(fabs(g_normal) * head_m);
 }
 
 /* The largest speed the scene can be expected to reach, from its own scales (docs/method.md). */

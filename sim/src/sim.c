@@ -44,8 +44,9 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     const double dp = p->numerics.dp_m;
     sim->derived.h_m = p->numerics.ch * sqrt(2.0) * dp;
     sim->derived.expected_speed_mps = scene_expected_speed(p);
-    sim->derived.head_c0_mps = scene_head_c0(p);
-    /* c0: the case's, or c0_factor times the expected speed, and no less than the hydrostatic head needs */
+    /* c0: the case's, or c0_factor times the larger of the expected speed and the hydrostatic head's speed (at the
+     * default factor 10 the head's term holds the hydrostatic density variation within 1 %) */
+    sim->derived.head_c0_mps = p->numerics.c0_factor * scene_head_speed(p);
     sim->derived.c0_mps = p->numerics.c0_mps > 0 ? p->numerics.c0_mps
                                                 : fmax(p->numerics.c0_factor * sim->derived.expected_speed_mps,
                                                        sim->derived.head_c0_mps);

@@ -143,7 +143,7 @@ static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
 /* scene.c */
 int scene_build(surge_sim *sim, char *err, size_t err_len);
 double scene_expected_speed(const surge_params *p);
-double scene_head_c0(const surge_params *p);
+double scene_head_speed(const surge_params *p);
 
 /* grid.c */
 int grid_init(surge_sim *sim, char *err, size_t err_len);
