@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Cheap corners of the stability map (tools/stability_map.py): configurations known to fail must be reported
-as failed by the health monitor, with the check that failed, and the paper's default must stay healthy.
+"""Cheap corners of the stability map (studies/stability/stability_map.py): configurations known to fail must be
+reported as failed by the health monitor, with the check that failed, and the paper's default must stay healthy.
 
 usage: test_stability_corners.py SURGE SOURCE_DIR WORK_DIR
 

@@ -12,6 +12,9 @@ import sys
 
 source, work = sys.argv[1], sys.argv[2]
 sys.path.insert(0, os.path.join(source, "tools"))
+FC = os.path.join(source, "studies", "freydier", "freydier_convergence.py")
+SM = os.path.join(source, "studies", "stability", "stability_map.py")
+PL = os.path.join(source, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
 from checks import check, finish  # noqa: E402
 from surgepy import study  # noqa: E402
 
@@ -33,25 +36,25 @@ check("positive_numbers", study.positive_numbers("t", "1,1.3, 2.2", "ch") == [1.
 old_table = os.path.join(work, "old_header.csv")
 with open(old_table, "w") as f:
     f.write("case,dp_m,ch\nid1,0.001,1.0\n")
-r = subprocess.run([sys.executable, os.path.join(source, "tools", "freydier_convergence.py"), "run", "--csv", old_table,
-                    "--surge", sys.executable], capture_output=True, text=True, timeout=60)
+r = subprocess.run([sys.executable, FC, "run", "--csv", old_table, "--surge", sys.executable], capture_output=True,
+                   text=True, timeout=60)
 check("freydier_convergence refuses a table with other columns", r.returncode == 2 and "columns" in r.stderr
       and old_table in r.stderr, r.stderr.strip())
 
 tools = os.path.join(source, "tools")
-for tool, option in (("freydier_convergence.py", "--ch"), ("stability_map.py", "--cfl")):
+for driver, option in ((FC, "--ch"), (SM, "--cfl")):
+    tool = os.path.basename(driver)
     for bad in ("0.2,abc", "-1", ""):
-        r = subprocess.run([sys.executable, os.path.join(tools, tool), "run", option, bad], capture_output=True,
-                           text=True, timeout=60)
+        r = subprocess.run([sys.executable, driver, "run", option, bad], capture_output=True, text=True, timeout=60)
         check("%s %s '%s' refused" % (tool, option, bad), r.returncode == 2 and option[2:] in r.stderr,
               r.stderr.strip())
     png = os.path.join(work, tool.replace(".py", ".png"))
-    r = subprocess.run([sys.executable, os.path.join(tools, tool), "chart", "--png", png], capture_output=True,
-                       text=True, timeout=120)
+    r = subprocess.run([sys.executable, driver, "chart", "--png", png], capture_output=True, text=True, timeout=120)
     check("%s chart" % tool, r.returncode == 0 and os.path.getsize(png) > 10000, r.stderr.strip())
 
 # the loaded-Poiseuille fit recovers the parameters of exact Krieger-Dougherty data, and says when rows are missing
 import numpy as np  # noqa: E402
+sys.path.insert(0, os.path.dirname(PL))
 import poiseuille_loaded  # noqa: E402
 phi = np.array([0.05, 0.1, 0.2, 0.3, 0.4, 0.5])
 phi_m, p, rmse = poiseuille_loaded.fit(phi, poiseuille_loaded.krieger_dougherty(phi, 0.62, 2.5))
@@ -75,23 +78,19 @@ if os.path.exists(short):
     os.remove(short)
 study.append_row(short, poiseuille_loaded.COLUMNS, {"phi": 0.1, "phi_actual": 0.1, "mu_eq_over_mu0": 1.2, "status": "ok",
                                                     "dp_m": 0.005, "ch": 1.8, "seed": 1})
-r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "report", "--csv", short],
-                   capture_output=True, text=True, timeout=60)
+r = subprocess.run([sys.executable, PL, "report", "--csv", short], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded report with one run refused", r.returncode == 2 and "needs 3" in r.stderr, r.stderr.strip())
 report_png = os.path.join(work, "poiseuille_loaded.png")
-r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "report", "--dp", "0.005", "--c0", "15",
-                    "--diffusion", "0", "--png", report_png], capture_output=True, text=True, timeout=120)
+r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--c0", "15", "--diffusion", "0", "--png",
+                    report_png], capture_output=True, text=True, timeout=120)
 check("poiseuille_loaded report fits and charts the committed table (r/dp 4)",
       r.returncode == 0 and "Krieger-Dougherty fit" in r.stdout and os.path.getsize(report_png) > 10000,
       (r.stdout + r.stderr).strip()[-300:])
-r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "run", "--phi", "0.9"],
-                   capture_output=True, text=True, timeout=60)
+r = subprocess.run([sys.executable, PL, "run", "--phi", "0.9"], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded run --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
-r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "run", "--diffusion", "2"],
-                   capture_output=True, text=True, timeout=60)
+r = subprocess.run([sys.executable, PL, "run", "--diffusion", "2"], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded run --diffusion 2 refused", r.returncode == 2 and "--diffusion" in r.stderr, r.stderr.strip())
-r = subprocess.run([sys.executable, os.path.join(tools, "poiseuille_loaded.py"), "reference", "--phi", "0.9"],
-                   capture_output=True, text=True, timeout=60)
+r = subprocess.run([sys.executable, PL, "reference", "--phi", "0.9"], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded reference --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
 
 # wall_contact: a synthetic belt run with one particle 0.4 dp behind the upstream wall's face and a bed layer

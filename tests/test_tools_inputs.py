@@ -1,6 +1,7 @@
 #!/usr/bin/python3
-"""Bad inputs to the Python tools (tools/*.py, tools/surgectl): each gets a clear error naming what is wrong, exit
-status 2 (3 for surgectl's unexpected replies), and never a traceback, a hang or a number printed from garbage.
+"""Bad inputs to the Python tools (tools/*.py, tools/surgectl, the study drivers in studies/*/): each gets a clear
+error naming what is wrong, exit status 2 (3 for surgectl's unexpected replies), and never a traceback, a hang or a
+number printed from garbage.
 
 usage: test_tools_inputs.py SURGE SOURCE_DIR WORK_DIR
 
@@ -24,7 +25,12 @@ import zmq
 
 SURGE, SOURCE, WORK = sys.argv[1:4]
 TOOLS = os.path.join(SOURCE, "tools")
+FC = os.path.join(SOURCE, "studies", "freydier", "freydier_convergence.py")
+SM = os.path.join(SOURCE, "studies", "stability", "stability_map.py")
+PL = os.path.join(SOURCE, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
 sys.path.insert(0, TOOLS)
+sys.path.insert(0, os.path.dirname(FC))
+sys.path.insert(0, os.path.dirname(PL))
 from checks import check, finish  # noqa: E402
 import freydier_convergence  # noqa: E402
 import poiseuille_loaded  # noqa: E402
@@ -34,7 +40,7 @@ from surgepy import vtp  # noqa: E402
 
 
 def tool(name, *args, timeout=60):
-    """Runs tools/NAME with args; returns the completed process (text output)."""
+    """Runs tools/NAME, or the script at the absolute path NAME, with args; returns the completed process."""
     return subprocess.run([sys.executable, os.path.join(TOOLS, name)] + [str(a) for a in args], capture_output=True,
                           text=True, timeout=timeout, stdin=subprocess.DEVNULL)
 
@@ -174,7 +180,6 @@ write(os.path.join(header_only, "diagnostics.csv"), open(path("run", "diagnostic
 copying = script("surge_header_only",  # a surge that "runs" by copying header_only into its -o folder
                  'out=""; prev=""\nfor a in "$@"; do [ "$prev" = "-o" ] && out="$a"; prev="$a"; done\n'
                  'mkdir -p "$out" && cp %s/* "$out"/\n' % header_only)
-FC = "freydier_convergence.py"
 common = ["--cases", "id1", "--dp", "0.004", "--ch", "1.8", "--end-s", "0.2", "--runs-dir", path("fc_runs"),
           "--csv", path("fc.csv"), "--parked-dir", path("fc_parked")]
 expect("freydier_convergence run: surge exits 2 at once: its message", tool(FC, "run", "--surge", refusing, *common),
@@ -182,27 +187,26 @@ expect("freydier_convergence run: surge exits 2 at once: its message", tool(FC, 
 expect("freydier_convergence run: diagnostics.csv with a header only",
        tool(FC, "run", "--surge", copying, *common), "diagnostics.csv", "no rows")
 expect("stability_map run: surge exits 2 at once: its message",
-       tool("stability_map.py", "run", "--surge", refusing, "--shifting", "none", "--ch", "1.8", "--cfl", "0.2",
-            "--c0-factor", "10", "--runs-dir", path("sm_runs"), "--csv", path("sm.csv"), "--frames", path("sm_frames")),
+       tool(SM, "run", "--surge", refusing, "--shifting", "none", "--ch", "1.8", "--cfl", "0.2", "--c0-factor", "10",
+            "--runs-dir", path("sm_runs"), "--csv", path("sm.csv"), "--frames", path("sm_frames")),
        "surge: bad option (stand-in)")
 expect("poiseuille_loaded run: surge exits 2 at once: its message",
-       tool("poiseuille_loaded.py", "run", "--surge", refusing, "--phi", "0", "--runs-dir", path("pl_runs"),
-            "--csv", path("pl.csv")), "surge: bad option (stand-in)")
+       tool(PL, "run", "--surge", refusing, "--phi", "0", "--runs-dir", path("pl_runs"), "--csv", path("pl.csv")),
+       "surge: bad option (stand-in)")
 silent = script("surge_silent", "exit 0\n")  # a surge that "succeeds" and writes nothing
 expect("poiseuille_loaded reference: surge wrote no run",
-       tool("poiseuille_loaded.py", "reference", "--surge", silent, "--phi", "0.1", "--runs-dir", path("pl_runs"),
+       tool(PL, "reference", "--surge", silent, "--phi", "0.1", "--runs-dir", path("pl_runs"),
             "--csv", path("pl_ref.csv")), "phi = 0.1", "wrote no run")
 expect("poiseuille_loaded reference: --csv in a missing folder",
-       tool("poiseuille_loaded.py", "reference", "--surge", SURGE, "--phi", "0.1", "--runs-dir", path("pl_runs"),
+       tool(PL, "reference", "--surge", SURGE, "--phi", "0.1", "--runs-dir", path("pl_runs"),
             "--csv", path("missing", "pl_ref.csv")), "--csv", "missing")
 expect("freydier_convergence run --cases id3 refused before anything runs",
        tool(FC, "run", "--surge", refusing, "--cases", "id1,id3"), "--cases", "id3")
 expect("freydier_convergence run --end-s nan", tool(FC, "run", "--surge", refusing, "--end-s", "nan"), "--end-s")
 expect("freydier_convergence run --dp inf", tool(FC, "run", "--surge", refusing, "--dp", "inf"), "--dp")
 expect("freydier_convergence run --surge a folder", tool(FC, "run", "--surge", WORK), "--surge", "not an executable")
-expect("stability_map run --end-s -1", tool("stability_map.py", "run", "--surge", refusing, "--end-s", "-1"),
-       "--end-s")
-expect("poiseuille_loaded run --c0 -1", tool("poiseuille_loaded.py", "run", "--surge", refusing, "--c0", "-1"), "--c0")
+expect("stability_map run --end-s -1", tool(SM, "run", "--surge", refusing, "--end-s", "-1"), "--end-s")
+expect("poiseuille_loaded run --c0 -1", tool(PL, "run", "--surge", refusing, "--c0", "-1"), "--c0")
 
 # ---- 3. park and unpark: bad checkpoints, progress files, archives; nothing half-written ----
 bad_ck_runs = folder("park_runs")
@@ -247,10 +251,9 @@ expect("freydier_convergence chart: a value that is not a number: file, line and
 expect("freydier_convergence run: the same table refused before anything runs",
        tool(FC, "run", "--surge", refusing, "--csv", garbage_csv), "dp_m")
 binary_csv = write(path("binary.csv"), bytes(range(256)) * 8)
-expect("stability_map chart: a binary file", tool("stability_map.py", "chart", "--csv", binary_csv), binary_csv,
-       "not a CSV")
+expect("stability_map chart: a binary file", tool(SM, "chart", "--csv", binary_csv), binary_csv, "not a CSV")
 expect("stability_map chart: --png into a missing folder",
-       tool("stability_map.py", "chart", "--png", path("nowhere", "map.png")), "--png", "nowhere")
+       tool(SM, "chart", "--png", path("nowhere", "map.png")), "--png", "nowhere")
 expect("freydier_convergence chart: --png with another extension", tool(FC, "chart", "--png", path("chart.svg")),
        "--png", ".png")
 no_clear = path("pl_no_clear.csv")
@@ -260,7 +263,7 @@ with open(no_clear, "w", newline="") as f:
     for phi in (0.1, 0.2, 0.3):
         writer.writerow(dict(dict.fromkeys(poiseuille_loaded.COLUMNS, "1"), phi=phi, phi_actual=phi, status="ok",
                              mu_eq_over_mu0=1 + 2 * phi))
-r = tool("poiseuille_loaded.py", "report", "--csv", no_clear)
+r = tool(PL, "report", "--csv", no_clear)
 expect("poiseuille_loaded report without a phi = 0 run", r, "phi = 0")
 check("poiseuille_loaded report without a phi = 0 run prints no nan", "nan" not in r.stdout, r.stdout)
 
@@ -317,15 +320,15 @@ def driven(name, force, height):
 
 
 expect("poiseuille_loaded measure: force_x_mps2 = 0",
-       tool("poiseuille_loaded.py", "measure", driven("force0", 0, 0.02)), "force_x_mps2")
+       tool(PL, "measure", driven("force0", 0, 0.02)), "force_x_mps2")
 expect("poiseuille_loaded measure: no fluid in the centre band",
-       tool("poiseuille_loaded.py", "measure", driven("empty_band", 1, 0.2)), "centre line")
+       tool(PL, "measure", driven("empty_band", 1, 0.2)), "centre line")
 d = driven("measure_no_kind", 1, 0.02)
 shutil.copy(os.path.join(no_kind, SNAPS[0]), d)
-expect("poiseuille_loaded measure: no kind array", tool("poiseuille_loaded.py", "measure", d), SNAPS[0], "kind")
+expect("poiseuille_loaded measure: no kind array", tool(PL, "measure", d), SNAPS[0], "kind")
 d = driven("measure_bad_pvd", 1, 0.02)
 write(os.path.join(d, "run.pvd"), "<VTKFile")
-expect("poiseuille_loaded measure: malformed run.pvd", tool("poiseuille_loaded.py", "measure", d), "run.pvd")
+expect("poiseuille_loaded measure: malformed run.pvd", tool(PL, "measure", d), "run.pvd")
 
 # ---- 9. surge_watch ----
 SW = "surge_watch.py"

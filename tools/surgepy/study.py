@@ -1,5 +1,6 @@
-"""Helpers shared by the study drivers (freydier_convergence.py, stability_map.py, poiseuille_loaded.py): option
-parsing, errors, resumable runs and the append-only CSV tables they write."""
+"""Helpers shared by the study drivers in studies/ (freydier/freydier_convergence.py, stability/stability_map.py,
+poiseuille_loaded/poiseuille_loaded.py, debris_surge/ensemble.py): option parsing, errors, resumable runs and the
+append-only CSV tables they write."""
 import collections
 import csv
 import gzip

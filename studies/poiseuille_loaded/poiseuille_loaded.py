@@ -3,13 +3,13 @@
 cases/poiseuille_loaded.ini, each run in its own folder and resumable from checkpoints, one CSV row per finished
 run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Einstein-Brady line.
 
-  tools/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8] [--seed 1]
-        [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded]
-        [--csv docs/validation/poiseuille_loaded.csv]
-  tools/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
-  tools/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
-  tools/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png] [--dp DP] [--c0 C0]
-        [--diffusion DELTA]
+  studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
+        [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
+        [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv docs/validation/poiseuille_loaded.csv]
+  studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
+  studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
+  studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
+        [--dp DP] [--c0 C0] [--diffusion DELTA]
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -34,11 +34,11 @@ import time
 
 import numpy as np
 
-from surgepy import cli_checks, study, vtp
-from surgepy.run_params import RunParams
-
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from surgepy import cli_checks, study, vtp  # noqa: E402
+from surgepy.run_params import RunParams  # noqa: E402
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",

@@ -3,10 +3,10 @@
 for each cell whether the health monitor let it finish, the failing check (particle, step, time) when it did
 not, and for every cell a frame of the particles near the upstream wall and the front.
 
-  tools/stability_map.py run [--case id1] [--dp 0.002] [--shifting none,velocity,lind] [--ch 1.3,1.8]
+  studies/stability/stability_map.py run [--case id1] [--dp 0.002] [--shifting none,velocity,lind] [--ch 1.3,1.8]
         [--cfl 0.2,0.5] [--c0-factor 10,5] [--end-s 3] [--threads 2]
         [--runs-dir runs/stability] [--csv docs/validation/stability_map.csv] [--frames docs/validation/stability]
-  tools/stability_map.py chart [--csv ...] [--png docs/validation/stability_map.png]
+  studies/stability/stability_map.py chart [--csv ...] [--png docs/validation/stability_map.png]
 
 One CSV row per cell (appended; cells already in the CSV are skipped): the parameters, status (healthy or the
 check that failed), the health message, wall time, the final time reached, the largest density deviation and
@@ -19,10 +19,11 @@ import subprocess
 import sys
 import time
 
-from surgepy import cli_checks, study, vtp
-
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from surgepy import cli_checks, study, vtp  # noqa: E402
+
 COLUMNS = ["case", "dp_m", "shifting", "ch", "cfl", "c0_factor", "end_s", "status", "message", "wall_s",
            "time_reached_s", "max_density_deviation", "mean_vx_last_s_mps", "frame"]
 

@@ -3,12 +3,13 @@
 its own folder, resumable from checkpoints, and appends one row per finished run to a CSV; `chart` plots each
 error against wall time (one point per run).
 
-  tools/freydier_convergence.py run [--cases id1,id2] [--dp 0.001,0.0005] [--ch 1,1.3,1.5,1.8,2.2]
+  studies/freydier/freydier_convergence.py run [--cases id1,id2] [--dp 0.001,0.0005] [--ch 1,1.3,1.5,1.8,2.2]
         [--shifting lind] [--shape block] [--continuity renormalised|plain] [--end-s 40] [--threads 2]
         [--budget-s SECONDS]
         [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
-  tools/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
-  tools/freydier_convergence.py park|unpark [--runs-dir runs/convergence] [--parked-dir docs/validation/parked]
+  studies/freydier/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
+  studies/freydier/freydier_convergence.py park|unpark [--runs-dir runs/convergence]
+        [--parked-dir docs/validation/parked]
 
 A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
 its wall time adds up across the pieces (progress.json in its folder). runs/ is not committed, so a run that must
@@ -28,10 +29,11 @@ import subprocess
 import sys
 import time
 
-from surgepy import cli_checks, study
-
 HERE = os.path.dirname(os.path.abspath(__file__))
-ROOT = os.path.dirname(HERE)
+ROOT = os.path.dirname(os.path.dirname(HERE))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from surgepy import cli_checks, study  # noqa: E402
+
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
            "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity", "corner"]
 METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
@@ -86,8 +88,9 @@ def run_one(args, case, dp, ch, deadline):
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
            "sim_time_s": "%.3f" % sim_time}
     if rc == 0:
-        metrics = subprocess.run([sys.executable, os.path.join(HERE, "freydier_metrics.py"), folder, "--csv-row",
-                                  "--png", os.path.join(folder, "metrics.png")], capture_output=True, text=True)
+        metrics = subprocess.run([sys.executable, os.path.join(ROOT, "tools", "freydier_metrics.py"), folder,
+                                  "--csv-row", "--png", os.path.join(folder, "metrics.png")],
+                                 capture_output=True, text=True)
         if metrics.returncode != 0:
             row.update({m: "nan" for m in METRICS})
             row["status"] = "metrics failed: " + metrics.stderr.strip().splitlines()[-1]
