@@ -48,6 +48,12 @@ typedef struct implicit_work {
 
 typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
 
+/* Whether the scene is large enough for the solves' loops to run on several threads: a BiCGSTAB iteration is ten or
+ * so short loops, and below this size waking the other threads at each costs more than it saves (the 800-particle
+ * tank: 0.53 s on one thread, 4.75 s on two with passive waiting; docs/performance.md) */
+#define WIDE_FLUID_PARTICLES 20000
+static inline int wide(const surge_sim *sim) { return sim->count - sim->wall_count >= WIDE_FLUID_PARTICLES; }
+
 static int grow(void **array, size_t need, size_t size)
 {
     void *grown = realloc(*array, (need + 1) * size);
@@ -122,7 +128,7 @@ static void wall_sums(surge_sim *sim)
     implicit_work *w = sim->implicit;
     const kernel2d *k = &sim->kernel;
     const double vol = sim->mass / sim->rho0;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         const double gx = surge_sim_wrapped_x(sim, sim->x[kw] + sim->ghost_dx[kw]), gy = sim->y[kw] + sim->ghost_dy[kw];
         neighbour_ranges r;
@@ -156,7 +162,7 @@ static void geometry(surge_sim *sim)
         wall_sums(sim);
     /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
      * the node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned */
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         double a[3][3] = {{0}};
         for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
@@ -199,7 +205,7 @@ static void geometry(surge_sim *sim)
             w->mirror_w[e] = (real)c;
         }
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         const int i = a - first;
         const real mxa = moved_x[a], mya = moved_y[a];
@@ -256,7 +262,7 @@ static void geometry(surge_sim *sim)
         sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
         sim->face_vn_mps[a] = face.vn_mps;
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         const int i = a - first;
         int near = sim->surface[a];
@@ -290,13 +296,13 @@ static void viscous_operator(surge_sim *sim, const double *x, double *out)
     const neighbour_lists *nl = &sim->neighbours;
     const int nf = sim->count - sim->wall_count;
     const double dt_nu = sim->dt_s * sim->params.fluid.viscosity_m2ps;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         const double ux = mirror_wall_vx(sim, kw), uy = sim->vy[kw];
         const double gx = w->dry[kw] ? ux : ghost_value(sim, kw, x), gy = w->dry[kw] ? uy : ghost_value(sim, kw, x + nf);
         w->wall_x[kw] = 2.0 * ux - gx, w->wall_y[kw] = 2.0 * uy - gy;
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const double xa = x[i], ya = x[nf + i];
         double lx = 0, ly = 0;
@@ -316,7 +322,7 @@ static void viscous_operator(surge_sim *sim, const double *x, double *out)
 static void wall_pressures(surge_sim *sim, const double *x)
 {
     implicit_work *w = sim->implicit;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++)
         w->wall_x[kw] = w->dry[kw] ? 0.0 : ghost_value(sim, kw, x) + w->neumann_pa[kw];
 }
@@ -328,7 +334,7 @@ static void pressure_gradient(surge_sim *sim, const double *x)
     implicit_work *w = sim->implicit;
     const neighbour_lists *nl = &sim->neighbours;
     const int nf = sim->count - sim->wall_count;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const double pa = w->fixed[i] ? 0.0 : x[i];
         double sx = 0, sy = 0;
@@ -357,7 +363,7 @@ static void pressure_operator(surge_sim *sim, const double *x, double *out)
     const int nf = sim->count - sim->wall_count;
     wall_pressures(sim, x);
     pressure_gradient(sim, x);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         if (w->fixed[i]) {
             out[i] = x[i];
@@ -379,7 +385,7 @@ static void pressure_operator(surge_sim *sim, const double *x, double *out)
 static double dot(const implicit_work *w, const double *a, const double *b, int n)
 {
     const int blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
     for (int k = 0; k < blocks; k++) {
         const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
         double sum = 0;
@@ -398,7 +404,7 @@ static void apply_linear(surge_sim *sim, affine_operator op, const double *x, do
 {
     op(sim, x, out);
     const double *offset = sim->implicit->offset;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++)
         out[i] -= offset[i];
 }
@@ -413,7 +419,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
     const double *diag = w->diag;
     op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
     apply_linear(sim, op, x, r, n);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++) {
         const double b = w->rhs[i] - w->offset[i];
         r[i] = b - r[i];
@@ -425,7 +431,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
     *residual = b_norm > 0 ? r_norm / b_norm : 0;
     if (b_norm == 0 || r_norm <= tolerance * b_norm)
         return 0;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++)
         rhat[i] = r[i];
     double rho = 1, alpha = 1, omega = 1;
@@ -435,7 +441,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
             return -1;
         const double beta = rho_new / rho * alpha / omega;
         rho = rho_new;
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < n; i++) {
             p[i] = r[i] + beta * (p[i] - omega * v[i]);
             y[i] = p[i] / diag[i];
@@ -445,7 +451,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
         if (rv == 0)
             return -1;
         alpha = rho / rv;
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < n; i++) {
             x[i] += alpha * y[i];
             s[i] = r[i] - alpha * v[i];
@@ -455,13 +461,13 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
             *residual = s_norm / b_norm;
             return it;
         }
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < n; i++)
             z[i] = s[i] / diag[i];
         apply_linear(sim, op, z, t, n);
         const double tt = dot(w, t, t, n);
         omega = tt > 0 ? dot(w, t, s, n) / tt : 0;
-        #pragma omp parallel for schedule(static)
+        #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < n; i++) {
             x[i] += omega * z[i];
             r[i] = s[i] - omega * t[i];
@@ -483,7 +489,7 @@ static double implicit_dt(const surge_sim *sim)
     if (p->numerics.dt_fixed_s > 0)
         return p->numerics.dt_fixed_s;
     double max_v2 = 0;
-    #pragma omp parallel for schedule(static) reduction(max : max_v2)
+    #pragma omp parallel for schedule(static) reduction(max : max_v2) if (wide(sim))
     for (int a = sim->wall_count; a < sim->count; a++) {
         const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
         max_v2 = v2 > max_v2 ? v2 : max_v2;
@@ -529,7 +535,7 @@ int step_implicit(surge_sim *sim)
     neighbours_track(sim);
     boundary_update(sim); /* the walls' normals and depths (the contact rule) */
     geometry(sim);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         sim->x_n[a] = sim->x[a], sim->y_n[a] = sim->y[a];
         sim->vx_n[a] = sim->vx[a], sim->vy_n[a] = sim->vy[a], sim->rho_n[a] = sim->rho[a];
@@ -540,16 +546,16 @@ int step_implicit(surge_sim *sim)
     const double rho0 = sim->rho0, dt_nu = dt * prm->fluid.viscosity_m2ps;
     const neighbour_lists *nl = &sim->neighbours;
     double *by_id = sim->implicit_pressure_by_id;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
     /* the walls' p_n: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
         w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
     wall_pressures(sim, w->pressure_n);
     pressure_gradient(sim, w->pressure_n);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         double sum_w = 0;
@@ -574,13 +580,13 @@ int step_implicit(surge_sim *sim)
             return -1;
         }
     }
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         sim->vx[first + i] = (real)w->x[i], sim->vy[first + i] = (real)w->x[nf + i];
 
     /* 2. the correction phi: the walls' Neumann offsets from v* at their ghosts, the source from div v* and the
      * density */
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++) {
         /* the wall's own velocity: only its normal part matters, and the belt-wall corner's (mirrored through the
          * corner point, its normal slanted) is the fixed upstream wall's, not the belt's */
@@ -601,7 +607,7 @@ int step_implicit(surge_sim *sim)
         w->wall_x[kw] = gvx - into * sim->ghost_dx[kw], w->wall_y[kw] = gvy - into * sim->ghost_dy[kw];
     }
     const double alpha = prm->implicit.density_correction;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         const double vxa = sim->vx[a], vya = sim->vy[a];
@@ -640,7 +646,7 @@ int step_implicit(surge_sim *sim)
 
     /* 3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi */
     pressure_gradient(sim, w->x);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         const double p_new = w->fixed[i] ? 0.0 : w->pressure_n[i] + w->x[i];
@@ -653,12 +659,12 @@ int step_implicit(surge_sim *sim)
         sim->rho[a] = (real)(sim->near_surface[a] ? rho0 : rho0 * w->kernel_ratio[i]);
     }
     /* the walls' pressure for the outputs: p_n+1 continued hydrostatically, as the next step takes it */
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
         sim->pressure[kw] = (real)(w->dry[kw] ? 0.0 : ghost_value(sim, kw, w->pressure_n) -
                                    rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
     const double face_reach_m = prm->walls.face_repulsion_reach_dp * prm->numerics.dp_m;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         double vx1 = w->x[i], vy1 = w->x[nf + i];
@@ -669,7 +675,7 @@ int step_implicit(surge_sim *sim)
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }
     shifting_compute(sim, dt);
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         double dx = dt * sim->vx[a] + sim->shift_x[a], dy = dt * sim->vy[a] + sim->shift_y[a];
         /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
