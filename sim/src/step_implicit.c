@@ -21,9 +21,6 @@
 #define DOT_BLOCK 4096        /* dot products: partial sums over fixed blocks, added in order */
 #define MIN_SHEPARD_SUM 0.1   /* a ghost node with less fluid around it is dry (as boundary.c) */
 #define MIN_DETERMINANT 1e-3  /* below it the first-order interpolation falls back to Shepard's (as boundary.c) */
-/* a ghost node with less fluid around it than this (its Shepard sum) is near the free surface: Shepard's
- * interpolation there, a weighted mean, where the first-order one would extrapolate from a few particles */
-#define MIN_FIRST_ORDER_SUM 0.45
 
 typedef struct implicit_work {
     size_t fluid_cap, wall_cap, mirror_cap; /* entries the per-entry arrays hold */
@@ -50,7 +47,7 @@ typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
 
 /* Whether the scene is large enough for the solves' loops to run on several threads: a BiCGSTAB iteration is ten or
  * so short loops, and below this size waking the other threads at each costs more than it saves (the 800-particle
- * tank: 0.53 s on one thread, 4.75 s on two with passive waiting; docs/performance.md) */
+ * tank: 0.53 s on one thread, 4.75 s on two with passive waiting; docs/method.md) */
 #define WIDE_FLUID_PARTICLES 20000
 static inline int wide(const surge_sim *sim) { return sim->count - sim->wall_count >= WIDE_FLUID_PARTICLES; }
 
@@ -182,7 +179,7 @@ static void geometry(surge_sim *sim)
                            a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                            a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
         double row[3] = {0, 0, 0}; /* the first row of a^-1: the value at the node from the sums */
-        if (fabs(det) >= MIN_DETERMINANT && a[0][0] >= MIN_FIRST_ORDER_SUM) {
+        if (fabs(det) >= MIN_DETERMINANT && a[0][0] >= MIN_SHEPARD_SUM) {
             row[0] = (a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det;
             row[1] = -(a[0][1] * a[2][2] - a[0][2] * a[2][1]) / det;
             row[2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det;
