@@ -17,6 +17,16 @@ static void compute_pressure(surge_sim *sim)
     }
 }
 
+/* The fluid's pair_state records for this evaluation, after compute_pressure and the surface flags */
+static void pack_pair_state(surge_sim *sim)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    #pragma omp parallel for schedule(static)
+    for (int i = sim->wall_count; i < sim->count; i++)
+        sim->pair_state[i] = (pair_state){nl->moved_x[i], nl->moved_y[i], sim->vx[i], sim->vy[i], sim->rho[i],
+                                          sim->inv_rho[i], sim->pressure[i], (real)sim->surface[i]};
+}
+
 /* Antuono et al. (2010) renormalised density gradient over the fluid neighbours,
  * <grad rho>_a = M_a^-1 sum_b (rho_b - rho_a) grad_a W_ab V_b, exact for a linear density field even where the
  * kernel is truncated. Where M is nearly singular (an isolated particle) the gradient is taken as zero. */
@@ -57,9 +67,11 @@ typedef struct pair_constants {
 /* The sums a fluid particle gathers over its neighbours (eq. 6, 7 and what the time step, shifting, the
  * renormalisation and the relaxation need) */
 typedef struct particle_sums {
-    real acc_x, acc_y, div_v, diffusion, visc_speed_mps, kernel_w; /* kernel_w: sum_b W_ab, not the particle itself */
-    real grad_c_x, grad_c_y, div_r;
-    real m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy; /* kernel moment M and velocity gradient G (pair_moment) */
+    real acc_x, acc_y, diffusion, visc_speed_mps, kernel_w; /* kernel_w: sum_b W_ab, not the particle itself */
+    real grad_c_x, grad_c_y;
+    /* kernel moment M and velocity gradient G (pair_moment): -tr G is the plain div v (pair_divergence summed),
+     * tr M the free-surface indicator div r */
+    real m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy;
     int near_surface, near_boulder;
 } particle_sums;
 
@@ -78,50 +90,48 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
     const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
     const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
     const real *restrict grad_rho_x = sim->grad_rho_x, *restrict grad_rho_y = sim->grad_rho_y;
-    const int32_t *restrict surface = sim->surface;
+    const pair_state *restrict st = sim->pair_state;
     const real grad_coef = c->grad_coef, inv_h = c->inv_h, alpha = c->alpha, mass = c->mass, eta2 = c->eta2;
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu, rho_h_per_m = c->rho_h_per_m;
     const real mxa = moved_x[a], mya = moved_y[a], vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a];
     const real inv_rhoa = inv_rho[a], grad_xa = grad_rho_x[a], grad_ya = grad_rho_y[a];
-    real acc_x = 0, acc_y = 0, div_v = 0, diffusion = 0, visc_speed_mps = 0, kernel_w = 0;
-    real grad_c_x = 0, grad_c_y = 0, div_r = 0, m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
+    real acc_x = 0, acc_y = 0, diffusion = 0, visc_speed_mps = 0, kernel_w = 0;
+    real grad_c_x = 0, grad_c_y = 0, m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
     int near_surface = 0;
     const int i = a - sim->wall_count;
     const int64_t first = nl->fluid_first[i], last = nl->fluid_first[i + 1];
-    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, div_v, diffusion, kernel_w, grad_c_x, grad_c_y, div_r, m_xx, m_xy, \
+    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, diffusion, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, \
                                m_yy, g_xx, g_xy, g_yx, g_yy) reduction(max : visc_speed_mps) reduction(| : near_surface)
     for (int64_t e = first; e < last; e++) {
         const int b = index[e];
-        const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]); /* r_ab */
+        const real dx = dx0[e] + (mxa - st[b].moved_x), dy = dy0[e] + (mya - st[b].moved_y); /* r_ab */
         const real r2 = dx * dx + dy * dy;
         const int inside = r2 < support2 && r2 > 0;
         const real r = REAL_SQRT(r2);
         const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0; /* grad_a W = f r_ab */
-        const real vol = mass * inv_rho[b], vf = vol * f;
-        const real dvx = vxa - vx[b], dvy = vya - vy[b];
-        const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+        const real vol = mass * st[b].inv_rho, vf = vol * f;
+        const real dvx = vxa - st[b].vx, dvy = vya - st[b].vy;
+        const real pressure_coef = pair_pressure_coef(mass, pa, st[b].pressure, inv_rhoa, st[b].inv_rho);
+        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, st[b].rho, eta2);
         acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
         acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
-        div_v += pair_divergence(vf, dvx, dvy, dx, dy);
         m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
         g_xx += pair_moment(vf, dvx, dx), g_xy += pair_moment(vf, dvx, dy);
         g_yx += pair_moment(vf, dvy, dx), g_yy += pair_moment(vf, dvy, dy);
         const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
                                          : pair_hydrostatic_part(rho_h_per_m, dy);
-        diffusion -= pair_diffusion(rhoa, rho[b], linear_part, f, vol);
-        div_r -= vf * r2;
+        diffusion -= pair_diffusion(rhoa, st[b].rho, linear_part, f, vol);
         if (!corrector) {
             const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2) : 0;
             visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
         } else {
             grad_c_x += vf * dx;
             grad_c_y += vf * dy;
-            near_surface |= inside & surface[b];
+            near_surface |= inside & (st[b].surface != 0);
             kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
         }
     }
-    *out = (particle_sums){acc_x, acc_y, div_v, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y, div_r,
+    *out = (particle_sums){acc_x, acc_y, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y,
                            m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0};
 }
 
@@ -141,11 +151,11 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu;
     const real mxa = moved_x[a], mya = moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
     const real pa = pres[a], inv_rhoa = inv_rho[a];
-    real acc_x = 0, acc_y = 0, div_v = 0, visc_speed_mps = 0, kernel_w = 0, grad_c_x = 0, grad_c_y = 0, div_r = 0;
+    real acc_x = 0, acc_y = 0, visc_speed_mps = 0, kernel_w = 0, grad_c_x = 0, grad_c_y = 0;
     real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
     const int i = a - sim->wall_count;
     const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
-    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, div_v, kernel_w, grad_c_x, grad_c_y, div_r, m_xx, m_xy, m_yy, g_xx, \
+    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, m_yy, g_xx, \
                                g_xy, g_yx, g_yy) reduction(max : visc_speed_mps)
     for (int64_t e = first; e < last; e++) {
         const int b = index[e];
@@ -161,11 +171,9 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
         acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
         acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
         const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-        div_v += pair_divergence(vf, wdx, wdy, dx, dy);
         m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
         g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
         g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
-        div_r -= vf * r2;
         if (!corrector) {
             const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2) : 0;
             visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
@@ -175,9 +183,9 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
             kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
         }
     }
-    s->acc_x += acc_x, s->acc_y += acc_y, s->div_v += div_v, s->kernel_w += kernel_w;
+    s->acc_x += acc_x, s->acc_y += acc_y, s->kernel_w += kernel_w;
     s->visc_speed_mps = visc_speed_mps > s->visc_speed_mps ? visc_speed_mps : s->visc_speed_mps;
-    s->grad_c_x += grad_c_x, s->grad_c_y += grad_c_y, s->div_r += div_r;
+    s->grad_c_x += grad_c_x, s->grad_c_y += grad_c_y;
     s->m_xx += m_xx, s->m_xy += m_xy, s->m_yy += m_yy, s->g_xx += g_xx, s->g_xy += g_xy, s->g_yx += g_yx;
     s->g_yy += g_yy;
 }
@@ -232,6 +240,7 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
 void interaction_compute(surge_sim *sim, int corrector)
 {
     compute_pressure(sim);
+    pack_pair_state(sim);
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
@@ -284,7 +293,7 @@ void interaction_compute(surge_sim *sim, int corrector)
         sim->ax[a] = s.acc_x + gx;
         sim->ay[a] = s.acc_y + gy;
         const real rhoa = sim->rho[a];
-        real div_v = s.div_v;
+        real div_v = -(s.g_xx + s.g_yy);
         const real det = s.m_xx * s.m_yy - s.m_xy * s.m_xy;
         if (sim->params.numerics.continuity_correction && det > (real)0.25) {
             /* div v = tr(G M^-1): exact for linear velocity fields even with a truncated kernel */
@@ -302,7 +311,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             const real kernel_sum = mass * (alpha + s.kernel_w); /* sum_b m W_ab, the particle itself included */
             sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
         }
-        sim->div_r[a] = s.div_r;
+        sim->div_r[a] = s.m_xx + s.m_yy;
         if (!corrector) /* the time step follows the predictor's pass */
             sim->visc_speed_mps[a] = s.visc_speed_mps;
         else { /* surface[] is set at the end of the predictor pass, after this step's sort */

@@ -41,6 +41,13 @@ typedef struct cell_span {
     double shift_x;            /* add to the neighbour's x */
 } cell_span;
 
+/* What a fluid neighbour brings to the pair loops, packed in one 32-byte record (8 floats) a particle: the loop's
+ * loads of a neighbour touch one cache line instead of eight arrays (interaction.c fills it at each evaluation;
+ * docs/performance.md) */
+typedef struct pair_state {
+    real moved_x, moved_y, vx, vy, rho, inv_rho, pressure, surface;
+} pair_state;
+
 /* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
  * wall_index[wall_first[i] .. wall_first[i+1]), in cell order, each with r_a - r_b at the build (periodic image
@@ -88,6 +95,7 @@ struct surge_sim {
     real *vx_n, *vy_n, *rho_n;
     /* per-particle rates and scratch */
     real *ax, *ay, *drho, *pressure, *inv_rho;
+    pair_state *pair_state;    /* the same per-neighbour fields packed (interaction.c) */
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
     real *face_gap_m;          /* the particle's distance from that face (negative past it) */
