@@ -215,6 +215,12 @@ def group_offline():
     code3, stderr3 = run(["render", os.path.join(d, "out")])
     check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
           code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
+    # render.frame_interval_s on the command line: one snapshot per interval (snapshots every 0.05 s, 0 to 0.2 s)
+    code9, stderr9 = run(["render", os.path.join(d, "out"), "--frames", os.path.join(d, "sparse_frames"), "-s",
+                          "render.frame_interval_s=0.1"])
+    sparse = os.listdir(os.path.join(d, "sparse_frames")) if code9 == 0 else []
+    check("offline: with -s render.frame_interval_s=0.1 one frame per 0.1 s of the 0.05 s snapshots",
+          code9 == 0 and len(sparse) == 3 and "rendered 3 snapshots" in stderr9, "%s\n%s" % (sparse, stderr9[-300:]))
     # one colour range for the whole movie, from all its frames, unless the user sets one (issue #24)
     check("offline: an automatic colour range is the range over all frames", "over all 5 frames" in stderr3,
           stderr3[-300:])

@@ -113,7 +113,8 @@ static const char *usage_render =
     "\n"
     "Renders every snapshot listed in RUN_DIR/run.pvd with the run's parameters (RUN_DIR/params.ini) and\n"
     "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot) and/or a movie at render.movie_fps.\n"
-    "Without --frames or --movie, frames go to RUN_DIR/frames.\n";
+    "With -s render.frame_interval_s=T, one snapshot per T of simulated time instead (the first at or after\n"
+    "each multiple of T). Without --frames or --movie, frames go to RUN_DIR/frames.\n";
 
 static const char *usage_keygen =
     "usage: surge keygen NAME\n\n"
@@ -882,6 +883,26 @@ static int command_render(int argc, char **argv)
         fprintf(stderr, "surge: %s\n", err);
         return EXIT_USAGE;
     }
+    /* the snapshots to draw: all, or with render.frame_interval_s on the command line one per interval */
+    size_t count = 0;
+    size_t *drawn = malloc((surge_pvd_count(pvd) + 1) * sizeof *drawn);
+    if (!drawn) {
+        fprintf(stderr, "surge: out of memory\n");
+        surge_pvd_close(pvd);
+        return EXIT_IO;
+    }
+    int every_interval = 0;
+    for (int i = 0; i < c.override_count; i++)
+        every_interval |= strncmp(c.overrides[i], "render.frame_interval_s=", 24) == 0;
+    const double interval_s = p.render.frame_interval_s;
+    double next_frame_s = -INFINITY;
+    for (size_t i = 0; i < surge_pvd_count(pvd); i++) {
+        const double t = surge_pvd_time_s(pvd, i);
+        if (every_interval && t < next_frame_s)
+            continue;
+        drawn[count++] = i;
+        next_frame_s = (floor(t / interval_s + 1e-9) + 1.0) * interval_s;
+    }
     if (!c.frames_dir && !c.movie_path) {
         snprintf(frames_dir, sizeof frames_dir, "%s/frames", c.case_path);
         c.frames_dir = frames_dir;
@@ -892,11 +913,13 @@ static int command_render(int argc, char **argv)
         claimed = claim_movie(c.movie_path, c.overwrite);
     if (claimed != 0) {
         surge_pvd_close(pvd);
+        free(drawn);
         return EXIT_USAGE;
     }
     if (c.frames_dir && surge_make_folders(c.frames_dir, "the frames", err, sizeof err) != 0) {
         fprintf(stderr, "surge: %s\n", err);
         surge_pvd_close(pvd);
+        free(drawn);
         return EXIT_IO;
     }
     if (surge_pvd_count(pvd) > 0) {
@@ -904,6 +927,7 @@ static int command_render(int argc, char **argv)
         if (fit_frame_height(&p, NULL, path, err, sizeof err) != 0) {
             fprintf(stderr, "surge: %s\n", err);
             surge_pvd_close(pvd);
+            free(drawn);
             return EXIT_USAGE;
         }
     }
@@ -914,12 +938,12 @@ static int command_render(int argc, char **argv)
         fprintf(stderr, "surge: %s\n", err);
         surge_canvas_destroy(canvas);
         surge_pvd_close(pvd);
+        free(drawn);
         return EXIT_IO;
     }
     surge_snapshot snap = {0};
     int rc = EXIT_OK;
     const double start = surge_wall_clock_s();
-    const size_t count = surge_pvd_count(pvd);
     snprintf(path, sizeof path, "%s/boulders.pvd", c.case_path);
     FILE *boulders_pvd = fopen(path, "r"); /* written by runs with boulders only */
     const int has_boulders = boulders_pvd != NULL;
@@ -930,7 +954,7 @@ static int command_render(int argc, char **argv)
     if (!(p.render.color_max > p.render.color_min)) {
         double low = INFINITY, high = -INFINITY;
         for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
-            snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, i));
+            snprintf(path, sizeof path, "%s/%s", c.case_path, surge_pvd_file(pvd, drawn[i]));
             const surge_canvas_layout *l = NULL;
             if (surge_vtp_read(path, &snap, err, sizeof err) != 0)
                 rc = EXIT_USAGE;
@@ -946,7 +970,7 @@ static int command_render(int argc, char **argv)
         }
     }
     for (size_t i = 0; i < count && rc == EXIT_OK; i++) {
-        const char *file = surge_pvd_file(pvd, i);
+        const char *file = surge_pvd_file(pvd, drawn[i]);
         snprintf(path, sizeof path, "%s/%s", c.case_path, file);
         if (surge_vtp_read(path, &snap, err, sizeof err) != 0) {
             rc = EXIT_USAGE;
@@ -969,6 +993,7 @@ static int command_render(int argc, char **argv)
         fprintf(stderr, "surge: rendered %zu snapshots of %s in %.1f s (%.1f frames/s)%s%s%s%s\n", count, c.case_path,
                 elapsed, elapsed > 0 ? count / elapsed : 0, c.frames_dir ? ": frames in " : "",
                 c.frames_dir ? c.frames_dir : "", c.movie_path ? ", movie " : "", c.movie_path ? c.movie_path : "");
+    free(drawn);
     surge_snapshot_free(&snap);
     surge_canvas_destroy(canvas);
     surge_pvd_close(pvd);

@@ -248,7 +248,8 @@ static const surge_param_info registry[] = {
      "Wall-clock seconds between progress lines on stderr (0: silent).", OFF(output.progress_interval_s)},
 
     {"render", "frame_interval_s", SURGE_PARAM_REAL, "s", 0.04, 1e-9, 1e7, true, NULL,
-     "Simulated time between rendered frames (--frames, --movie).", OFF(render.frame_interval_s)},
+     "Simulated time between rendered frames (--frames, --movie); surge render draws every snapshot unless this "
+     "is set on its command line, then one snapshot per interval.", OFF(render.frame_interval_s)},
     {"render", "width_px", SURGE_PARAM_INT, "px", 1280, 16, 8192, false, NULL, "Frame width.", OFF(render.width_px)},
     {"render", "height_px", SURGE_PARAM_INT, "px", 0, 0, 8192, false, NULL,
      "Frame height; 0: fitted to the scene (the walls' extent across the bed at the frame's width, between a fifth of the width and the width).",

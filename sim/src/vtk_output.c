@@ -728,6 +728,8 @@ surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len)
 size_t surge_pvd_count(const surge_pvd *pvd) { return pvd->count; }
 const char *surge_pvd_file(const surge_pvd *pvd, size_t index) { return pvd->entries[index].file; }
 
+double surge_pvd_time_s(const surge_pvd *pvd, size_t index) { return pvd->entries[index].time_s; }
+
 /* ------------------------------------------------------------------------------------------------
  * Reading our own .vtp files back
  * --------------------------------------------------------------------------------------------- */

@@ -56,6 +56,7 @@ int surge_pvd_add(surge_pvd *pvd, double time_s, const char *relative_file, char
 surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len);
 size_t surge_pvd_count(const surge_pvd *pvd);
 const char *surge_pvd_file(const surge_pvd *pvd, size_t index); /* relative to the .pvd's folder */
+double surge_pvd_time_s(const surge_pvd *pvd, size_t index);
 
 /* Frees the collection (the file on disk stays as last written). NULL is allowed. */
 void surge_pvd_close(surge_pvd *pvd);
