@@ -426,6 +426,45 @@ static double contact_rule_case(double reach_dp, double *shift_room_m, double *s
     return vy;
 }
 
+/* The health monitor stops an explicit run at a particle faster than the speed of sound, naming it and the check,
+ * and passes one just below it. */
+static int test_health_speed(void)
+{
+    surge_params p = surge_default_params();
+    p.domain.length_m = 0.1;
+    p.domain.height_m = 0.05;
+    p.domain.periodic_x = true;
+    p.walls.left = p.walls.right = p.walls.top = p.walls.upstream = false;
+    p.walls.bottom = true;
+    p.fluid.x0_m = 0;
+    p.fluid.x1_m = 0.1;
+    p.fluid.depth_m = 0.02;
+    p.numerics.dp_m = 0.005;
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    const int a = sim->wall_count + (sim->count - sim->wall_count) / 2;
+    const double c0 = sim->derived.c0_mps;
+    sim->vx[a] = (real)(0.99 * c0);
+    const int below = health_check(sim);
+    sim->vx[a] = (real)(1.01 * c0);
+    const int above = health_check(sim);
+    const surge_health *h = &sim->health;
+    printf("health_speed: c0 = %.4g m/s; at 0.99 c0 the check returns %d; at 1.01 c0 %d: %s\n", c0, below, above,
+           h->message);
+    expect_below("health_speed: a particle at 0.99 c0 passes (1 = stopped)", below != 0, 0);
+    expect_below("health_speed: at 1.01 c0 the speed check stops the run (1 = it does not)",
+                 !(above != 0 && h->check == SURGE_CHECK_SPEED && h->particle_id == sim->id[a] &&
+                   strstr(h->message, "speed of sound") != NULL), 0);
+    sim->params.numerics.scheme = SURGE_SCHEME_IMPLICIT; /* no speed of sound there */
+    expect_below("health_speed: the implicit scheme is not held to c0 (1 = stopped)", health_check(sim) != 0, 0);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 static int test_wall_contact_rules(void)
 {
     double room, shift_y, gap, room_off, shift_off, gap_off;
@@ -557,6 +596,8 @@ int main(int argc, char **argv)
         return test_corner_continuity() ? 1 : 0;
     if (!strcmp(argv[1], "disc_contact_rules"))
         return test_disc_contact_rules() ? 1 : 0;
+    if (!strcmp(argv[1], "health_speed"))
+        return test_health_speed() ? 1 : 0;
     if (!strcmp(argv[1], "wall_contact_rules"))
         return test_wall_contact_rules() ? 1 : 0;
     if (!strcmp(argv[1], "diffusion_linear"))

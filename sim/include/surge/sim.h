@@ -31,6 +31,7 @@ typedef enum surge_health_check {
     SURGE_CHECK_DT_COLLAPSE,  /* dt below health.min_dt_ratio of the first dt */
     SURGE_CHECK_OUT_OF_MEMORY, /* a step could not allocate what it needed (the contact solver's arrays) */
     SURGE_CHECK_SOLVER,       /* a linear solve of the implicit scheme did not converge */
+    SURGE_CHECK_SPEED,        /* explicit scheme: a particle faster than the speed of sound c0 */
 } surge_health_check;
 
 typedef struct surge_health {
