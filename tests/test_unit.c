@@ -373,11 +373,8 @@ static int test_corner_continuity(void)
     return failures;
 }
 
-/* The wall treatment's contact and shift rules (docs/method.md, Walls; issue #22): a fluid particle put 0.1 dp above
- * the bed face and thrown at it at 0.5 m/s leaves the step with no velocity toward the face, and a shift that would
- * carry it further in stops at the repulsion's reach. Without the rules (reach 0) the same particle keeps
- * approaching. */
-static double contact_rule_case(double reach_dp, double *shift_room_m, double *shift_y_m, double *gap_m)
+/* A 2 cm layer on a no-slip bed, periodic over 0.1 m, dp = 5 mm: the scene of the single-particle tests below */
+static surge_params small_bed_params(void)
 {
     surge_params p = surge_default_params();
     p.domain.length_m = 0.1;
@@ -389,6 +386,16 @@ static double contact_rule_case(double reach_dp, double *shift_room_m, double *s
     p.fluid.x1_m = 0.1;
     p.fluid.depth_m = 0.02;
     p.numerics.dp_m = 0.005;
+    return p;
+}
+
+/* The wall treatment's contact and shift rules (docs/method.md, Walls; issue #22): a fluid particle put 0.1 dp above
+ * the bed face and thrown at it at 0.5 m/s leaves the step with no velocity toward the face, and a shift that would
+ * carry it further in stops at the repulsion's reach. Without the rules (reach 0) the same particle keeps
+ * approaching. */
+static double contact_rule_case(double reach_dp, double *shift_room_m, double *shift_y_m, double *gap_m)
+{
+    surge_params p = small_bed_params();
     p.walls.face_repulsion_reach_dp = reach_dp;
     char err[256];
     surge_sim *sim = surge_sim_create(&p, err, sizeof err);
@@ -430,16 +437,7 @@ static double contact_rule_case(double reach_dp, double *shift_room_m, double *s
  * and passes one just below it. */
 static int test_health_speed(void)
 {
-    surge_params p = surge_default_params();
-    p.domain.length_m = 0.1;
-    p.domain.height_m = 0.05;
-    p.domain.periodic_x = true;
-    p.walls.left = p.walls.right = p.walls.top = p.walls.upstream = false;
-    p.walls.bottom = true;
-    p.fluid.x0_m = 0;
-    p.fluid.x1_m = 0.1;
-    p.fluid.depth_m = 0.02;
-    p.numerics.dp_m = 0.005;
+    surge_params p = small_bed_params();
     char err[256];
     surge_sim *sim = surge_sim_create(&p, err, sizeof err);
     if (!sim) {
