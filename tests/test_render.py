@@ -221,6 +221,10 @@ def group_offline():
     sparse = os.listdir(os.path.join(d, "sparse_frames")) if code9 == 0 else []
     check("offline: with -s render.frame_interval_s=0.1 one frame per 0.1 s of the 0.05 s snapshots",
           code9 == 0 and len(sparse) == 3 and "rendered 3 snapshots" in stderr9, "%s\n%s" % (sparse, stderr9[-300:]))
+    code10, stderr10 = run(["render", os.path.join(d, "out"), "--frames", os.path.join(d, "sparse_frames2"), "-s",
+                            " render.frame_interval_s = 0.1"])
+    check("offline: the same with spaces around the name, as -s allows them", code10 == 0 and
+          "rendered 3 snapshots" in stderr10, stderr10[-300:])
     # one colour range for the whole movie, from all its frames, unless the user sets one (issue #24)
     check("offline: an automatic colour range is the range over all frames", "over all 5 frames" in stderr3,
           stderr3[-300:])

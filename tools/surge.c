@@ -1,6 +1,7 @@
 /* surge: the command-line program. Wires the solver (sim/) to its outputs, the state publisher and the control
  * socket (stream/) and the renderer (render/). */
 #define _XOPEN_SOURCE 700 /* POSIX 2008 and realpath */
+#include <ctype.h>
 #include <errno.h>
 #include <limits.h>
 #include <math.h>
@@ -847,6 +848,22 @@ static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, con
     return movie ? surge_movie_add(movie, rgba, err, err_len) : 0;
 }
 
+/* Whether the -s assignment names the parameter name (or, with prefix, one that starts with it), spaces around the
+ * name allowed as surge_params_override allows them */
+static int override_sets(const char *assignment, const char *name, int prefix)
+{
+    const char *eq = strchr(assignment, '=');
+    if (!eq)
+        return 0;
+    while (assignment < eq && isspace((unsigned char)*assignment))
+        assignment++;
+    while (eq > assignment && isspace((unsigned char)eq[-1]))
+        eq--;
+    const size_t len = (size_t)(eq - assignment), want = strlen(name);
+    return prefix ? len >= want && strncmp(assignment, name, want) == 0
+                  : len == want && strncmp(assignment, name, want) == 0;
+}
+
 static int command_render(int argc, char **argv)
 {
     if (wants_help(argc, argv)) {
@@ -865,7 +882,7 @@ static int command_render(int argc, char **argv)
         return EXIT_USAGE;
     }
     for (int i = 0; i < c.override_count; i++)
-        if (strncmp(c.overrides[i], "render.", 7) != 0) {
+        if (!override_sets(c.overrides[i], "render.", 1)) {
             fprintf(stderr, "surge: render: '-s %s': only render.key=value can be set here (the run's other "
                             "parameters are what it was run with)\n", c.overrides[i]);
             return EXIT_USAGE;
@@ -893,7 +910,7 @@ static int command_render(int argc, char **argv)
     }
     int every_interval = 0;
     for (int i = 0; i < c.override_count; i++)
-        every_interval |= strncmp(c.overrides[i], "render.frame_interval_s=", 24) == 0;
+        every_interval |= override_sets(c.overrides[i], "render.frame_interval_s", 0);
     const double interval_s = p.render.frame_interval_s;
     double next_frame_s = -INFINITY;
     for (size_t i = 0; i < surge_pvd_count(pvd); i++) {

@@ -7,24 +7,20 @@
 #include "pair_terms.h"
 #include "sim_internal.h"
 
+/* Every particle's pressure and 1/density, and the fluid's pair_state records for this evaluation (after the
+ * surface flags of the predictor pass) */
 static void compute_pressure(surge_sim *sim)
 {
+    const neighbour_lists *nl = &sim->neighbours;
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
     #pragma omp parallel for schedule(static)
     for (int i = 0; i < sim->count; i++) {
         sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
         sim->inv_rho[i] = (real)1 / sim->rho[i];
+        if (i >= sim->wall_count)
+            sim->pair_state[i] = (pair_state){nl->moved_x[i], nl->moved_y[i], sim->vx[i], sim->vy[i], sim->rho[i],
+                                              sim->inv_rho[i], sim->pressure[i], (real)sim->surface[i]};
     }
-}
-
-/* The fluid's pair_state records for this evaluation, after compute_pressure and the surface flags */
-static void pack_pair_state(surge_sim *sim)
-{
-    const neighbour_lists *nl = &sim->neighbours;
-    #pragma omp parallel for schedule(static)
-    for (int i = sim->wall_count; i < sim->count; i++)
-        sim->pair_state[i] = (pair_state){nl->moved_x[i], nl->moved_y[i], sim->vx[i], sim->vy[i], sim->rho[i],
-                                          sim->inv_rho[i], sim->pressure[i], (real)sim->surface[i]};
 }
 
 /* Antuono et al. (2010) renormalised density gradient over the fluid neighbours,
@@ -240,7 +236,6 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
 void interaction_compute(surge_sim *sim, int corrector)
 {
     compute_pressure(sim);
-    pack_pair_state(sim);
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
