@@ -47,7 +47,7 @@ typedef struct ghost_sums {
 } ghost_sums;
 
 /* The ghost node's sums over a list of fluid particles j at r_ghost - r_j = dx0 + (g - moved_j) (nothing beyond 2h):
- * kernel and gradient in pair precision, sums in double; an omp simd loop over the list, pairs beyond 2h masked. */
+ * an omp simd loop over the list in pair precision, pairs beyond 2h masked; the solve that follows is in double. */
 static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict index, const real *restrict dx0,
                                   const real *restrict dy0, int64_t first, int64_t last, real gx, real gy)
 {
@@ -56,8 +56,8 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
     const real mass = (real)sim->mass;
     const real *restrict moved_x = sim->neighbours.moved_x, *restrict moved_y = sim->neighbours.moved_y;
     const real *restrict rho = sim->rho, *restrict vx = sim->vx, *restrict vy = sim->vy;
-    double a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
-    double r00 = 0, r01 = 0, r02 = 0, r10 = 0, r11 = 0, r12 = 0, r20 = 0, r21 = 0, r22 = 0;
+    real a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
+    real r00 = 0, r01 = 0, r02 = 0, r10 = 0, r11 = 0, r12 = 0, r20 = 0, r21 = 0, r22 = 0;
     #pragma omp simd simdlen(8) reduction(+ : a00, a01, a02, a10, a11, a12, a20, a21, a22, r00, r01, r02, r10, r11, \
                                           r12, r20, r21, r22)
     for (int64_t e = first; e < last; e++) {
@@ -66,10 +66,10 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
         const real r2 = dx * dx + dy * dy;
         const real r = REAL_SQRT(r2);
         const real vol = r2 < support2 ? mass / rho[j] : 0; /* beyond 2h: no contribution */
-        const double w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
-        const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
-        const double wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
-        const double rx = -(double)dx, ry = -(double)dy;      /* r_j - r_ghost */
+        const real w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
+        const real f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
+        const real wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
+        const real rx = -dx, ry = -dy;                       /* r_j - r_ghost */
         a00 += w_vol, a01 += rx * w_vol, a02 += ry * w_vol;
         a10 += wx_vol, a11 += rx * wx_vol, a12 += ry * wx_vol;
         a20 += wy_vol, a21 += rx * wy_vol, a22 += ry * wy_vol;

@@ -108,7 +108,8 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
         const real vol = mass * st[b].inv_rho, vf = vol * f;
         const real dvx = vxa - st[b].vx, dvy = vya - st[b].vy;
         const real pressure_coef = pair_pressure_coef(mass, pa, st[b].pressure, inv_rhoa, st[b].inv_rho);
-        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, st[b].rho, eta2);
+        const real inv_denominator = pair_viscous_denominator(rhoa, st[b].rho, r2, eta2);
+        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
         acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
         acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
         m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
@@ -118,7 +119,7 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
                                          : pair_hydrostatic_part(rho_h_per_m, dy);
         diffusion -= pair_diffusion(rhoa, st[b].rho, linear_part, f, vol);
         if (!corrector) {
-            const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, r2, eta2) : 0;
+            const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, rhoa + st[b].rho, inv_denominator) : 0;
             visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
         } else {
             grad_c_x += vf * dx;
@@ -151,6 +152,8 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
     const int i = a - sim->wall_count;
     const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
+    if (first == last)
+        return;
     #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, m_yy, g_xx, \
                                g_xy, g_yx, g_yy) reduction(max : visc_speed_mps)
     for (int64_t e = first; e < last; e++) {
@@ -162,7 +165,8 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
         const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
         const real vf = mass * inv_rho[b] * f;
         const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, rhoa, rho[b], eta2);
+        const real inv_denominator = pair_viscous_denominator(rhoa, rho[b], r2, eta2);
+        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
         const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
         acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
         acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
@@ -171,7 +175,7 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
         g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
         g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
         if (!corrector) {
-            const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, r2, eta2) : 0;
+            const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, rhoa + rho[b], inv_denominator) : 0;
             visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
         } else {
             grad_c_x += vf * dx;

@@ -14,10 +14,17 @@ static inline real pair_pressure_coef(real mass, real p_a, real p_b, real inv_rh
     return -mass * (p_a + p_b) * inv_rho_a * inv_rho_b;
 }
 
-/* Momentum, laminar viscosity: dv_a/dt += V_ab v_ab, V_ab = 4 m nu f r^2 / ((rho_a + rho_b)(r^2 + eta^2))  (eq. 7) */
-static inline real pair_viscous_coef(real mass, real four_nu, real f, real r2, real rho_a, real rho_b, real eta2)
+/* 1 / ((rho_a + rho_b)(r^2 + eta^2)): the one division of a pair, shared by its viscous terms */
+static inline real pair_viscous_denominator(real rho_a, real rho_b, real r2, real eta2)
 {
-    return mass * four_nu * f * r2 / ((rho_a + rho_b) * (r2 + eta2));
+    return (real)1 / ((rho_a + rho_b) * (r2 + eta2));
+}
+
+/* Momentum, laminar viscosity: dv_a/dt += V_ab v_ab, V_ab = 4 m nu f r^2 / ((rho_a + rho_b)(r^2 + eta^2))  (eq. 7),
+ * inv_denominator from pair_viscous_denominator */
+static inline real pair_viscous_coef(real mass, real four_nu, real f, real r2, real inv_denominator)
+{
+    return mass * four_nu * f * r2 * inv_denominator;
 }
 
 /* One component of the pair's acceleration of a: P_ab f r_ab + V_ab v_ab  (eq. 7) */
@@ -54,10 +61,12 @@ static inline real pair_gradient_part(real grad_x_a, real grad_y_a, real grad_x_
     return (real)-0.5 * ((grad_x_a + grad_x_b) * dx + (grad_y_a + grad_y_b) * dy);
 }
 
-/* |h v_ab . r_ab / (r^2 + eta^2)|, a speed: its largest over the pairs sets the viscous time-step limit dt_cv */
-static inline real pair_viscous_speed(real h, real dvx, real dvy, real dx, real dy, real r2, real eta2)
+/* |h v_ab . r_ab / (r^2 + eta^2)|, a speed: its largest over the pairs sets the viscous time-step limit dt_cv
+ * (inv_denominator from pair_viscous_denominator) */
+static inline real pair_viscous_speed(real h, real dvx, real dvy, real dx, real dy, real rho_sum,
+                                      real inv_denominator)
 {
-    return REAL_FABS(h * (dvx * dx + dvy * dy) / (r2 + eta2));
+    return REAL_FABS(h * (dvx * dx + dvy * dy) * rho_sum * inv_denominator);
 }
 
 /* One entry of the kernel moment M = -sum V_b f r_ab (x) r_ab (u = r_ab) or of the velocity gradient

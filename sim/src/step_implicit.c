@@ -225,7 +225,7 @@ static void geometry(surge_sim *sim)
                 const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
                 const real vf = vol * f;
                 /* the Laplacian's weight: the viscous pair coefficient (eq. 7) per unit viscosity, negated */
-                lap_w[e] = -pair_viscous_coef(mass, four, f, r2, rho0, rho0, eta2);
+                lap_w[e] = -pair_viscous_coef(mass, four, f, r2, pair_viscous_denominator(rho0, rho0, r2, eta2));
                 gx[e] = vf * dx, gy[e] = vf * dy;
                 wrx += lap_w[e] * dx, wry += lap_w[e] * dy;
                 m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
