@@ -87,7 +87,7 @@ void boundary_update(surge_sim *sim)
     const double rho0 = sim->rho0;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy;
 
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int b = 0; b < sim->wall_count; b++) {
         /* A s = rhs for s = (value, d/dx, d/dy) of density, vx, vy at the ghost node */
         ghost_sums sums;

@@ -13,7 +13,7 @@ static void compute_pressure(surge_sim *sim)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int i = 0; i < sim->count; i++) {
         sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
         sim->inv_rho[i] = (real)1 / sim->rho[i];
@@ -33,7 +33,7 @@ static void compute_density_gradient(surge_sim *sim)
     const real support2 = sim->kernel.support2;
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho;
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
         const real rhoa = rho[a], mxa = moved_x[a], mya = moved_y[a];
         real m_xx = 0, m_xy = 0, m_yy = 0, sum_x = 0, sum_y = 0;
@@ -257,7 +257,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
 
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
         particle_sums s;
         if (corrector) {
@@ -321,7 +321,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     }
     if (!corrector) {
         const real threshold = (real)sim->params.shifting.surface_threshold;
-        #pragma omp parallel for schedule(static)
+        #pragma omp for schedule(static)
         for (int a = sim->wall_count; a < sim->count; a++)
             sim->surface[a] = sim->div_r[a] < threshold;
     }

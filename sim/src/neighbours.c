@@ -196,7 +196,7 @@ void neighbours_track(surge_sim *sim)
 {
     neighbour_lists *nl = &sim->neighbours;
     const int from = sim->boulders.count > 0 ? 0 : sim->wall_count; /* other walls never move */
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int a = from; a < sim->count; a++) {
         nl->moved_x[a] = (real)(sim->x[a] - nl->x_build[a]);
         nl->moved_y[a] = (real)(sim->y[a] - nl->y_build[a]);

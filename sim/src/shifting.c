@@ -69,7 +69,7 @@ static void shift_divergence(surge_sim *sim)
     const real support2 = sim->kernel.support2;
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict inv_rho = sim->inv_rho, *restrict sx = sim->shift_x, *restrict sy = sim->shift_y;
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int a = sim->wall_count; a < sim->count; a++) {
         const real sxa = sx[a], sya = sy[a], mxa = moved_x[a], mya = moved_y[a];
         real sum = 0;
@@ -99,7 +99,7 @@ static void shift_divergence(surge_sim *sim)
 void shifting_compute(surge_sim *sim, double dt_s)
 {
     const int first = sim->wall_count, n = sim->count;
-    #pragma omp parallel for schedule(static)
+    #pragma omp for schedule(static)
     for (int a = first; a < n; a++) {
         double sx, sy;
         shift_displacement(sim, a, dt_s, &sx, &sy);

@@ -177,15 +177,16 @@ void neighbours_free(neighbour_lists *nl);
 int neighbours_update(surge_sim *sim);
 /* Sorts by the build positions as they are and builds the lists (restarts: the same lists as the saved run). */
 int neighbours_adopt_build_positions(surge_sim *sim);
+/* Worksharing functions: their loops are `omp for`, to be called by every thread of a parallel region (one force
+ * evaluation shares one region: step_explicit.c); called outside one, they run on the calling thread alone. */
 /* Every particle's displacement since the build: before each force evaluation (positions changed). */
 void neighbours_track(surge_sim *sim);
-
-/* boundary.c: mDBC density and no-slip velocity of wall particles */
+/* boundary.c: mDBC density and no-slip velocity of wall particles (worksharing) */
 void boundary_update(surge_sim *sim);
-void boundary_wall_speeds(surge_sim *sim, double time_s);
-
-/* interaction.c: rates of change of fluid particles */
+/* interaction.c: rates of change of fluid particles (worksharing) */
 void interaction_compute(surge_sim *sim, int corrector);
+
+void boundary_wall_speeds(surge_sim *sim, double time_s);
 /* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
  * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal
  * line), or the nearest face of a disc among them: its distance (search_m when none), normal, the wall's velocity
@@ -213,7 +214,7 @@ int boulders_correct(surge_sim *sim, double dt_s);            /* full step from 
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
 void boulders_free(boulder_set *b);
 
-/* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass) */
+/* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass; worksharing) */
 void shifting_compute(surge_sim *sim, double dt_s);
 
 /* sim.c: back to the state saved at the start of the step (x_n, ..., rho_n) */

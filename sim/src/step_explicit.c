@@ -5,26 +5,33 @@
 
 #include "sim_internal.h"
 
-/* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7) */
-static double variable_dt(const surge_sim *sim)
+/* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7), from the largest acceleration squared and viscous
+ * speed over the fluid (largest_rates) */
+static double variable_dt(const surge_sim *sim, double max_acc2, double max_visc_mps)
 {
     const surge_params *p = &sim->params;
     if (p->numerics.dt_fixed_s > 0)
         return p->numerics.dt_fixed_s;
     const double h = sim->derived.h_m, c0 = sim->derived.c0_mps;
-    double max_acc2 = 0, max_visc_mps = 0;
-    #pragma omp parallel for schedule(static) reduction(max : max_acc2, max_visc_mps)
-    for (int a = sim->wall_count; a < sim->count; a++) {
-        double acc2 = (double)sim->ax[a] * sim->ax[a] + (double)sim->ay[a] * sim->ay[a];
-        max_acc2 = acc2 > max_acc2 ? acc2 : max_acc2;
-        max_visc_mps = sim->visc_speed_mps[a] > max_visc_mps ? sim->visc_speed_mps[a] : max_visc_mps;
-    }
     double dt = h / (c0 + max_visc_mps);             /* dt_cv */
     if (max_acc2 > 0)
         dt = fmin(dt, sqrt(h / sqrt(max_acc2)));     /* dt_f */
     if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)
         dt = fmin(dt, h * h / p->fluid.viscosity_m2ps); /* dt_nu */
     return p->numerics.cfl * dt;
+}
+
+/* One force evaluation (the predictor's or the corrector's): displacements since the list build, the walls' mDBC
+ * state, the fluid's rates, in one parallel region (waking the threads once, not three times), then the discs' */
+static void evaluate_rates(surge_sim *sim, int corrector)
+{
+    #pragma omp parallel
+    {
+        neighbours_track(sim);
+        boundary_update(sim);
+        interaction_compute(sim, corrector);
+    }
+    boulders_fluid_forces(sim);
 }
 
 int step_explicit(surge_sim *sim)
@@ -40,39 +47,45 @@ int step_explicit(surge_sim *sim)
         return -1;
     }
     boundary_wall_speeds(sim, t_n);
-    neighbours_track(sim);
-    boundary_update(sim);
-    interaction_compute(sim, 0);
-    boulders_fluid_forces(sim);
-    const double dt = variable_dt(sim);
+    evaluate_rates(sim, 0);
+    /* the time step from the predictor's rates, and the predictor's half step (workshop paper eq. 5a-b), in one
+     * parallel region */
+    double max_acc2 = 0, max_visc_mps = 0, dt = 0;
+    #pragma omp parallel
+    {
+        #pragma omp for schedule(static) reduction(max : max_acc2, max_visc_mps)
+        for (int a = first; a < n; a++) {
+            const double acc2 = (double)sim->ax[a] * sim->ax[a] + (double)sim->ay[a] * sim->ay[a];
+            max_acc2 = acc2 > max_acc2 ? acc2 : max_acc2;
+            max_visc_mps = sim->visc_speed_mps[a] > max_visc_mps ? sim->visc_speed_mps[a] : max_visc_mps;
+        }
+        #pragma omp single
+        dt = variable_dt(sim, max_acc2, max_visc_mps);
+        const double half = 0.5 * dt;
+        #pragma omp for schedule(static)
+        for (int a = first; a < n; a++) {
+            sim->x_n[a] = sim->x[a];
+            sim->y_n[a] = sim->y[a];
+            sim->vx_n[a] = sim->vx[a];
+            sim->vy_n[a] = sim->vy[a];
+            sim->rho_n[a] = sim->rho[a];
+            sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
+            sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
+            sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
+            sim->x[a] = sim->x_n[a] + half * sim->vx_n[a]; /* wrapped into the period at list builds */
+            sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
+        }
+    }
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
-
-    /* predictor: half step (workshop paper eq. 5a-b) */
     const double half = 0.5 * dt;
-    #pragma omp parallel for schedule(static)
-    for (int a = first; a < n; a++) {
-        sim->x_n[a] = sim->x[a];
-        sim->y_n[a] = sim->y[a];
-        sim->vx_n[a] = sim->vx[a];
-        sim->vy_n[a] = sim->vy[a];
-        sim->rho_n[a] = sim->rho[a];
-        sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
-        sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
-        sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
-        sim->x[a] = sim->x_n[a] + half * sim->vx_n[a]; /* wrapped into the period at list builds */
-        sim->y[a] = sim->y_n[a] + half * sim->vy_n[a];
-    }
 
     if (boulders)
         boulders_predict(sim, half);
 
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
-    neighbours_track(sim);
-    boundary_update(sim);
-    interaction_compute(sim, 1);
-    boulders_fluid_forces(sim);
+    evaluate_rates(sim, 1);
     if (boulders && boulders_correct(sim, dt) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n + dt};
@@ -81,25 +94,28 @@ int step_explicit(surge_sim *sim)
         boulders_restore(sim);
         return -1;
     }
-    shifting_compute(sim, dt);
     const double face_reach_m = sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m;
-    #pragma omp parallel for schedule(static)
-    for (int a = first; a < n; a++) {
-        double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
-        /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md) */
-        const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0) {
-            vx1 -= approach_mps * sim->face_nx[a];
-            vy1 -= approach_mps * sim->face_ny[a];
+    #pragma omp parallel
+    {
+        shifting_compute(sim, dt);
+        #pragma omp for schedule(static)
+        for (int a = first; a < n; a++) {
+            double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
+            /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md) */
+            const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
+            if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0) {
+                vx1 -= approach_mps * sim->face_nx[a];
+                vy1 -= approach_mps * sim->face_ny[a];
+            }
+            /* eps = div(v) dt (+ div(dr) of the shift) */
+            const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
+            const double sx = sim->shift_x[a], sy = sim->shift_y[a];
+            sim->vx[a] = (real)vx1;
+            sim->vy[a] = (real)vy1;
+            sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));
+            sim->x[a] = sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx;
+            sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
         }
-        /* eps = div(v) dt (+ div(dr) of the shift) */
-        const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
-        const double sx = sim->shift_x[a], sy = sim->shift_y[a];
-        sim->vx[a] = (real)vx1;
-        sim->vy[a] = (real)vy1;
-        sim->rho[a] = (real)(sim->rho_n[a] * (2.0 - eps) / (2.0 + eps));
-        sim->x[a] = sim->x_n[a] + half * (sim->vx_n[a] + (real)vx1) + sx;
-        sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
     }
     sim->time_s = t_n + dt;
     sim->dt_s = dt;

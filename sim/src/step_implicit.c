@@ -529,8 +529,11 @@ int step_implicit(surge_sim *sim)
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
     boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step */
-    neighbours_track(sim);
-    boundary_update(sim); /* the walls' normals and depths (the contact rule) */
+    #pragma omp parallel
+    {
+        neighbours_track(sim);
+        boundary_update(sim); /* the walls' normals and depths (the contact rule) */
+    }
     geometry(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
@@ -671,6 +674,7 @@ int step_implicit(surge_sim *sim)
             vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }
+    #pragma omp parallel
     shifting_compute(sim, dt);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
