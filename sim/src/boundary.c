@@ -146,7 +146,6 @@ void boundary_update(surge_sim *sim)
         sim->wall_nx[b] = (real)nx;
         sim->wall_ny[b] = (real)ny;
         sim->wall_depth_m[b] = (real)(0.5 * glen);
-        sim->wall_is_boulder[b] = sim->wall_of[b] == WALL_BOULDER;
         double cont_vx = vx[b], cont_vy = vy[b];
         if (sim->params.walls.no_penetration && sim->wall_of[b] != WALL_BOULDER) {
             const double approach = -((vgx - wall_vx) * nx + (vgy - wall_vy) * ny);

@@ -58,7 +58,6 @@ static void compute_density_gradient(surge_sim *sim)
 /* What one evaluation's pair loops take from the scene, constant over the particles */
 typedef struct pair_constants {
     real grad_coef, inv_h, alpha, mass, eta2, h, support2, four_nu, rho_h_per_m;
-    real face_search_m, half_dp; /* interaction_wall_face's search (0: none) */
 } pair_constants;
 
 /* The sums a fluid particle gathers over its neighbours (eq. 6, 7 and what the time step, shifting, the
@@ -70,7 +69,6 @@ typedef struct particle_sums {
      * tr M the free-surface indicator div r */
     real m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy;
     int near_surface, near_boulder;
-    int wall_face_candidate; /* a wall neighbour that interaction_wall_face could find (wall_pairs) */
 } particle_sums;
 
 /* Fluid particle a's fluid neighbours: pressure, viscosity, continuity, density diffusion (Antuono's form when
@@ -131,16 +129,11 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
         }
     }
     *out = (particle_sums){acc_x, acc_y, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y,
-                           m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0, 0};
+                           m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0};
 }
 
 /* Fluid particle a's wall neighbours, added to s: mDBC pressure; the no-slip velocity in the viscous term, the
- * wall's (with no penetration) in continuity; no density diffusion across the wall (passes as in fluid_pairs).
- * Also whether interaction_wall_face needs to look at the list: a boulder's particle within 2h, or, with a search,
- * a fixed wall particle that could give a face within it. That face lies along < search + depth in front of the
- * particle and within half a dp of its normal line, so r^2 < along^2 + (dp/2)^2; for along >= dp/2 that means
- * r^2 < (search + depth)^2 + (dp/2)^2. The test here is wider (1.001 x 2h, 1.01 x that bound) so that rounding
- * never drops a face the search would find. */
+ * wall's (with no penetration) in continuity; no density diffusion across the wall (passes as in fluid_pairs). */
 static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *sim, const pair_constants *c, int a,
                                                              int corrector, particle_sums *s)
 {
@@ -155,20 +148,14 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu;
     const real mxa = moved_x[a], mya = moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
     const real pa = pres[a], inv_rhoa = inv_rho[a];
-    const int32_t *restrict is_boulder = sim->wall_is_boulder;
-    const real *restrict wall_nx = sim->wall_nx, *restrict wall_ny = sim->wall_ny, *restrict depth = sim->wall_depth_m;
-    const int search = c->face_search_m > 0;
-    const real search_m = c->face_search_m, half_dp = c->half_dp, half_dp2 = half_dp * half_dp;
-    const real candidate_support2 = (real)1.001 * support2;
     real acc_x = 0, acc_y = 0, visc_speed_mps = 0, kernel_w = 0, grad_c_x = 0, grad_c_y = 0;
     real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
-    int candidate = 0;
     const int i = a - sim->wall_count;
     const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
     if (first == last)
         return;
     #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, m_yy, g_xx, \
-                               g_xy, g_yx, g_yy) reduction(max : visc_speed_mps) reduction(| : candidate)
+                               g_xy, g_yx, g_yy) reduction(max : visc_speed_mps)
     for (int64_t e = first; e < last; e++) {
         const int b = index[e];
         const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
@@ -184,9 +171,6 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
         acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
         acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
         const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-        const real along = dx * wall_nx[b] + dy * wall_ny[b], reach = search_m + depth[b];
-        const int face_possible = search & ((along < half_dp) | (r2 < (real)1.01 * (reach * reach + half_dp2)));
-        candidate |= (r2 < candidate_support2) & (is_boulder[b] | face_possible);
         m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
         g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
         g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
@@ -204,7 +188,6 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     s->grad_c_x += grad_c_x, s->grad_c_y += grad_c_y;
     s->m_xx += m_xx, s->m_xy += m_xy, s->m_yy += m_yy, s->g_xx += g_xx, s->g_xy += g_xy, s->g_yx += g_yx;
     s->g_yy += g_yy;
-    s->wall_face_candidate = candidate;
 }
 
 /* The face of disc i if it is nearer to fluid particle a than face: the disc's circle, its outward normal through
@@ -260,19 +243,18 @@ void interaction_compute(surge_sim *sim, int corrector)
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
-    /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
-    const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
-    const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
     const pair_constants c = {
         .grad_coef = sim->kernel.grad_coef, .inv_h = sim->kernel.inv_h, .alpha = sim->kernel.alpha,
         .mass = (real)sim->mass, .eta2 = (real)sim->eta2, .h = sim->kernel.h, .support2 = sim->kernel.support2,
-        .four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps), .rho_h_per_m = (real)sim->rho_h_per_m,
-        .face_search_m = face_search_m, .half_dp = (real)(0.5 * sim->params.numerics.dp_m)};
+        .four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps), .rho_h_per_m = (real)sim->rho_h_per_m};
     const real ddt_coef = (real)(2.0 * sim->params.numerics.density_diffusion * sim->derived.h_m * sim->derived.c0_mps);
     const real gx = (real)sim->gx, gy = (real)sim->gy;
     /* relaxation of the density toward the kernel sum in the bulk: kappa per unit strain (corrector pass only) */
     const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
     const real mass = c.mass, alpha = c.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
+    /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
+    const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
+    const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
 
     #pragma omp for schedule(static)
@@ -292,8 +274,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             wall_pairs(sim, &c, a, 0, &s);
         }
         s.near_surface |= sim->surface[a];
-        const wall_face face = s.wall_face_candidate ? interaction_wall_face(sim, a, face_search_m, &s.near_boulder)
-                                                     : (wall_face){face_search_m, 0, 0, 0, -1, -1};
+        const wall_face face = interaction_wall_face(sim, a, face_search_m, &s.near_boulder);
         sim->face_disc[a] = -1;
         if (face.gap_m < face_reach_m) { /* closer to a wall face than a particle at rest sits: pushed back along
                                           * its normal; the step's update takes away any velocity toward it (sim.c) */

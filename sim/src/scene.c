@@ -207,7 +207,7 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->boulders.local_y, s->wall_count); ALLOC(s->boulders.spin_coupling, s->wall_count);
     ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count);
     ALLOC(s->wall_cont_vx, s->wall_count); ALLOC(s->wall_cont_vy, s->wall_count);
-    ALLOC(s->wall_nx, s->wall_count); ALLOC(s->wall_ny, s->wall_count); ALLOC(s->wall_depth_m, s->wall_count); ALLOC(s->wall_is_boulder, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
+    ALLOC(s->wall_nx, s->wall_count); ALLOC(s->wall_ny, s->wall_count); ALLOC(s->wall_depth_m, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
     ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
 #undef ALLOC
     return ok ? 0 : -1;

@@ -117,7 +117,6 @@ struct surge_sim {
     real *wall_cont_vx, *wall_cont_vy; /* velocity in the continuity equation: the wall's, plus no penetration */
     real *wall_nx, *wall_ny;   /* unit normal from the wall particle toward its ghost (into the fluid) */
     real *wall_depth_m;        /* the wall particle's distance below the wall face (half its ghost offset) */
-    int32_t *wall_is_boulder;  /* 1 for a boulder's particle (boundary_update; int32 for the vector loops) */
     double wall_speed[WALL_COUNT];
     uint8_t *kind;             /* surge_particle_kind, by id */
 
