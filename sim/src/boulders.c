@@ -459,7 +459,8 @@ void boulders_fluid_forces(surge_sim *sim)
             const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
             /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop) */
             const real pressure_coef = pair_pressure_coef(mass, pres[a], pres[k], inv_rho[a], inv_rho[k]);
-            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, pair_viscous_denominator(rho[a], rho[k], r2, eta2));
+            const real inv_denominator = pair_viscous_denominator(rho[a], rho[k], r2, eta2);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
             sum_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, vx[a] - sim->wall_vx[k]);
             sum_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, vy[a] - sim->wall_vy[k]);
             sum_viscous += viscous_coef;

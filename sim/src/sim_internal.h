@@ -185,7 +185,7 @@ void neighbours_track(surge_sim *sim);
 void boundary_update(surge_sim *sim);
 /* interaction.c: rates of change of fluid particles (worksharing) */
 void interaction_compute(surge_sim *sim, int corrector);
-
+/* boundary.c: the moving walls' speeds at time_s (the start ramp), and the particles' kinds that follow them */
 void boundary_wall_speeds(surge_sim *sim, double time_s);
 /* What fluid particle a's wall neighbours within 2h say besides the pair terms: whether one is a boulder's, and the
  * nearest fixed wall face within search_m straight below the particle (the wall particle within dp/2 of its normal

@@ -6,7 +6,7 @@
 #include "sim_internal.h"
 
 /* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7), from the largest acceleration squared and viscous
- * speed over the fluid (largest_rates) */
+ * speed over the fluid (reduced in step_explicit's predictor region) */
 static double variable_dt(const surge_sim *sim, double max_acc2, double max_visc_mps)
 {
     const surge_params *p = &sim->params;
