@@ -5,7 +5,8 @@
  *              repeat with their seed; an impossible request is refused
  *   csv        the disc list reads back exactly; bad lists are refused with file:line
  *   flow       eq. 21 (flow.csv) on a synthetic surge with known answers: a block 1.3 m high moving 2 m/s against
- *              the belt, a disc riding 2 m behind its front, fluid splashed next to the wall left out */
+ *              the belt, a disc riding 2 m behind its front and one gone round the period ahead of it (counted as
+ *              ahead of the front), fluid splashed next to the wall left out */
 #define _DEFAULT_SOURCE /* erand48 */
 #include <math.h>
 #include <stdio.h>
@@ -239,22 +240,26 @@ static void group_flow(void)
         s.x_m[n] = (i + 0.5) * 0.1, s.y_m[n] = -0.05, s.vx_mps[n] = -3.5f, s.vy_mps[n] = 0,
         s.kind[n] = SURGE_KIND_MOVING_WALL;
     s.count = n;
-    surge_snapshot_reserve_boulders(&s, 1);
-    s.boulders.count = 1;
+    surge_snapshot_reserve_boulders(&s, 2);
+    s.boulders.count = 2;
     s.boulders.x_m[0] = 1.5 + 18, s.boulders.y_m[0] = 1.2, s.boulders.radius_m[0] = 0.3;
+    /* one that left the surge, rolled down the belt and went round the period: behind the wall, 30 m from it */
+    s.boulders.x_m[1] = 1.5 + 30 - 33, s.boulders.y_m[1] = 0.3, s.boulders.radius_m[1] = 0.25;
     surge_flow_metrics m;
     const int rc = surge_flow_metrics_compute(&s, &p, &m);
     const double g = 9.81, slope = 10.1 * 3.14159265358979323846 / 180;
     const double fr = 2.0 / sqrt(g * 1.3), mu = g * sin(slope) * 1.3 * 1.3 / (3 * 2.0 * 0.28);
     char detail[512];
     snprintf(detail, sizeof detail, "h_max %.6g (1.3), with boulders %.6g (1.5), u_bar %.6g (2), Fr %.6g (%.6g), "
-             "mu_eq/mu0 %.6g (%.6g), front %.6g m (20), boulders %.6g m behind (2), %d fluid (1950: the block past 5 m)", m.h_max_m,
+             "mu_eq/mu0 %.6g (%.6g), front %.6g m (20), boulders %.6g m behind on average (2 and -10: -4), %d ahead "
+             "of the front (1), %d fluid (1950: the block past 5 m)", m.h_max_m,
              m.h_max_with_boulders_m, m.u_bar_mps, m.froude, fr, m.mu_eq_over_mu0, mu, m.front_from_wall_m,
-             m.boulders_behind_front_m, m.fluid_counted);
+             m.boulders_behind_front_m, m.boulders_ahead_of_front, m.fluid_counted);
     check("flow: eq. 21 on a synthetic surge gives the known numbers", rc == 0 && fabs(m.h_max_m - 1.3) < 1e-9 &&
           fabs(m.h_max_with_boulders_m - 1.5) < 1e-9 && fabs(m.u_bar_mps - 2) < 1e-6 && fabs(m.froude - fr) < 1e-6 &&
           fabs(m.mu_eq_over_mu0 - mu) < 1e-6 && fabs(m.front_from_wall_m - 20) < 1e-9 &&
-          fabs(m.boulders_behind_front_m - 2) < 1e-9 && m.fluid_counted == 1950, detail);
+          fabs(m.boulders_behind_front_m + 4) < 1e-9 && m.boulders_ahead_of_front == 1 && m.fluid_counted == 1950,
+          detail);
     surge_snapshot_free(&s);
 }
 

@@ -14,7 +14,7 @@ static double from_wall(const surge_params *p, double x)
 int surge_flow_metrics_compute(const surge_snapshot *s, const surge_params *p, surge_flow_metrics *out)
 {
     const double nan = NAN, ignore_m = p->output.flow_ignore_m, column_m = p->output.flow_column_m;
-    *out = (surge_flow_metrics){s->time_s, nan, nan, nan, nan, nan, nan, nan, 0};
+    *out = (surge_flow_metrics){s->time_s, nan, nan, nan, nan, nan, nan, nan, 0, 0};
     double belt_mps = 0, belt_y = INFINITY, reach_m = 0;
     for (int32_t i = 0; i < s->count; i++) {
         if (s->kind[i] == SURGE_KIND_MOVING_WALL && s->y_m[i] < belt_y)
@@ -72,8 +72,10 @@ int surge_flow_metrics_compute(const surge_snapshot *s, const surge_params *p, s
     out->fluid_counted = counted;
     if (b->count > 0) {
         double behind = 0;
-        for (int k = 0; k < b->count; k++)
+        for (int k = 0; k < b->count; k++) {
             behind += (front - from_wall(p, b->x_m[k])) / b->count;
+            out->boulders_ahead_of_front += from_wall(p, b->x_m[k]) > front;
+        }
         out->boulders_behind_front_m = behind;
     }
     return 0;

@@ -121,9 +121,10 @@ static int write_flow(const surge_sim *sim, run_outputs *o, char *err, size_t er
     }
     surge_flow_metrics m;
     surge_flow_metrics_compute(&o->snap, surge_sim_params(sim), &m);
-    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d\n", m.time_s,
+    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d\n", m.time_s,
                 (long long)surge_sim_step_count(sim), m.h_max_m, m.h_max_with_boulders_m, m.u_bar_mps, m.froude,
-                m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted) < 0 ||
+                m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted,
+                m.boulders_ahead_of_front) < 0 ||
         fflush(o->flow_csv) != 0) {
         snprintf(err, err_len, "cannot write %s/flow.csv: %s", o->dir, strerror(errno));
         return -1;
@@ -166,6 +167,21 @@ static FILE *open_series(const run_outputs *o, const char *name, const char *hea
     char path[4096];
     join(path, sizeof path, o->dir, name);
     long long checkpoint_step = (long long)surge_sim_step_count(sim);
+    if (restarted) { /* rows of other columns (an earlier version's file) are not appended to */
+        FILE *old = fopen(path, "r");
+        char first[512] = "";
+        if (old) {
+            if (!fgets(first, sizeof first, old))
+                first[0] = '\0';
+            fclose(old);
+        }
+        first[strcspn(first, "\r\n")] = '\0';
+        if (first[0] != '\0' && strcmp(first, header) != 0) {
+            snprintf(err, err_len, "'%s' has the columns '%.200s', not this version's '%.200s': restart into another "
+                     "folder (-o), or move the file away", path, first, header);
+            return NULL;
+        }
+    }
     if (restarted && surge_file_keep_lines(path, row_at_or_before_step, &checkpoint_step, err, err_len) != 0)
         return NULL;
     FILE *f = fopen(path, restarted ? "a" : "w");
@@ -291,7 +307,8 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         goto done;
     if (p->output.flow_interval_s > 0 &&
         !(o.flow_csv = open_series(&o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
-                                   "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted", sim,
+                                   "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted,"
+                                   "boulders_ahead_of_front", sim,
                                    opt->restarted, err, err_len)))
         goto done;
     if (!opt->restarted &&

@@ -16,6 +16,8 @@ typedef struct surge_flow_metrics {
     double front_from_wall_m;       /* downstream end of the last column whose top exceeds 10 % of h_max */
     double boulders_behind_front_m; /* mean distance of the disc centres behind the front; NaN without discs */
     int fluid_counted;              /* fluid particles measured */
+    int boulders_ahead_of_front;    /* discs whose centre is downstream of the front (distances from the wall taken
+                                     * around a periodic domain): discs that have left the surge */
 } surge_flow_metrics;
 
 /* Over the fluid more than params->output.flow_ignore_m downstream of the upstream wall (walls.upstream_x_m,
