@@ -65,8 +65,10 @@ for member in ("n0_s1_dp0.066", "n6_s1_dp0.066"):
         with open(os.path.join(RUNS, member, "boulders.csv")) as f:
             discs = len(f.read().strip().split("\n")) - 1
         behind = [float(r["boulders_behind_front_m"]) for r in rows]
-        check("n6: 6 discs written to boulders.csv, riding within the surge",
-              discs == 6 and all(0 < b < 20 for b in behind), "%d discs, behind the front %s" % (discs, behind))
+        ahead = [r["boulders_ahead_of_front"] for r in rows]
+        check("n6: 6 discs written to boulders.csv, riding within the surge (none ahead of the front)",
+              discs == 6 and all(0 < b < 20 for b in behind) and all(a == "0" for a in ahead),
+              "%d discs, behind the front %s, ahead of it %s" % (discs, behind, ahead))
     check("%s: every flow.csv row after the start is finite" % member, finite, str(later))
 
 table, png = os.path.join(WORK, "ensemble.csv"), os.path.join(WORK, "ensemble.png")
@@ -74,7 +76,9 @@ rc, out, err = tool("collect", "--runs-dir", RUNS, "--csv", table, "--png", png)
 rows = list(csv.DictReader(open(table))) if os.path.isfile(table) else []
 fluid = [r for r in rows if r["count"] == "0"]
 froude = float(fluid[0]["froude"]) if fluid else float("nan")
-check("collect: a row per member and the box plots", rc == 0 and len(rows) == 2 and os.path.getsize(png) > 10000,
+check("collect: a row per member and the box plots, with the most discs ever ahead of the front (none here)",
+      rc == 0 and len(rows) == 2 and os.path.getsize(png) > 10000 and
+      [r["most_boulders_ahead"] for r in sorted(rows, key=lambda r: int(r["count"]))] == ["0", "0"],
       out + err[-1000:])
 check("collect: the fluid alone runs at the uniform flow's Froude number within 10 %% (Fr %.3f, window %s-%s s)"
       % (froude, fluid[0]["window_start_s"] if fluid else "?", fluid[0]["window_end_s"] if fluid else "?"),

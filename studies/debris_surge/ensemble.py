@@ -15,7 +15,8 @@ from its checkpoint, a finished one is skipped). --member K runs only the K-th m
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
 density ratio 0.9.
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
-25 s is averaged over its second half, and the window used is written); a table (--csv) and box plots of Fr and
+25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
+the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png).
 """
@@ -36,7 +37,7 @@ from surgepy.run_params import ParamsError, RunParams  # noqa: E402
 TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
 COLUMNS = ["count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
-           "h_max_m", "u_bar_mps", "boulders_behind_front_m", "end_s", "wall_s", "status"]
+           "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s", "wall_s", "status"]
 
 
 def fail(message):
@@ -127,6 +128,17 @@ def window_means(flow_csv, window):
     return start, stop, len(chosen), means, end
 
 
+def most_boulders_ahead(flow_csv):
+    """The most discs ever downstream of the front over the run (flow.csv's boulders_ahead_of_front: discs that
+    left the surge); nan for a flow.csv written before that column existed."""
+    with open(flow_csv, newline="") as f:
+        columns = csv.DictReader(f).fieldnames or []
+    if "boulders_ahead_of_front" not in columns:
+        return float("nan")
+    return max(int(r["boulders_ahead_of_front"])
+               for r in study.read_rows(TOOL, flow_csv, {"boulders_ahead_of_front": int}))
+
+
 def solid_fraction(folder):
     """Disc area (boulders.csv) over the initial fluid block's area (params.ini); 0 without discs."""
     path = os.path.join(folder, "boulders.csv")
@@ -173,7 +185,8 @@ def command_collect(args):
                       "window_start_s": start, "window_end_s": stop, "rows": n_rows, "froude": means["froude"],
                       "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
-                      "end_s": end, "wall_s": progress["wall_s"], "status": progress["status"]})
+                      "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
+                      "status": progress["status"]})
     if not table:
         fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
     table.sort(key=lambda r: (r["dp_m"], r["count"], r["seed"]))
