@@ -160,7 +160,7 @@ static int row_at_or_before_step(const char *line, void *checkpoint_step)
 }
 
 /* A time series (diagnostics.csv, flow.csv) opened for this run: on a restart the rows up to the checkpoint's step
- * are kept and new rows appended; a new file gets the header. NULL with err. */
+ * are kept and new rows appended (a file with other columns is refused); a new file gets the header. NULL with err. */
 static FILE *open_series(const run_outputs *o, const char *name, const char *header, const surge_sim *sim,
                          int restarted, char *err, size_t err_len)
 {
@@ -169,18 +169,21 @@ static FILE *open_series(const run_outputs *o, const char *name, const char *hea
     long long checkpoint_step = (long long)surge_sim_step_count(sim);
     if (restarted) { /* rows of other columns (an earlier version's file) are not appended to */
         FILE *old = fopen(path, "r");
-        char first[512] = "";
-        if (old) {
-            if (!fgets(first, sizeof first, old))
-                first[0] = '\0';
-            fclose(old);
+        char *first = NULL;
+        size_t capacity = 0;
+        int other = 0;
+        if (old && getline(&first, &capacity, old) > 0) {
+            first[strcspn(first, "\r\n")] = '\0';
+            other = first[0] != '\0' && strcmp(first, header) != 0;
         }
-        first[strcspn(first, "\r\n")] = '\0';
-        if (first[0] != '\0' && strcmp(first, header) != 0) {
+        if (other)
             snprintf(err, err_len, "'%s' has the columns '%.200s', not this version's '%.200s': restart into another "
                      "folder (-o), or move the file away", path, first, header);
+        free(first);
+        if (old)
+            fclose(old);
+        if (other)
             return NULL;
-        }
     }
     if (restarted && surge_file_keep_lines(path, row_at_or_before_step, &checkpoint_step, err, err_len) != 0)
         return NULL;
