@@ -73,8 +73,9 @@ int surge_flow_metrics_compute(const surge_snapshot *s, const surge_params *p, s
     if (b->count > 0) {
         double behind = 0;
         for (int k = 0; k < b->count; k++) {
-            behind += (front - from_wall(p, b->x_m[k])) / b->count;
-            out->boulders_ahead_of_front += from_wall(p, b->x_m[k]) > front;
+            const double d = from_wall(p, b->x_m[k]);
+            behind += (front - d) / b->count;
+            out->boulders_ahead_of_front += d > front;
         }
         out->boulders_behind_front_m = behind;
     }
