@@ -94,6 +94,27 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
     return count;
 }
 
+/* Every list is padded to a multiple of LIST_PAD entries, so that the omp simd loops over it (interaction.c,
+ * boundary.c) run whole vectors and no scalar remainder: the padding repeats the list's first neighbour at
+ * r_ab = (2 reach, 0), beyond the kernel's support however far the particles move before the next build (skin/2
+ * each), where every loop masks or skips it. */
+#define LIST_PAD 8
+
+static int padded(int count)
+{
+    return (count + LIST_PAD - 1) / LIST_PAD * LIST_PAD;
+}
+
+/* scan()'s writing pass, then the padding up to entries */
+static void scan_padded(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int self, double reach2,
+                        int entries, int32_t *index, real *dx0, real *dy0)
+{
+    const int count = scan(sim, r, xa, ya, self, reach2, index, dx0, dy0);
+    const real beyond_m = (real)(2.0 * sqrt(reach2));
+    for (int e = count; e < entries; e++)
+        index[e] = index[0], dx0[e] = beyond_m, dy0[e] = 0;
+}
+
 /* Where a list's searches start: fluid particle a's build position; for wall particle a, its mDBC ghost node, or
  * for a boulder's particle the particle itself (wrapped into the period). */
 static void search_point(const surge_sim *sim, int a, double *xs, double *ys)
@@ -116,9 +137,10 @@ static void list_fluid_around(surge_sim *sim, double xs, double ys, double reach
     neighbour_ranges fluid;
     grid_neighbour_ranges(&sim->grid, sim->grid.fluid_start, xs, ys, &fluid);
     if (!fill)
-        first[k + 1] = scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL);
+        first[k + 1] = padded(scan(sim, &fluid, xs, ys, -1, reach2, NULL, NULL, NULL));
     else
-        scan(sim, &fluid, xs, ys, -1, reach2, index + first[k], dx0 + first[k], dy0 + first[k]);
+        scan_padded(sim, &fluid, xs, ys, -1, reach2, (int)(first[k + 1] - first[k]), index + first[k], dx0 + first[k],
+                    dy0 + first[k]);
 }
 
 /* Counts (fill = 0) or writes (fill = 1) the lists of particle a (a fluid particle's fluid and wall lists, or a
@@ -148,13 +170,15 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
     neighbour_ranges fluid, walls;
     grid_fluid_and_wall_ranges(&sim->grid, xs, ys, &fluid, &walls);
     if (!fill) {
-        nl->fluid_first[i + 1] = scan(sim, &fluid, xs, ys, a, reach2, NULL, NULL, NULL);
-        nl->wall_first[i + 1] = scan(sim, &walls, xs, ys, -1, reach2, NULL, NULL, NULL);
+        nl->fluid_first[i + 1] = padded(scan(sim, &fluid, xs, ys, a, reach2, NULL, NULL, NULL));
+        nl->wall_first[i + 1] = padded(scan(sim, &walls, xs, ys, -1, reach2, NULL, NULL, NULL));
         return;
     }
     const int64_t ef = nl->fluid_first[i], ew = nl->wall_first[i];
-    scan(sim, &fluid, xs, ys, a, reach2, nl->fluid_index + ef, nl->fluid_dx0 + ef, nl->fluid_dy0 + ef);
-    scan(sim, &walls, xs, ys, -1, reach2, nl->wall_index + ew, nl->wall_dx0 + ew, nl->wall_dy0 + ew);
+    scan_padded(sim, &fluid, xs, ys, a, reach2, (int)(nl->fluid_first[i + 1] - ef), nl->fluid_index + ef,
+                nl->fluid_dx0 + ef, nl->fluid_dy0 + ef);
+    scan_padded(sim, &walls, xs, ys, -1, reach2, (int)(nl->wall_first[i + 1] - ew), nl->wall_index + ew,
+                nl->wall_dx0 + ew, nl->wall_dy0 + ew);
 }
 
 static void prefix_sum(int64_t *first, int n)

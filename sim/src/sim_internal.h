@@ -56,7 +56,9 @@ typedef struct pair_state {
  * wall_fluid_index[wall_fluid_first[k] .. wall_fluid_first[k+1]): for a wall that does not move, the fluid within
  * 2h + skin of its mDBC ghost node, with r_ghost - r_j at the build in wall_fluid_dx0, wall_fluid_dy0; for a
  * boulder's particle, the fluid within 2h + skin of the particle (its force on the disc, eq. 10), with r_k - r_j,
- * and, in the ghost_fluid lists below, the fluid around its ghost node, which turns with the disc. */
+ * and, in the ghost_fluid lists below, the fluid around its ghost node, which turns with the disc. Every list is
+ * padded to a multiple of 8 entries with copies of its first neighbour placed beyond the kernel's support
+ * (neighbours.c): every loop must mask or skip pairs beyond 2h, as the skin already requires. */
 typedef struct neighbour_lists {
     double skin_m;
     int valid;                 /* 0: build at the next step */
