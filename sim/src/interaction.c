@@ -74,8 +74,8 @@ typedef struct particle_sums {
 /* Fluid particle a's fluid neighbours: pressure, viscosity, continuity, density diffusion (Antuono's form when
  * antuono), moments; in the predictor's pass the viscous speed (the time step), in the corrector's what shifting and
  * the relaxation need. antuono and corrector are constants the compiler specialises on. Pairs beyond 2h (the skin)
- * are masked, not skipped, so that the loop vectorises; each particle sums its own pairs in list order, whatever
- * the thread count. */
+ * are masked, not skipped, so that the loop vectorises; each particle sums its own pairs, lane l taking entries
+ * l, l + PAIR_LANES, ... in list order and the lanes added in order, whatever the thread count. */
 static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *sim, const pair_constants *c, int a,
                                                               int antuono, int corrector, particle_sums *out)
 {
@@ -91,45 +91,58 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu, rho_h_per_m = c->rho_h_per_m;
     const real mxa = moved_x[a], mya = moved_y[a], vxa = vx[a], vya = vy[a], rhoa = rho[a], pa = pres[a];
     const real inv_rhoa = inv_rho[a], grad_xa = grad_rho_x[a], grad_ya = grad_rho_y[a];
-    real acc_x = 0, acc_y = 0, diffusion = 0, visc_speed_mps = 0, kernel_w = 0;
-    real grad_c_x = 0, grad_c_y = 0, m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
-    int near_surface = 0;
+    /* one partial sum per lane, added up in lane order at the end (the lists hold whole vectors, neighbours.c) */
+    real acc_x[PAIR_LANES] = {0}, acc_y[PAIR_LANES] = {0}, diffusion[PAIR_LANES] = {0}, visc_speed_mps[PAIR_LANES] = {0};
+    real kernel_w[PAIR_LANES] = {0}, grad_c_x[PAIR_LANES] = {0}, grad_c_y[PAIR_LANES] = {0};
+    real m_xx[PAIR_LANES] = {0}, m_xy[PAIR_LANES] = {0}, m_yy[PAIR_LANES] = {0};
+    real g_xx[PAIR_LANES] = {0}, g_xy[PAIR_LANES] = {0}, g_yx[PAIR_LANES] = {0}, g_yy[PAIR_LANES] = {0};
+    int near_surface[PAIR_LANES] = {0};
     const int i = a - sim->wall_count;
     const int64_t first = nl->fluid_first[i], last = nl->fluid_first[i + 1];
-    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, diffusion, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, \
-                               m_yy, g_xx, g_xy, g_yx, g_yy) reduction(max : visc_speed_mps) reduction(| : near_surface)
-    for (int64_t e = first; e < last; e++) {
-        const int b = index[e];
-        const real dx = dx0[e] + (mxa - st[b].moved_x), dy = dy0[e] + (mya - st[b].moved_y); /* r_ab */
-        const real r2 = dx * dx + dy * dy;
-        const int inside = r2 < support2 && r2 > 0;
-        const real r = REAL_SQRT(r2);
-        const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0; /* grad_a W = f r_ab */
-        const real vol = mass * st[b].inv_rho, vf = vol * f;
-        const real dvx = vxa - st[b].vx, dvy = vya - st[b].vy;
-        const real pressure_coef = pair_pressure_coef(mass, pa, st[b].pressure, inv_rhoa, st[b].inv_rho);
-        const real inv_denominator = pair_viscous_denominator(rhoa, st[b].rho, r2, eta2);
-        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-        acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
-        acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
-        m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
-        g_xx += pair_moment(vf, dvx, dx), g_xy += pair_moment(vf, dvx, dy);
-        g_yx += pair_moment(vf, dvy, dx), g_yy += pair_moment(vf, dvy, dy);
-        const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
-                                         : pair_hydrostatic_part(rho_h_per_m, dy);
-        diffusion -= pair_diffusion(rhoa, st[b].rho, linear_part, f, vol);
-        if (!corrector) {
-            const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, rhoa + st[b].rho, inv_denominator) : 0;
-            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-        } else {
-            grad_c_x += vf * dx;
-            grad_c_y += vf * dy;
-            near_surface |= inside & (st[b].surface != 0);
-            kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+    for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        #pragma omp simd simdlen(PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int b = index[e];
+            const real dx = dx0[e] + (mxa - st[b].moved_x), dy = dy0[e] + (mya - st[b].moved_y); /* r_ab */
+            const real r2 = dx * dx + dy * dy;
+            const int inside = r2 < support2 && r2 > 0;
+            const real r = REAL_SQRT(r2);
+            const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0; /* grad_a W = f r_ab */
+            const real vol = mass * st[b].inv_rho, vf = vol * f;
+            const real dvx = vxa - st[b].vx, dvy = vya - st[b].vy;
+            const real pressure_coef = pair_pressure_coef(mass, pa, st[b].pressure, inv_rhoa, st[b].inv_rho);
+            const real inv_denominator = pair_viscous_denominator(rhoa, st[b].rho, r2, eta2);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
+            acc_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
+            acc_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
+            m_xx[l] += pair_moment(vf, dx, dx), m_xy[l] += pair_moment(vf, dx, dy), m_yy[l] += pair_moment(vf, dy, dy);
+            g_xx[l] += pair_moment(vf, dvx, dx), g_xy[l] += pair_moment(vf, dvx, dy);
+            g_yx[l] += pair_moment(vf, dvy, dx), g_yy[l] += pair_moment(vf, dvy, dy);
+            const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
+                                             : pair_hydrostatic_part(rho_h_per_m, dy);
+            diffusion[l] -= pair_diffusion(rhoa, st[b].rho, linear_part, f, vol);
+            if (!corrector) {
+                const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, rhoa + st[b].rho, inv_denominator) : 0;
+                visc_speed_mps[l] = speed > visc_speed_mps[l] ? speed : visc_speed_mps[l];
+            } else {
+                grad_c_x[l] += vf * dx;
+                grad_c_y[l] += vf * dy;
+                near_surface[l] |= inside & (st[b].surface != 0);
+                kernel_w[l] += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+            }
         }
     }
-    *out = (particle_sums){acc_x, acc_y, diffusion, visc_speed_mps, kernel_w, grad_c_x, grad_c_y,
-                           m_xx, m_xy, m_yy, g_xx, g_xy, g_yx, g_yy, near_surface, 0};
+    particle_sums sums = {0};
+    for (int l = 0; l < PAIR_LANES; l++) {
+        sums.acc_x += acc_x[l], sums.acc_y += acc_y[l], sums.diffusion += diffusion[l], sums.kernel_w += kernel_w[l];
+        sums.visc_speed_mps = visc_speed_mps[l] > sums.visc_speed_mps ? visc_speed_mps[l] : sums.visc_speed_mps;
+        sums.grad_c_x += grad_c_x[l], sums.grad_c_y += grad_c_y[l];
+        sums.m_xx += m_xx[l], sums.m_xy += m_xy[l], sums.m_yy += m_yy[l];
+        sums.g_xx += g_xx[l], sums.g_xy += g_xy[l], sums.g_yx += g_yx[l], sums.g_yy += g_yy[l];
+        sums.near_surface |= near_surface[l];
+    }
+    *out = sums;
 }
 
 /* Fluid particle a's wall neighbours, added to s: mDBC pressure; the no-slip velocity in the viscous term, the

@@ -94,15 +94,13 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
     return count;
 }
 
-/* Every list is padded to a multiple of LIST_PAD entries, so that the omp simd loops over it (interaction.c,
+/* Every list is padded to a multiple of PAIR_LANES entries, so that the pair loops over it (interaction.c,
  * boundary.c) run whole vectors and no scalar remainder: the padding repeats the list's first neighbour at
  * r_ab = (2 reach, 0), beyond the kernel's support however far the particles move before the next build (skin/2
  * each), where every loop masks or skips it. */
-#define LIST_PAD 8
-
 static int padded(int count)
 {
-    return (count + LIST_PAD - 1) / LIST_PAD * LIST_PAD;
+    return (count + PAIR_LANES - 1) / PAIR_LANES * PAIR_LANES;
 }
 
 /* scan()'s writing pass, then the padding up to entries */
