@@ -47,7 +47,7 @@ typedef struct ghost_sums {
 } ghost_sums;
 
 /* The ghost node's sums over a list of fluid particles j at r_ghost - r_j = dx0 + (g - moved_j) (nothing beyond 2h):
- * an omp simd loop over the list in pair precision, pairs beyond 2h masked; the solve that follows is in double. */
+ * a vector loop over the list in pair precision, pairs beyond 2h masked; the solve that follows is in double. */
 static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict index, const real *restrict dx0,
                                   const real *restrict dy0, int64_t first, int64_t last, real gx, real gy)
 {
@@ -56,29 +56,42 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
     const real mass = (real)sim->mass;
     const real *restrict moved_x = sim->neighbours.moved_x, *restrict moved_y = sim->neighbours.moved_y;
     const real *restrict rho = sim->rho, *restrict vx = sim->vx, *restrict vy = sim->vy;
-    real a00 = 0, a01 = 0, a02 = 0, a10 = 0, a11 = 0, a12 = 0, a20 = 0, a21 = 0, a22 = 0;
-    real r00 = 0, r01 = 0, r02 = 0, r10 = 0, r11 = 0, r12 = 0, r20 = 0, r21 = 0, r22 = 0;
-    #pragma omp simd simdlen(8) reduction(+ : a00, a01, a02, a10, a11, a12, a20, a21, a22, r00, r01, r02, r10, r11, \
-                                          r12, r20, r21, r22)
-    for (int64_t e = first; e < last; e++) {
-        const int j = index[e];
-        const real dx = dx0[e] + (gx - moved_x[j]), dy = dy0[e] + (gy - moved_y[j]);
-        const real r2 = dx * dx + dy * dy;
-        const real r = REAL_SQRT(r2);
-        const real vol = r2 < support2 ? mass / rho[j] : 0; /* beyond 2h: no contribution */
-        const real w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
-        const real f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
-        const real wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
-        const real rx = -dx, ry = -dy;                       /* r_j - r_ghost */
-        a00 += w_vol, a01 += rx * w_vol, a02 += ry * w_vol;
-        a10 += wx_vol, a11 += rx * wx_vol, a12 += ry * wx_vol;
-        a20 += wy_vol, a21 += rx * wy_vol, a22 += ry * wy_vol;
-        r00 += rho[j] * w_vol, r01 += rho[j] * wx_vol, r02 += rho[j] * wy_vol;
-        r10 += vx[j] * w_vol, r11 += vx[j] * wx_vol, r12 += vx[j] * wy_vol;
-        r20 += vy[j] * w_vol, r21 += vy[j] * wx_vol, r22 += vy[j] * wy_vol;
+    /* one partial sum per lane, the lanes added in order at the end (lanes.h; the lists hold whole vectors) */
+    real a00[PAIR_LANES] = {0}, a01[PAIR_LANES] = {0}, a02[PAIR_LANES] = {0}, a10[PAIR_LANES] = {0};
+    real a11[PAIR_LANES] = {0}, a12[PAIR_LANES] = {0}, a20[PAIR_LANES] = {0}, a21[PAIR_LANES] = {0};
+    real a22[PAIR_LANES] = {0}, r00[PAIR_LANES] = {0}, r01[PAIR_LANES] = {0}, r02[PAIR_LANES] = {0};
+    real r10[PAIR_LANES] = {0}, r11[PAIR_LANES] = {0}, r12[PAIR_LANES] = {0}, r20[PAIR_LANES] = {0};
+    real r21[PAIR_LANES] = {0}, r22[PAIR_LANES] = {0};
+    for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        #pragma omp simd simdlen(PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int j = index[e];
+            const real dx = dx0[e] + (gx - moved_x[j]), dy = dy0[e] + (gy - moved_y[j]);
+            const real r2 = dx * dx + dy * dy;
+            const real r = REAL_SQRT(r2);
+            const real vol = r2 < support2 ? mass / rho[j] : 0; /* beyond 2h: no contribution */
+            const real w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
+            const real f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
+            const real wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
+            const real rx = -dx, ry = -dy;                       /* r_j - r_ghost */
+            a00[l] += w_vol, a01[l] += rx * w_vol, a02[l] += ry * w_vol;
+            a10[l] += wx_vol, a11[l] += rx * wx_vol, a12[l] += ry * wx_vol;
+            a20[l] += wy_vol, a21[l] += rx * wy_vol, a22[l] += ry * wy_vol;
+            r00[l] += rho[j] * w_vol, r01[l] += rho[j] * wx_vol, r02[l] += rho[j] * wy_vol;
+            r10[l] += vx[j] * w_vol, r11[l] += vx[j] * wx_vol, r12[l] += vx[j] * wy_vol;
+            r20[l] += vy[j] * w_vol, r21[l] += vy[j] * wx_vol, r22[l] += vy[j] * wy_vol;
+        }
     }
-    return (ghost_sums){{{a00, a01, a02}, {a10, a11, a12}, {a20, a21, a22}},
-                        {{r00, r01, r02}, {r10, r11, r12}, {r20, r21, r22}}};
+    const real zero[PAIR_LANES] = {0};
+    const real *const lanes[3][8] = {{a00, a01, a02, a10, a11, a12, a20, a21},
+                                     {a22, r00, r01, r02, r10, r11, r12, r20},
+                                     {r21, r22, zero, zero, zero, zero, zero, zero}};
+    real t[24];
+    for (int q = 0; q < 3; q++)
+        lanes_totals(lanes[q], t + 8 * q);
+    return (ghost_sums){{{t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}},
+                        {{t[9], t[10], t[11]}, {t[12], t[13], t[14]}, {t[15], t[16], t[17]}}};
 }
 
 void boundary_update(surge_sim *sim)

@@ -133,13 +133,17 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
             }
         }
     }
-    particle_sums sums = {0};
+    /* the lanes' totals, each added in lane order (lanes.h) */
+    const real zero[PAIR_LANES] = {0};
+    const real *const first_eight[8] = {acc_x, acc_y, diffusion, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy};
+    const real *const last_five[8] = {m_yy, g_xx, g_xy, g_yx, g_yy, zero, zero, zero};
+    real total[16];
+    lanes_totals(first_eight, total);
+    lanes_totals(last_five, total + 8);
+    particle_sums sums = {total[0], total[1], total[2], 0, total[3], total[4], total[5], total[6], total[7],
+                          total[8], total[9], total[10], total[11], total[12], 0, 0};
     for (int l = 0; l < PAIR_LANES; l++) {
-        sums.acc_x += acc_x[l], sums.acc_y += acc_y[l], sums.diffusion += diffusion[l], sums.kernel_w += kernel_w[l];
         sums.visc_speed_mps = visc_speed_mps[l] > sums.visc_speed_mps ? visc_speed_mps[l] : sums.visc_speed_mps;
-        sums.grad_c_x += grad_c_x[l], sums.grad_c_y += grad_c_y[l];
-        sums.m_xx += m_xx[l], sums.m_xy += m_xy[l], sums.m_yy += m_yy[l];
-        sums.g_xx += g_xx[l], sums.g_xy += g_xy[l], sums.g_yx += g_yx[l], sums.g_yy += g_yy[l];
         sums.near_surface |= near_surface[l];
     }
     *out = sums;
@@ -161,46 +165,57 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu;
     const real mxa = moved_x[a], mya = moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
     const real pa = pres[a], inv_rhoa = inv_rho[a];
-    real acc_x = 0, acc_y = 0, visc_speed_mps = 0, kernel_w = 0, grad_c_x = 0, grad_c_y = 0;
-    real m_xx = 0, m_xy = 0, m_yy = 0, g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0;
     const int i = a - sim->wall_count;
     const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
     if (first == last)
         return;
-    #pragma omp simd simdlen(8) reduction(+ : acc_x, acc_y, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, m_yy, g_xx, \
-                               g_xy, g_yx, g_yy) reduction(max : visc_speed_mps)
-    for (int64_t e = first; e < last; e++) {
-        const int b = index[e];
-        const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
-        const real r2 = dx * dx + dy * dy;
-        const int inside = r2 < support2;
-        const real r = REAL_SQRT(r2);
-        const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
-        const real vf = mass * inv_rho[b] * f;
-        const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-        const real inv_denominator = pair_viscous_denominator(rhoa, rho[b], r2, eta2);
-        const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-        const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
-        acc_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
-        acc_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
-        const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
-        m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
-        g_xx += pair_moment(vf, wdx, dx), g_xy += pair_moment(vf, wdx, dy);
-        g_yx += pair_moment(vf, wdy, dx), g_yy += pair_moment(vf, wdy, dy);
-        if (!corrector) {
-            const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, rhoa + rho[b], inv_denominator) : 0;
-            visc_speed_mps = speed > visc_speed_mps ? speed : visc_speed_mps;
-        } else {
-            grad_c_x += vf * dx;
-            grad_c_y += vf * dy;
-            kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+    real acc_x[PAIR_LANES] = {0}, acc_y[PAIR_LANES] = {0}, visc_speed_mps[PAIR_LANES] = {0};
+    real kernel_w[PAIR_LANES] = {0}, grad_c_x[PAIR_LANES] = {0}, grad_c_y[PAIR_LANES] = {0};
+    real m_xx[PAIR_LANES] = {0}, m_xy[PAIR_LANES] = {0}, m_yy[PAIR_LANES] = {0};
+    real g_xx[PAIR_LANES] = {0}, g_xy[PAIR_LANES] = {0}, g_yx[PAIR_LANES] = {0}, g_yy[PAIR_LANES] = {0};
+    for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        #pragma omp simd simdlen(PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int b = index[e];
+            const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
+            const real r2 = dx * dx + dy * dy;
+            const int inside = r2 < support2;
+            const real r = REAL_SQRT(r2);
+            const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
+            const real vf = mass * inv_rho[b] * f;
+            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
+            const real inv_denominator = pair_viscous_denominator(rhoa, rho[b], r2, eta2);
+            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
+            const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+            acc_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
+            acc_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
+            const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+            m_xx[l] += pair_moment(vf, dx, dx), m_xy[l] += pair_moment(vf, dx, dy), m_yy[l] += pair_moment(vf, dy, dy);
+            g_xx[l] += pair_moment(vf, wdx, dx), g_xy[l] += pair_moment(vf, wdx, dy);
+            g_yx[l] += pair_moment(vf, wdy, dx), g_yy[l] += pair_moment(vf, wdy, dy);
+            if (!corrector) {
+                const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, rhoa + rho[b], inv_denominator) : 0;
+                visc_speed_mps[l] = speed > visc_speed_mps[l] ? speed : visc_speed_mps[l];
+            } else {
+                grad_c_x[l] += vf * dx;
+                grad_c_y[l] += vf * dy;
+                kernel_w[l] += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+            }
         }
     }
-    s->acc_x += acc_x, s->acc_y += acc_y, s->kernel_w += kernel_w;
-    s->visc_speed_mps = visc_speed_mps > s->visc_speed_mps ? visc_speed_mps : s->visc_speed_mps;
-    s->grad_c_x += grad_c_x, s->grad_c_y += grad_c_y;
-    s->m_xx += m_xx, s->m_xy += m_xy, s->m_yy += m_yy, s->g_xx += g_xx, s->g_xy += g_xy, s->g_yx += g_yx;
-    s->g_yy += g_yy;
+    const real zero[PAIR_LANES] = {0};
+    const real *const first_eight[8] = {acc_x, acc_y, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy, m_yy};
+    const real *const last_four[8] = {g_xx, g_xy, g_yx, g_yy, zero, zero, zero, zero};
+    real total[16];
+    lanes_totals(first_eight, total);
+    lanes_totals(last_four, total + 8);
+    s->acc_x += total[0], s->acc_y += total[1], s->kernel_w += total[2];
+    s->grad_c_x += total[3], s->grad_c_y += total[4];
+    s->m_xx += total[5], s->m_xy += total[6], s->m_yy += total[7];
+    s->g_xx += total[8], s->g_xy += total[9], s->g_yx += total[10], s->g_yy += total[11];
+    for (int l = 0; l < PAIR_LANES; l++)
+        s->visc_speed_mps = visc_speed_mps[l] > s->visc_speed_mps ? visc_speed_mps[l] : s->visc_speed_mps;
 }
 
 /* The face of disc i if it is nearer to fluid particle a than face: the disc's circle, its outward normal through
@@ -268,6 +283,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
     const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
     const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
+    const real surface_threshold = (real)sim->params.shifting.surface_threshold;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
 
     #pragma omp for schedule(static)
@@ -324,18 +340,14 @@ void interaction_compute(surge_sim *sim, int corrector)
             sim->drho[a] += relax_per_strain * strain_rate * (kernel_sum * inv_lattice_sum - rhoa);
         }
         sim->div_r[a] = s.m_xx + s.m_yy;
-        if (!corrector) /* the time step follows the predictor's pass */
+        if (!corrector) { /* the time step follows the predictor's pass, and the surface flags (read above, and by
+                           * the other particles from their pair_state copies) */
             sim->visc_speed_mps[a] = s.visc_speed_mps;
-        else { /* surface[] is set at the end of the predictor pass, after this step's sort */
+            sim->surface[a] = sim->div_r[a] < surface_threshold;
+        } else { /* surface[] is set at the end of the predictor pass, after this step's sort */
             sim->grad_c_x[a] = s.grad_c_x;
             sim->grad_c_y[a] = s.grad_c_y;
             sim->near_surface[a] = (uint8_t)s.near_surface;
         }
-    }
-    if (!corrector) {
-        const real threshold = (real)sim->params.shifting.surface_threshold;
-        #pragma omp for schedule(static)
-        for (int a = sim->wall_count; a < sim->count; a++)
-            sim->surface[a] = sim->div_r[a] < threshold;
     }
 }

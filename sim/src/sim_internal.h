@@ -7,6 +7,7 @@
 
 #include "boulders.h"
 #include "kernel.h"
+#include "lanes.h"
 #include "precision.h"
 #include "surge/sim.h"
 
@@ -59,11 +60,6 @@ typedef struct pair_state {
  * and, in the ghost_fluid lists below, the fluid around its ghost node, which turns with the disc. Every list is
  * padded to a multiple of 8 entries with copies of its first neighbour placed beyond the kernel's support
  * (neighbours.c): every loop must mask or skip pairs beyond 2h, as the skin already requires. */
-/* The pair loops' vector width: every list is padded to a multiple of it (neighbours.c), so the loops run whole
- * vectors; the fluid pair loop (interaction.c) keeps one partial sum per lane in a small array, which measured
- * faster than an omp simd reduction (docs/performance.md) */
-#define PAIR_LANES 8
-
 typedef struct neighbour_lists {
     double skin_m;
     int valid;                 /* 0: build at the next step */
