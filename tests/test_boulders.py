@@ -294,6 +294,23 @@ def group_scene():
                                                 "boulders.list_m=0.05 0.0135 0.0125", "-s", "contacts.margin_dp=1"])
     check("scene: a listed disc closer to the bed than the contact margin is refused",
           near.returncode == 2 and "closer than contacts.margin_dp" in near.stderr, near.stderr)
+    # a disc come round the periodic channel meets the back of the upstream wall (its contact slab: front, back
+    # and top), not the wall's particles: thrown at it from behind at 3 m/s, it stops a margin short of the back face
+    behind_csv = os.path.join(WORK, "behind_wall.csv")
+    with open(behind_csv, "w") as f:
+        f.write("x_m,y_m,r_m,vx_mps,vy_mps,omega_radps\n0.5,0.35,0.25,3,0,0\n")
+    behind, r, cmd_b = surge("scene_behind_wall", ["run", "debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s",
+                                                   "time.end_s=0.4", "-s", "output.snapshot_interval_s=0.05", "-s",
+                                                   "boulders.density_ratio=0.9", "-s", "boulders.placement=file", "-s",
+                                                   "boulders.file=" + behind_csv])
+    layers = re.search(r"^layers = (\d+)", open(os.path.join(behind, "params.ini")).read(), re.M) \
+        if r.returncode == 0 else None
+    series = boulder_series(behind) if r.returncode == 0 else []
+    reach = max(s[1]["points"][0][0] + s[1]["radius_m"][0] for s in series) if series else float("nan")
+    back_face = 1.5 - int(layers.group(1)) * 0.05 if layers else float("nan")
+    check("scene: a disc thrown at the upstream wall from behind stops short of its back face (disc front %.3f m, "
+          "back face %.3f m)" % (reach, back_face), reach < back_face and reach > back_face - 0.2,
+          cmd_b + "\nexit %d\n%s" % (r.returncode, r.stderr[-1500:]))
     _, bad, _ = surge("scene_bad", ["check"] + args + ["-s", "boulders.placement=file",
                                                        "-s", "boulders.file=" + os.path.join(WORK, "missing.csv")])
     check("scene: a missing disc file is named", bad.returncode == 2 and "missing.csv" in bad.stderr, bad.stderr)

@@ -17,6 +17,7 @@ Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any fa
 import csv
 import math
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -44,7 +45,11 @@ check("list: the fluid alone once, then each count with each seed", rc == 0 and 
 rc, out, err = tool("run", *COMMON, "--member", "2", "--surge", SURGE)
 check("run: a member out of range is refused", rc == 2 and "members 0..1" in err, err[-500:])
 
-run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE]
+rc, out, err = tool("run", *COMMON, "--surge", SURGE, "--set", "numerics.c0_mps=abc")
+check("run: a --set value surge refuses stops the ensemble before any member, named",
+      rc == 2 and "numerics.c0_mps" in err and not os.path.exists(RUNS), err[-500:])
+
+run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE, "--set", "contacts.margin_dp=2"]
 rc, out, err = tool("run", *run_args, "--member", "1", "--budget-s", "4")
 progress = open(os.path.join(RUNS, "n6_s1_dp0.066", "progress.json")).read()
 check("run: a member past its budget stops with a checkpoint", rc == 0 and '"interrupted"' in progress, err[-1500:])
@@ -52,6 +57,10 @@ rc, out, err = tool("run", *run_args)
 check("run: the next run finishes every member", rc == 0 and all(
     '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066")),
     err[-2000:])
+
+params = open(os.path.join(RUNS, "n6_s1_dp0.066", "params.ini")).read()
+check("run: --set reaches the member's parameters (params.ini: margin_dp = 2)",
+      re.search(r"^margin_dp = 2$", params, re.M) is not None, params[:2000])
 
 for member in ("n0_s1_dp0.066", "n6_s1_dp0.066"):
     with open(os.path.join(RUNS, member, "flow.csv")) as f:

@@ -538,8 +538,12 @@ void boulders_restore(surge_sim *sim)
 }
 
 /* The walls discs can touch: the bed (moving with the belt), the lid, the box sides and the upstream wall; planes
- * stand half the contact margin in front of the wall faces (the discs' contact radii carry the other half). */
-static int contact_walls(const surge_sim *sim, contact_wall walls[5])
+ * stand half the contact margin in front of the wall faces (the discs' contact radii carry the other half). The
+ * upstream wall is a slab as thick as its particle layers, its front, back and top half the margin out: a disc
+ * that went round the periodic channel meets its back face, not its particles (the 60-disc surge of
+ * docs/validation/debris_surge.md). */
+#define CONTACT_WALLS_MAX 7
+static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_MAX])
 {
     const surge_params *p = &sim->params;
     const double half_margin = 0.5 * p->contacts.margin_dp * p->numerics.dp_m;
@@ -553,9 +557,14 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[5])
         walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, half_margin, 0, 0, 0, 0, 0, 0};
     if (p->walls.right)
         walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m + half_margin, 0, 0, 0, 0, 0, 0};
-    if (p->walls.upstream)
-        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, p->walls.upstream_x_m, 0, p->walls.upstream_x_m,
-                                    p->walls.upstream_height_m, 0, 0};
+    if (p->walls.upstream) {
+        const double front_m = p->walls.upstream_x_m + half_margin;
+        const double back_m = p->walls.upstream_x_m - p->walls.layers * p->numerics.dp_m - half_margin;
+        const double top_m = p->walls.upstream_height_m + half_margin;
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, front_m, 0, front_m, top_m, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, 0, back_m, top_m, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, top_m, front_m, top_m, 0, 0};
+    }
     return n;
 }
 
@@ -573,7 +582,7 @@ int boulders_correct(surge_sim *sim, double dt_s)
         b->ay[i] = b->fy[i] * b->inv_mass[i] + gy;
         b->alpha[i] = b->torque[i] * b->inv_inertia[i] + b->spin_damping[i] * b->omega_forces[i];
     }
-    contact_wall walls[5];
+    contact_wall walls[CONTACT_WALLS_MAX];
     const int wall_count = contact_walls(sim, walls);
     contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
                            b->inv_inertia, b->spin_damping};

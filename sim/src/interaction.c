@@ -257,8 +257,11 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
             last_disc = disc;
             continue;
         }
+        /* a face counts for a particle on its side of the wall particle (or within dp/2 behind its centre): one
+         * behind the wall, come round a periodic channel, is not pushed through the whole wall */
         const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
-        if (search_m > 0 && r2 - along * along < half_dp * half_dp && along - sim->wall_depth_m[b] < face.gap_m)
+        if (search_m > 0 && along > -half_dp && r2 - along * along < half_dp * half_dp &&
+            along - sim->wall_depth_m[b] < face.gap_m)
             face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b],
                                sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
     }

@@ -4,7 +4,7 @@ each a run of cases/debris_surge.ini with graded boulders (docs/boulders.md), an
 number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validation/debris_surge.md says more.
 
   studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--seeds 5] [--dp 0.05] [--end-s 75]
-        [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge]
+        [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge] [--set NAME=VALUE ...]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
   studies/debris_surge/ensemble.py list [--counts ...] [--seeds ...] [--dp ...]
@@ -13,7 +13,9 @@ run: the members are (count, seed) pairs, count 0 once (the fluid alone has no r
 1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
 from its checkpoint, a finished one is skipped). --member K runs only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
-density ratio 0.9.
+density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every member's first run (e.g.
+contacts.margin_dp=2, numerics.c0_mps=110); `surge check` vets them before any member starts, and each member's
+params.ini records them.
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
@@ -24,6 +26,7 @@ import argparse
 import csv
 import math
 import os
+import subprocess
 import sys
 import threading
 import time
@@ -54,6 +57,14 @@ def counts_list(text):
     return values
 
 
+def setting_arg(text):
+    """NAME=VALUE with NAME a section.key of the parameter registry (surge check vets the rest)."""
+    name, equals, value = text.partition("=")
+    if not equals or not value or name.count(".") != 1 or not all(name.split(".")):
+        raise argparse.ArgumentTypeError("expected section.key=value, got '%s'" % text)
+    return text
+
+
 def members(args):
     """[(count, seed)] in a fixed order: count 0 once, every other count with seeds 1..N."""
     return [(c, s) for c in args.counts for s in ([1] if c == 0 else range(1, args.seeds + 1))]
@@ -76,6 +87,8 @@ def run_member(args, count, seed, deadline):
     if count > 0:
         fresh += ["-s", "boulders.placement=graded", "-s", "boulders.count=%d" % count, "-s", "boulders.seed=%d" % seed,
                   "-s", "boulders.density_ratio=0.9"]
+    for setting in args.set:
+        fresh += ["-s", setting]
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
               "-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
     rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common, deadline)
@@ -90,6 +103,13 @@ def command_run(args):
         if not 0 <= args.member < len(chosen):
             fail("--member %d: the ensemble has members 0..%d (see the list command)" % (args.member, len(chosen) - 1))
         chosen = [chosen[args.member]]
+    if args.set:
+        vet = [args.surge, "check", CASE, "-s", "numerics.dp_m=%g" % args.dp]
+        for setting in args.set:
+            vet += ["-s", setting]
+        checked = subprocess.run(vet, capture_output=True, text=True)
+        if checked.returncode != 0:
+            fail("--set: %s" % (checked.stderr.strip().splitlines() or ["surge check failed"])[-1])
     deadline = time.time() + args.budget_s if args.budget_s > 0 else None
     os.makedirs(args.runs_dir, exist_ok=True)
     queue, lock = list(chosen), threading.Lock()
@@ -255,6 +275,7 @@ def main():
             p.add_argument("--member", type=int, default=None)
             p.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
             p.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+            p.add_argument("--set", action="append", default=[], type=setting_arg, metavar="NAME=VALUE")
     c = sub.add_parser("collect")
     c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"))
     c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0])
