@@ -170,7 +170,8 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     else:
         argv = fresh_argv + common
         progress["wall_s"] = 0.0  # a fresh start (after a failed run, say) owes nothing to earlier pieces
-    print("%s: %s" % (tool, " ".join(argv)), flush=True)
+    sys.stdout.write("%s: %s\n" % (tool, " ".join(argv)))  # one write: members started together print whole lines
+    sys.stdout.flush()
     start = time.time()
     progress["status"] = "running"
     progress["piece_started_unix"] = start  # lets park() count a running piece's time up to its last checkpoint
