@@ -247,6 +247,9 @@ def box_plots(table, png, fr_uniform, mu_uniform):
         ax.boxplot(data, positions=positions, widths=0.04, whis=(0, 100), manage_ticks=False)
         ax.plot(positions, means, "o", color="C1", label="mean over seeds")
         ax.axhline(reference, ls="--", color="grey", label="uniform flow, phi = 0")
+        low, high = ax.get_ylim()  # the reference line in view even where every box lies on one side of it
+        margin = 0.05 * (max(high, reference) - min(low, reference))
+        ax.set_ylim(min(low, reference - margin), max(high, reference + margin))
         ax.set_xlabel("solid fraction phi")
         ax.set_ylabel(label)
         ax.set_xlim(-0.05, max(positions) + 0.1)
