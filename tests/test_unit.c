@@ -18,6 +18,37 @@ static void expect_below(const char *what, double value, double bound)
     failures += !ok;
 }
 
+/* lanes_totals (lanes.h): eight quantities' lanes added by a transpose must equal, bit for bit, each quantity's lanes
+ * added one by one in lane order, as the pair loops' state hashes rely on; values of mixed sign and magnitude so
+ * that another order would round differently. */
+static int test_lanes(void)
+{
+    real lanes[8][PAIR_LANES];
+    unsigned state = 12345u;
+    for (int q = 0; q < 8; q++)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            state = state * 1103515245u + 12345u;
+            lanes[q][l] = (real)(((double)(state >> 8) / (1 << 24) - 0.5) * pow(10.0, (double)((q + l) % 7 - 3)));
+        }
+    const real *const rows[8] = {lanes[0], lanes[1], lanes[2], lanes[3], lanes[4], lanes[5], lanes[6], lanes[7]};
+    real total[8];
+    lanes_totals(rows, total);
+    int mismatched = 0, order_matters = 0;
+    for (int q = 0; q < 8; q++) {
+        real sequential = 0, reversed = 0;
+        for (int l = 0; l < PAIR_LANES; l++)
+            sequential += lanes[q][l], reversed += lanes[q][PAIR_LANES - 1 - l];
+        mismatched += total[q] != sequential;
+        order_matters += reversed != sequential;
+    }
+    printf("lanes: %d of 8 transposed totals differ from the lane-order sums; %d of 8 would differ in reverse order\n",
+           mismatched, order_matters);
+    expect_below("lanes: totals that differ from the lane-order sums", mismatched, 0);
+    expect_below("lanes: the data can tell the order apart (8 - quantities whose reverse sum differs)",
+                 8 - order_matters, 7);
+    return failures;
+}
+
 static int test_kernel(void)
 {
     const double h = 0.01;
@@ -636,6 +667,8 @@ int main(int argc, char **argv)
         return test_corner_continuity() ? 1 : 0;
     if (!strcmp(argv[1], "disc_contact_rules"))
         return test_disc_contact_rules() ? 1 : 0;
+    if (!strcmp(argv[1], "lanes"))
+        return test_lanes() ? 1 : 0;
     if (!strcmp(argv[1], "behind_wall"))
         return test_behind_wall() ? 1 : 0;
     if (!strcmp(argv[1], "health_speed"))
