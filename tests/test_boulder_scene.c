@@ -6,7 +6,8 @@
  *   csv        the disc list reads back exactly; bad lists are refused with file:line
  *   flow       eq. 21 (flow.csv) on a synthetic surge with known answers: a block 1.3 m high moving 2 m/s against
  *              the belt, a disc riding 2 m behind its front and one gone round the period ahead of it (counted as
- *              ahead of the front), fluid splashed next to the wall left out */
+ *              ahead of the front, the film riding it not counted as surge), fluid splashed next to the wall left
+ *              out */
 #define _DEFAULT_SOURCE /* erand48 */
 #include <math.h>
 #include <stdio.h>
@@ -228,7 +229,7 @@ static void group_flow(void)
     p.fluid.viscosity_m2ps = 0.28;
     p.body.slope_deg = 10.1;
     surge_snapshot s = {0};
-    surge_snapshot_reserve(&s, 200 * 13 + 330 + 1);
+    surge_snapshot_reserve(&s, 200 * 13 + 330 + 1 + 3);
     int n = 0;
     for (int i = 0; i < 200; i++) /* the block: 20 m from the wall's face, 13 rows */
         for (int j = 0; j < 13; j++, n++) {
@@ -236,6 +237,9 @@ static void group_flow(void)
             s.vx_mps[n] = -3.5f + 2.0f, s.vy_mps[n] = 0, s.kind[n] = SURGE_KIND_FLUID;
         }
     s.x_m[n] = 3.0, s.y_m[n] = 3.0, s.vx_mps[n] = 50, s.kind[n++] = SURGE_KIND_FLUID; /* within 5 m: left out */
+    for (int i = 0; i < 3; i++, n++) /* a film riding the disc that left (below): not the surge */
+        s.x_m[n] = 1.5 + 30 - 33 + 0.1 * (i - 1), s.y_m[n] = 0.6, s.vx_mps[n] = -0.5f, s.vy_mps[n] = 0,
+        s.kind[n] = SURGE_KIND_FLUID;
     for (int i = 0; i < 330; i++, n++) /* the belt */
         s.x_m[n] = (i + 0.5) * 0.1, s.y_m[n] = -0.05, s.vx_mps[n] = -3.5f, s.vy_mps[n] = 0,
         s.kind[n] = SURGE_KIND_MOVING_WALL;

@@ -311,6 +311,19 @@ def group_scene():
     check("scene: a disc thrown at the upstream wall from behind stops short of its back face (disc front %.3f m, "
           "back face %.3f m)" % (reach, back_face), reach < back_face and reach > back_face - 0.2,
           cmd_b + "\nexit %d\n%s" % (r.returncode, r.stderr[-1500:]))
+    # the disc catcher: a disc rolling off the front at 3 m/s stops at the end of the period (x = 33 m), not behind it
+    catch_csv = os.path.join(WORK, "catcher.csv")
+    with open(catch_csv, "w") as f:
+        f.write("x_m,y_m,r_m,vx_mps,vy_mps,omega_radps\n32.3,0.35,0.25,3,0,0\n")
+    caught, r, cmd_c = surge("scene_catcher", ["run", "debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s",
+                                               "time.end_s=0.3", "-s", "output.snapshot_interval_s=0.05", "-s",
+                                               "boulders.density_ratio=0.9", "-s", "boulders.placement=file", "-s",
+                                               "boulders.file=" + catch_csv])
+    series = boulder_series(caught) if r.returncode == 0 else []
+    fronts = [s[1]["points"][0][0] + s[1]["radius_m"][0] for s in series]
+    check("scene: the disc catcher stops a disc thrown down the belt at the end of the period (fronts %s m)" %
+          " ".join("%.3f" % x for x in fronts), len(fronts) == 7 and min(fronts) > 32.5 and 32.9 < fronts[-1] < 33.0,
+          cmd_c + "\nexit %d\n%s" % (r.returncode, r.stderr[-1500:]))
     _, bad, _ = surge("scene_bad", ["check"] + args + ["-s", "boulders.placement=file",
                                                        "-s", "boulders.file=" + os.path.join(WORK, "missing.csv")])
     check("scene: a missing disc file is named", bad.returncode == 2 and "missing.csv" in bad.stderr, bad.stderr)

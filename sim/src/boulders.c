@@ -541,8 +541,9 @@ void boulders_restore(surge_sim *sim)
  * stand half the contact margin in front of the wall faces (the discs' contact radii carry the other half). The
  * upstream wall is a slab as thick as its particle layers, its front, back and top half the margin out: a disc
  * that went round the periodic channel meets its back face, not its particles (the 60-disc surge of
- * docs/validation/debris_surge.md). */
-#define CONTACT_WALLS_MAX 7
+ * docs/validation/debris_surge.md). The disc catcher is a line at the end of the period, x = length (= 0), from the
+ * bed to the domain's top: a disc that rolled off the front stops there, short of the wall's back. */
+#define CONTACT_WALLS_MAX 8
 static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_MAX])
 {
     const surge_params *p = &sim->params;
@@ -564,6 +565,10 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, front_m, 0, front_m, top_m, 0, 0};
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, 0, back_m, top_m, 0, 0};
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, top_m, front_m, top_m, 0, 0};
+    }
+    if (p->walls.disc_catcher) {
+        const double end_m = p->domain.length_m;
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, end_m, 0, end_m, p->domain.height_m, 0, 0};
     }
     return n;
 }

@@ -29,37 +29,49 @@ int surge_flow_metrics_compute(const surge_snapshot *s, const surge_params *p, s
     double *top_with_boulders = top + columns;
     for (int c = 0; c < 2 * columns; c++)
         top[c] = -INFINITY;
-    double sum_u = 0;
-    int counted = 0;
     for (int32_t i = 0; i < s->count; i++) {
         const double d = s->kind[i] == SURGE_KIND_FLUID ? from_wall(p, s->x_m[i]) : -1;
-        if (d <= ignore_m)
-            continue;
-        const int c = (int)((d - ignore_m) / column_m);
-        top[c] = fmax(top[c], s->y_m[i] + 0.5 * p->numerics.dp_m);
-        sum_u += s->vx_mps[i] - belt_mps;
-        counted++;
+        if (d > ignore_m) {
+            const int c = (int)((d - ignore_m) / column_m);
+            top[c] = fmax(top[c], s->y_m[i] + 0.5 * p->numerics.dp_m);
+        }
     }
+    /* The surge ends at the last column above 10 % of the highest before a gap wider than the kernel support
+     * (2h = 2 ch sqrt(2) dp): fluid beyond it, such as a film riding a disc that left the front, is not the surge. */
+    double h_all = -INFINITY;
+    for (int c = 0; c < columns; c++)
+        h_all = fmax(h_all, top[c]);
+    const int gap_columns = (int)ceil(2.0 * p->numerics.ch * sqrt(2.0) * p->numerics.dp_m / column_m);
+    int last = -1;
+    for (int c = 0; c < columns && c - last <= gap_columns; c++)
+        if (top[c] > 0.1 * h_all)
+            last = c;
+    const double front = ignore_m + (last + 1) * column_m;
     double h_max = -INFINITY, h_with = -INFINITY;
-    for (int c = 0; c < columns; c++) {
+    for (int c = 0; c <= last; c++) {
         top_with_boulders[c] = top[c];
         h_max = fmax(h_max, top[c]);
     }
     const surge_boulder_state *b = &s->boulders;
     for (int k = 0; k < b->count; k++) {
         const double d = from_wall(p, b->x_m[k]);
-        if (d > ignore_m && d < ignore_m + columns * column_m) {
+        if (d > ignore_m && d < front) {
             const int c = (int)((d - ignore_m) / column_m);
             top_with_boulders[c] = fmax(top_with_boulders[c], b->y_m[k] + b->radius_m[k]);
         }
     }
-    double front = ignore_m;
-    for (int c = 0; c < columns; c++) {
+    for (int c = 0; c <= last; c++)
         h_with = fmax(h_with, top_with_boulders[c]);
-        if (top[c] > 0.1 * h_max)
-            front = ignore_m + (c + 1) * column_m;
-    }
     free(top);
+    double sum_u = 0;
+    int counted = 0;
+    for (int32_t i = 0; i < s->count; i++) {
+        const double d = s->kind[i] == SURGE_KIND_FLUID ? from_wall(p, s->x_m[i]) : -1;
+        if (d > ignore_m && d < front) {
+            sum_u += s->vx_mps[i] - belt_mps;
+            counted++;
+        }
+    }
     if (counted == 0)
         return -1;
     const double g = p->body.gravity_mps2, slope = p->body.slope_deg * 3.14159265358979323846 / 180.0;

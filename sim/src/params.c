@@ -49,6 +49,10 @@ static const surge_param_info registry[] = {
     {"walls", "upstream", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
      "Fixed vertical wall at upstream_x_m inside a periodic domain, fluid on its downstream (+x) side.",
      OFF(walls.upstream)},
+    {"walls", "disc_catcher", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL,
+     "With an upstream wall: discs cannot cross the end of the period (x = domain.length_m), a line the fluid passes. "
+     "A disc that leaves the front and rolls down the dry belt stops there, like a grate at a flume's end, instead of "
+     "going round to the back of the upstream wall (docs/boulders.md).", OFF(walls.disc_catcher)},
     {"walls", "no_penetration", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Where fluid approaches a wall or the belt (not a boulder), the wall particle meets it with the mirrored normal "
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
@@ -751,6 +755,10 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
     }
     if (p->walls.upstream && !p->domain.periodic_x) {
         fail(err, err_len, "walls.upstream is for periodic domains; use walls.left in a closed box");
+        return -1;
+    }
+    if (p->walls.disc_catcher && !p->walls.upstream) {
+        fail(err, err_len, "walls.disc_catcher stops discs behind an upstream wall: it needs walls.upstream = true");
         return -1;
     }
     if (p->walls.upstream &&

@@ -10,10 +10,12 @@ typedef struct surge_flow_metrics {
     double time_s;
     double h_max_m;                 /* highest fluid column top (top particle + dp/2), boulders not counted */
     double h_max_with_boulders_m;   /* the same where a disc's top stands higher than the fluid of its column */
-    double u_bar_mps;               /* mean fluid x velocity relative to the belt */
+    double u_bar_mps;               /* mean fluid x velocity relative to the belt over the surge */
     double froude;                  /* u_bar / sqrt(g h_max) */
     double mu_eq_over_mu0;          /* g sin(theta) h_max^2 / (3 u_bar nu0) */
-    double front_from_wall_m;       /* downstream end of the last column whose top exceeds 10 % of h_max */
+    double front_from_wall_m;       /* downstream end of the surge: its last column whose top exceeds 10 % of the
+                                     * highest, before a gap wider than the kernel support; the other numbers are
+                                     * over the fluid (and discs) between the ignored zone and the front */
     double boulders_behind_front_m; /* mean distance of the disc centres behind the front; NaN without discs */
     int fluid_counted;              /* fluid particles measured */
     int boulders_ahead_of_front;    /* discs whose centre is downstream of the front (distances from the wall taken

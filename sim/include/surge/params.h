@@ -76,6 +76,7 @@ typedef struct surge_params {
         int layers;
         bool bottom, top, left, right;
         bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
+        bool disc_catcher;        /* discs (not fluid) cannot cross the end of the period, x = domain.length_m */
         bool no_penetration;      /* continuity sees approaching fluid met by the mirrored normal velocity */
         double face_repulsion_reach_dp; /* fluid closer than this to a wall face is pushed back (dp; 0: off) */
         double upstream_x_m;
