@@ -266,24 +266,36 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in ("run", "list"):
-        p = sub.add_parser(name)
-        p.add_argument("--counts", type=counts_list, default=[0, 50, 100, 154])
-        p.add_argument("--seeds", type=cli_checks.positive_int, default=5)
-        p.add_argument("--dp", type=cli_checks.positive, default=0.05)
-        p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"))
+        p = sub.add_parser(name, help="run the members" if name == "run" else "print the members, one a line: index, discs, seed, folder")
+        p.add_argument("--counts", type=counts_list, default=[0, 50, 100, 154],
+                       help="disc counts, comma-separated (default: the paper's 0,50,100,154)")
+        p.add_argument("--seeds", type=cli_checks.positive_int, default=5,
+                       help="seeds 1..N per disc count (count 0 runs once; default 5)")
+        p.add_argument("--dp", type=cli_checks.positive, default=0.05, help="particle spacing, m (default 0.05)")
+        p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"),
+                       help="where the member folders go (default runs/debris_surge)")
         if name == "run":
-            p.add_argument("--end-s", type=cli_checks.positive, default=75.0)
-            p.add_argument("--threads", type=cli_checks.positive_int, default=1)
-            p.add_argument("--jobs", type=cli_checks.positive_int, default=1)
-            p.add_argument("--member", type=int, default=None)
-            p.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
-            p.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
-            p.add_argument("--set", action="append", default=[], type=setting_arg, metavar="NAME=VALUE")
-    c = sub.add_parser("collect")
-    c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"))
-    c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0])
-    c.add_argument("--csv")
-    c.add_argument("--png", type=cli_checks.png_file)
+            p.add_argument("--end-s", type=cli_checks.positive, default=75.0,
+                           help="seconds of flow per member (default the paper's 75)")
+            p.add_argument("--threads", type=cli_checks.positive_int, default=1, help="threads per member (default 1)")
+            p.add_argument("--jobs", type=cli_checks.positive_int, default=1,
+                           help="members run at a time (default 1)")
+            p.add_argument("--member", type=int, default=None,
+                           help="run only this member of `list` (0-based; a job array's index)")
+            p.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0,
+                           help="wall time, s, after which running members stop at a checkpoint and no more start; "
+                                "run again to resume (0: none)")
+            p.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"),
+                           help="the surge program (default build/surge)")
+            p.add_argument("--set", action="append", default=[], type=setting_arg, metavar="NAME=VALUE",
+                           help="a parameter for every member, repeatable (vetted by surge check)")
+    c = sub.add_parser("collect", help="the members' statistics: table and box plots")
+    c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"),
+                   help="the members' folders (default runs/debris_surge)")
+    c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0], metavar=("START_S", "END_S"),
+                   help="the averaging window, s of flow (default the paper's 20 75)")
+    c.add_argument("--csv", help="write the table to this CSV file")
+    c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     args = parser.parse_args()
     if args.command == "list":
         for k, (count, seed) in enumerate(members(args)):
