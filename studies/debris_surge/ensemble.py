@@ -266,7 +266,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in ("run", "list"):
-        p = sub.add_parser(name, help="run the members" if name == "run" else "print the members, one a line: index, discs, seed, folder")
+        p = sub.add_parser(name, help="run the members" if name == "run" else
+                           "print the members, one a line: index, discs, seed, folder")
         p.add_argument("--counts", type=counts_list, default=[0, 50, 100, 154],
                        help="disc counts, comma-separated (default: the paper's 0,50,100,154)")
         p.add_argument("--seeds", type=cli_checks.positive_int, default=5,
@@ -292,7 +293,8 @@ def main():
     c = sub.add_parser("collect", help="the members' statistics: table and box plots")
     c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"),
                    help="the members' folders (default runs/debris_surge)")
-    c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0], metavar=("START_S", "END_S"),
+    c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0],
+                   metavar=("START_S", "END_S"),
                    help="the averaging window, s of flow (default the paper's 20 75)")
     c.add_argument("--csv", help="write the table to this CSV file")
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
