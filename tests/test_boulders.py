@@ -52,6 +52,17 @@ def boulder_series(out):
     return [(t, vtp.read_vtp(os.path.join(out, f))) for t, f in vtp.read_pvd(os.path.join(out, "boulders.pvd"))]
 
 
+def thrown_disc(name, disc, end_s):
+    """The debris surge at dp = 0.05 m with one disc from its list line (x_m,y_m,r_m,vx_mps,vy_mps,omega_radps),
+    snapshots every 0.05 s: (folder, process, command)."""
+    disc_csv = os.path.join(WORK, name + ".csv")
+    with open(disc_csv, "w") as f:
+        f.write("x_m,y_m,r_m,vx_mps,vy_mps,omega_radps\n%s\n" % disc)
+    return surge(name, ["run", "debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s", "time.end_s=%g" % end_s, "-s",
+                        "output.snapshot_interval_s=0.05", "-s", "boulders.density_ratio=0.9", "-s",
+                        "boulders.placement=file", "-s", "boulders.file=" + disc_csv])
+
+
 def faxen_terminal_speed(a, l, drho_g, mu):
     """Happel & Brenner (1965): a cylinder of radius a moving midway between plane walls 2l apart."""
     k = a / l
@@ -296,13 +307,7 @@ def group_scene():
           near.returncode == 2 and "closer than contacts.margin_dp" in near.stderr, near.stderr)
     # a disc come round the periodic channel meets the back of the upstream wall (its contact slab: front, back
     # and top), not the wall's particles: thrown at it from behind at 3 m/s, it stops a margin short of the back face
-    behind_csv = os.path.join(WORK, "behind_wall.csv")
-    with open(behind_csv, "w") as f:
-        f.write("x_m,y_m,r_m,vx_mps,vy_mps,omega_radps\n0.5,0.35,0.25,3,0,0\n")
-    behind, r, cmd_b = surge("scene_behind_wall", ["run", "debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s",
-                                                   "time.end_s=0.4", "-s", "output.snapshot_interval_s=0.05", "-s",
-                                                   "boulders.density_ratio=0.9", "-s", "boulders.placement=file", "-s",
-                                                   "boulders.file=" + behind_csv])
+    behind, r, cmd_b = thrown_disc("scene_behind_wall", "0.5,0.35,0.25,3,0,0", 0.4)
     layers = re.search(r"^layers = (\d+)", open(os.path.join(behind, "params.ini")).read(), re.M) \
         if r.returncode == 0 else None
     series = boulder_series(behind) if r.returncode == 0 else []
@@ -312,13 +317,7 @@ def group_scene():
           "back face %.3f m)" % (reach, back_face), reach < back_face and reach > back_face - 0.2,
           cmd_b + "\nexit %d\n%s" % (r.returncode, r.stderr[-1500:]))
     # the disc catcher: a disc rolling off the front at 3 m/s stops at the end of the period (x = 33 m), not behind it
-    catch_csv = os.path.join(WORK, "catcher.csv")
-    with open(catch_csv, "w") as f:
-        f.write("x_m,y_m,r_m,vx_mps,vy_mps,omega_radps\n32.3,0.35,0.25,3,0,0\n")
-    caught, r, cmd_c = surge("scene_catcher", ["run", "debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s",
-                                               "time.end_s=0.3", "-s", "output.snapshot_interval_s=0.05", "-s",
-                                               "boulders.density_ratio=0.9", "-s", "boulders.placement=file", "-s",
-                                               "boulders.file=" + catch_csv])
+    caught, r, cmd_c = thrown_disc("scene_catcher", "32.3,0.35,0.25,3,0,0", 0.3)
     series = boulder_series(caught) if r.returncode == 0 else []
     fronts = [s[1]["points"][0][0] + s[1]["radius_m"][0] for s in series]
     check("scene: the disc catcher stops a disc thrown down the belt at the end of the period (fronts %s m)" %
