@@ -379,8 +379,8 @@ static int test_corner_continuity(void)
         boundary_wall_speeds(sim, 1.0);
         if (neighbours_update(sim) != 0)
             return 1;
-        neighbours_track(sim);
-        boundary_update(sim);
+        interaction_prepare(sim);
+        boundary_update(sim, 1);
         interaction_compute(sim, 0);
         const double dp = p.numerics.dp_m, strain_scale = fabs(p.walls.bottom_speed_mps) / dp;
         double corner = 0, bulk = 0;
@@ -635,8 +635,8 @@ static int test_diffusion_linear(void)
         }
         if (neighbours_update(sim) != 0)
             return 1;
-        neighbours_track(sim);
-        boundary_update(sim);
+        interaction_prepare(sim);
+        boundary_update(sim, 1);
         interaction_compute(sim, 0);
         for (int a = sim->wall_count; a < sim->count; a++)
             largest_rate[form] = fmax(largest_rate[form], fabs(sim->drho[a]));

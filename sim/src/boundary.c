@@ -3,6 +3,7 @@
  * wall face, and, for no-slip, the velocity 2 v_wall - v_ghost. */
 #include <math.h>
 
+#include "eos.h"
 #include "sim_internal.h"
 
 /* Smooth start of moving walls: v(t) = v_target (1 - cos(pi t / T)) / 2 for t < T. Sets the velocity of every
@@ -94,7 +95,7 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
                         {{t[9], t[10], t[11]}, {t[12], t[13], t[14]}, {t[15], t[16], t[17]}}};
 }
 
-void boundary_update(surge_sim *sim)
+void boundary_update(surge_sim *sim, int wall_pressure)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const double rho0 = sim->rho0;
@@ -169,5 +170,9 @@ void boundary_update(surge_sim *sim)
         }
         sim->wall_cont_vx[b] = (real)cont_vx;
         sim->wall_cont_vy[b] = (real)cont_vy;
+        if (wall_pressure) {
+            sim->pressure[b] = tait_pressure(sim->rho[b], (real)rho0, (real)sim->b_pa);
+            sim->inv_rho[b] = (real)1 / sim->rho[b];
+        }
     }
 }

@@ -7,19 +7,21 @@
 #include "pair_terms.h"
 #include "sim_internal.h"
 
-/* Every particle's pressure and 1/density, and the fluid's pair_state records for this evaluation (after the
- * surface flags of the predictor pass) */
-static void compute_pressure(surge_sim *sim)
+void interaction_prepare(surge_sim *sim)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
+    /* one loop, one barrier: the walls' displacements (discs), then the fluid's with its state (after the surface
+     * flags of the predictor pass); the walls' pressures follow their mDBC densities (boundary_update) */
     #pragma omp for schedule(static)
-    for (int i = 0; i < sim->count; i++) {
-        sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
-        sim->inv_rho[i] = (real)1 / sim->rho[i];
-        if (i >= sim->wall_count)
+    for (int i = neighbours_first_moving(sim); i < sim->count; i++) {
+        neighbours_track_particle(sim, i);
+        if (i >= sim->wall_count) {
+            sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
+            sim->inv_rho[i] = (real)1 / sim->rho[i];
             sim->pair_state[i] = (pair_state){nl->moved_x[i], nl->moved_y[i], sim->vx[i], sim->vy[i], sim->rho[i],
                                               sim->inv_rho[i], sim->pressure[i], (real)sim->surface[i]};
+        }
     }
 }
 
@@ -270,7 +272,6 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
 
 void interaction_compute(surge_sim *sim, int corrector)
 {
-    compute_pressure(sim);
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;
     if (antuono)
         compute_density_gradient(sim);
@@ -289,8 +290,9 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real surface_threshold = (real)sim->params.shifting.surface_threshold;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);
 
-    #pragma omp for schedule(static)
-    for (int a = sim->wall_count; a < sim->count; a++) {
+    int begin, end;
+    neighbours_fluid_share(sim, &begin, &end);
+    for (int a = begin; a < end; a++) {
         particle_sums s;
         if (corrector) {
             if (antuono)
@@ -353,4 +355,5 @@ void interaction_compute(surge_sim *sim, int corrector)
             sim->near_surface[a] = (uint8_t)s.near_surface;
         }
     }
+    #pragma omp barrier
 }

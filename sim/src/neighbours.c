@@ -4,10 +4,43 @@
  * Between builds the particles keep their order and positions are not wrapped into the period (the lists hold
  * each pair's periodic image); a build wraps them, sorts by cell and records the build positions. */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "sim_internal.h"
+
+/* What a pass over fluid particle i's lists costs, in list entries: its fluid and wall entries and a part of its own
+ * (the lane totals, the wall-face search, the writes), counted as PARTICLE_COST_ENTRIES entries; cost_before(i) is
+ * the total of particles 0 .. i-1. */
+#define PARTICLE_COST_ENTRIES 8
+static int64_t cost_before(const neighbour_lists *nl, int i)
+{
+    return nl->fluid_first[i] + nl->wall_first[i] + (int64_t)PARTICLE_COST_ENTRIES * i;
+}
+
+/* The first fluid particle (0 .. count) whose cost_before reaches target. */
+static int first_at_cost(const neighbour_lists *nl, int count, int64_t target)
+{
+    int low = 0, high = count;
+    while (low < high) {
+        const int mid = low + (high - low) / 2;
+        if (cost_before(nl, mid) < target)
+            low = mid + 1;
+        else
+            high = mid;
+    }
+    return low;
+}
+
+void neighbours_fluid_share(const surge_sim *sim, int *begin, int *end)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int count = sim->count - sim->wall_count;
+    const int64_t threads = omp_get_num_threads(), t = omp_get_thread_num(), total = cost_before(nl, count);
+    *begin = sim->wall_count + first_at_cost(nl, count, total * t / threads);
+    *end = sim->wall_count + first_at_cost(nl, count, total * (t + 1) / threads);
+}
 
 int neighbours_init(surge_sim *sim, char *err, size_t err_len)
 {
@@ -216,13 +249,9 @@ static int build_lists(surge_sim *sim)
 
 void neighbours_track(surge_sim *sim)
 {
-    neighbour_lists *nl = &sim->neighbours;
-    const int from = sim->boulders.count > 0 ? 0 : sim->wall_count; /* other walls never move */
     #pragma omp for schedule(static)
-    for (int a = from; a < sim->count; a++) {
-        nl->moved_x[a] = (real)(sim->x[a] - nl->x_build[a]);
-        nl->moved_y[a] = (real)(sim->y[a] - nl->y_build[a]);
-    }
+    for (int a = neighbours_first_moving(sim); a < sim->count; a++)
+        neighbours_track_particle(sim, a);
 }
 
 int neighbours_adopt_build_positions(surge_sim *sim)

@@ -69,8 +69,9 @@ static void shift_divergence(surge_sim *sim)
     const real support2 = sim->kernel.support2;
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict inv_rho = sim->inv_rho, *restrict sx = sim->shift_x, *restrict sy = sim->shift_y;
-    #pragma omp for schedule(static)
-    for (int a = sim->wall_count; a < sim->count; a++) {
+    int begin, end;
+    neighbours_fluid_share(sim, &begin, &end);
+    for (int a = begin; a < end; a++) {
         const real sxa = sx[a], sya = sy[a], mxa = moved_x[a], mya = moved_y[a];
         real sum = 0;
         const int i = a - sim->wall_count;
@@ -94,6 +95,7 @@ static void shift_divergence(surge_sim *sim)
         }
         sim->shift_div[a] = -sum;
     }
+    #pragma omp barrier
 }
 
 void shifting_compute(surge_sim *sim, double dt_s)

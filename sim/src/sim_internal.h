@@ -184,9 +184,29 @@ int neighbours_adopt_build_positions(surge_sim *sim);
  * evaluation shares one region: step_explicit.c); called outside one, they run on the calling thread alone. */
 /* Every particle's displacement since the build: before each force evaluation (positions changed). */
 void neighbours_track(surge_sim *sim);
-/* boundary.c: mDBC density and no-slip velocity of wall particles (worksharing) */
-void boundary_update(surge_sim *sim);
-/* interaction.c: rates of change of fluid particles (worksharing) */
+/* The first particle that moves: walls move only when there are discs */
+static inline int neighbours_first_moving(const surge_sim *sim)
+{
+    return sim->boulders.count > 0 ? 0 : sim->wall_count;
+}
+/* One particle's displacement since the build */
+static inline void neighbours_track_particle(surge_sim *sim, int a)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    nl->moved_x[a] = (real)(sim->x[a] - nl->x_build[a]);
+    nl->moved_y[a] = (real)(sim->y[a] - nl->y_build[a]);
+}
+/* The fluid particles [begin, end) that the calling thread of a parallel region takes in a pass over the fluid's lists:
+ * contiguous shares of equal cost (list entries plus a part per particle), so that the thread with the bed's wall
+ * entries does not leave the other waiting; outside a region, all of them. The pass ends with `omp barrier`. Each
+ * particle sums its own pairs, so results do not depend on the shares. */
+void neighbours_fluid_share(const surge_sim *sim, int *begin, int *end);
+/* boundary.c: mDBC density and no-slip velocity of wall particles (worksharing); with wall_pressure also their
+ * Tait pressure and 1/density (the explicit scheme's pair terms; the implicit scheme solves for its own) */
+void boundary_update(surge_sim *sim, int wall_pressure);
+/* interaction.c (worksharing): before boundary_update, every moving particle's displacement since the build
+ * (neighbours_track) and the fluid's pressure, 1/density and pair_state records; after it, the fluid's rates */
+void interaction_prepare(surge_sim *sim);
 void interaction_compute(surge_sim *sim, int corrector);
 /* boundary.c: the moving walls' speeds at time_s (the start ramp), and the particles' kinds that follow them */
 void boundary_wall_speeds(surge_sim *sim, double time_s);

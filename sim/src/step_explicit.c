@@ -27,8 +27,8 @@ static void evaluate_rates(surge_sim *sim, int corrector)
 {
     #pragma omp parallel
     {
-        neighbours_track(sim);
-        boundary_update(sim);
+        interaction_prepare(sim);
+        boundary_update(sim, 1);
         interaction_compute(sim, corrector);
     }
     boulders_fluid_forces(sim);

@@ -532,7 +532,7 @@ int step_implicit(surge_sim *sim)
     #pragma omp parallel
     {
         neighbours_track(sim);
-        boundary_update(sim); /* the walls' normals and depths (the contact rule) */
+        boundary_update(sim, 0); /* the walls' normals and depths (the contact rule) */
     }
     geometry(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
