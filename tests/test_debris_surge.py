@@ -58,6 +58,17 @@ check("run: the next run finishes every member", rc == 0 and all(
     '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066")),
     err[-2000:])
 
+# a member the health monitor stops (a density bound no run meets) is not run over again: its last good state stays
+sick_args = ["--counts", "0", "--seeds", "1", "--dp", "0.066", "--runs-dir", os.path.join(WORK, "sick"), "--end-s",
+             "0.2", "--surge", SURGE, "--set", "health.max_density_deviation=0.0001"]
+rc, out, err = tool("run", *sick_args)
+last_good = os.path.join(WORK, "sick", "n0_s1_dp0.066", "last_good.vtp")
+stopped = os.path.isfile(last_good) and os.path.getmtime(last_good)
+rc2, out2, err2 = tool("run", *sick_args)
+check("run: a member the health monitor stopped is skipped the next time, its last_good.vtp kept",
+      rc == 0 and rc2 == 0 and stopped and os.path.getmtime(last_good) == stopped and
+      "stopped by the health monitor earlier" in out2, err[-1000:] + out2 + err2[-1000:])
+
 params = open(os.path.join(RUNS, "n6_s1_dp0.066", "params.ini")).read()
 check("run: --set reaches the member's parameters (params.ini: margin_dp = 2)",
       re.search(r"^margin_dp = 2$", params, re.M) is not None, params[:2000])

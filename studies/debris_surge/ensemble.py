@@ -11,7 +11,8 @@ number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validat
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
 1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
-from its checkpoint, a finished one is skipped). --member K runs only the K-th member of `list` (0-based), for a
+from its checkpoint, a finished one is skipped, and so is one the health monitor stopped, whose folder keeps its
+last good state). --member K runs only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
 density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every member's first run (e.g.
 contacts.margin_dp=2, numerics.c0_mps=110); `surge check` vets them before any member starts, and each member's
@@ -82,6 +83,10 @@ def run_member(args, count, seed, deadline):
         fail(str(e))
     if progress["status"] == "done":
         print("%s: %s: done already" % (TOOL, folder), flush=True)
+        return
+    if progress["status"] == "unhealthy":  # the same run would stop again; its last_good.vtp and checkpoint stay
+        print("%s: %s: stopped by the health monitor earlier (see its last_good.vtp); remove the folder to run it "
+              "again, or continue it with surge run --restart" % (TOOL, folder), flush=True)
         return
     fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite", "-s", "numerics.dp_m=%g" % args.dp]
     if count > 0:
