@@ -326,6 +326,9 @@ def group_scene():
     _, bad, _ = surge("scene_bad", ["check"] + args + ["-s", "boulders.placement=file",
                                                        "-s", "boulders.file=" + os.path.join(WORK, "missing.csv")])
     check("scene: a missing disc file is named", bad.returncode == 2 and "missing.csv" in bad.stderr, bad.stderr)
+    _, lone, _ = surge("scene_catcher_alone", ["check"] + args + ["-s", "walls.upstream=false"])
+    check("scene: a disc catcher without the upstream wall is refused, named",
+          lone.returncode == 2 and "walls.disc_catcher" in lone.stderr, lone.stderr)
     _, narrow, _ = surge("scene_narrow", ["check"] + args + ["-s", "output.flow_column_m=0.001"])
     check("scene: flow.csv columns narrower than dp/2 are refused", narrow.returncode == 2 and
           "output.flow_column_m" in narrow.stderr, narrow.stderr)

@@ -1,7 +1,8 @@
 /* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
  * periodic wrap, the neighbour lists against brute force over many steps of reuse, live parameter changes, the continuity rate at the belt-wall corner, density diffusion of a
- * linear field. usage: test_unit kernel|eos|neighbours|neighbour_lists|set_param|corner_continuity|diffusion_linear */
+ * linear field, the threads' shares of the fluid lists. usage: test_unit NAME (the names in main) */
 #include <math.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +17,27 @@ static void expect_below(const char *what, double value, double bound)
     const int ok = value <= bound;
     printf("%-60s %12.4g  (bound %g)  %s\n", what, value, bound, ok ? "ok" : "FAILED");
     failures += !ok;
+}
+
+/* A solver for cases/<name>, its dp changed when dp_m > 0, and boulders set by the caller's edit; NULL (the error
+ * printed) when the case does not load or build. */
+static surge_sim *case_sim(const char *name, double dp_m, void (*edit)(surge_params *))
+{
+    surge_params p = surge_default_params();
+    char path[512], err[256];
+    snprintf(path, sizeof path, "%s/cases/%s", SURGE_SOURCE_DIR, name);
+    if (surge_params_load(&p, path, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
+        return NULL;
+    }
+    if (dp_m > 0)
+        p.numerics.dp_m = dp_m;
+    if (edit)
+        edit(&p);
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim)
+        fprintf(stderr, "%s\n", err);
+    return sim;
 }
 
 /* lanes_totals (lanes.h): eight quantities' lanes added by a transpose must equal, bit for bit, each quantity's lanes
@@ -515,17 +537,10 @@ static int test_wall_contact_rules(void)
  * it, and the disc takes the push's reaction. */
 static int test_disc_contact_rules(void)
 {
-    surge_params p = surge_default_params();
-    char err[256];
-    if (surge_params_load(&p, SURGE_SOURCE_DIR "/cases/boulder_settling.ini", err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
+    surge_sim *sim = case_sim("boulder_settling.ini", 0, NULL);
+    if (!sim)
         return 1;
-    }
-    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
-    if (!sim) {
-        fprintf(stderr, "%s\n", err);
-        return 1;
-    }
+    const surge_params p = sim->params;
     const boulder_set *b = &sim->boulders;
     const double dp = p.numerics.dp_m, cx = b->x[0], cy = b->y[0], r = b->radius[0];
     int a = -1; /* the fluid particle nearest the point 1 dp above the disc's top */
@@ -568,18 +583,10 @@ static int test_disc_contact_rules(void)
  * debris_surge.md). One step of the debris surge at dp = 0.1 m. */
 static int test_behind_wall(void)
 {
-    surge_params p = surge_default_params();
-    char err[256];
-    if (surge_params_load(&p, SURGE_SOURCE_DIR "/cases/debris_surge.ini", err, sizeof err) != 0) {
-        fprintf(stderr, "%s\n", err);
+    surge_sim *sim = case_sim("debris_surge.ini", 0.1, NULL);
+    if (!sim)
         return 1;
-    }
-    p.numerics.dp_m = 0.1;
-    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
-    if (!sim) {
-        fprintf(stderr, "%s\n", err);
-        return 1;
-    }
+    const surge_params p = sim->params;
     const double dp = p.numerics.dp_m, back_face_m = p.walls.upstream_x_m - sim->params.walls.layers * dp;
     int a = -1; /* the fluid particle nearest the point 0.6 dp behind the wall's back face, at 0.5 m */
     for (int f = sim->wall_count; f < sim->count; f++)
@@ -649,6 +656,71 @@ static int test_diffusion_linear(void)
     return failures;
 }
 
+static void sixty_graded_discs(surge_params *p)
+{
+    p->boulders.placement = SURGE_BOULDERS_GRADED;
+    p->boulders.count = 60;
+    p->boulders.seed = 1;
+    p->boulders.density_ratio = 0.9;
+}
+
+/* A fluid particle's cost in a pass over its lists, as neighbours_fluid_share counts it (entries plus 8). */
+static int64_t pass_cost(const surge_sim *sim, int a)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int i = a - sim->wall_count;
+    return nl->fluid_first[i + 1] - nl->fluid_first[i] + nl->wall_first[i + 1] - nl->wall_first[i] + 8;
+}
+
+/* neighbours_fluid_share on the 60-disc debris surge (whose discs' wall entries bunch near the front): for 1, 2, 3
+ * and 7 threads the shares tile the fluid in order, and no share costs more than an even split plus one particle;
+ * an even split by particle count, as before, is shown for comparison. */
+static int test_fluid_share(void)
+{
+    surge_sim *sim = case_sim("debris_surge.ini", 0.066, sixty_graded_discs);
+    if (!sim)
+        return 1;
+    if (neighbours_update(sim) != 0)
+        return 1;
+    int64_t total = 0, largest = 0;
+    for (int a = sim->wall_count; a < sim->count; a++)
+        total += pass_cost(sim, a), largest = pass_cost(sim, a) > largest ? pass_cost(sim, a) : largest;
+    const int counts[] = {1, 2, 3, 7};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        const int threads = counts[k];
+        int begin[8] = {0}, end[8] = {0}, got = 0;
+        #pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            neighbours_fluid_share(sim, &begin[t], &end[t]);
+            #pragma omp single
+            got = omp_get_num_threads();
+        }
+        int gaps = got != threads || begin[0] != sim->wall_count || end[threads - 1] != sim->count;
+        double worst = 0, worst_even = 0;
+        for (int t = 0; t < threads; t++) {
+            gaps += t > 0 && begin[t] != end[t - 1];
+            int64_t cost = 0, cost_even = 0;
+            for (int a = begin[t]; a < end[t]; a++)
+                cost += pass_cost(sim, a);
+            const int nf = sim->count - sim->wall_count;
+            for (int a = sim->wall_count + (int)((int64_t)nf * t / threads);
+                 a < sim->wall_count + (int)((int64_t)nf * (t + 1) / threads); a++)
+                cost_even += pass_cost(sim, a);
+            worst = fmax(worst, (double)(cost - total / threads) / (double)largest);
+            worst_even = fmax(worst_even, (double)(cost_even - total / threads) / (double)largest);
+        }
+        char what[128];
+        snprintf(what, sizeof what, "fluid_share: %d threads, shares not tiling the fluid", threads);
+        expect_below(what, gaps, 0);
+        snprintf(what, sizeof what, "fluid_share: %d threads, largest share over even (particles' cost; by count %.1f)",
+                 threads, worst_even);
+        expect_below(what, worst, 1.0);
+    }
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -677,5 +749,7 @@ int main(int argc, char **argv)
         return test_wall_contact_rules() ? 1 : 0;
     if (!strcmp(argv[1], "diffusion_linear"))
         return test_diffusion_linear() ? 1 : 0;
+    if (!strcmp(argv[1], "fluid_share"))
+        return test_fluid_share() ? 1 : 0;
     return 2;
 }
