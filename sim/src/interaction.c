@@ -98,23 +98,31 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
     real kernel_w[PAIR_LANES] = {0}, grad_c_x[PAIR_LANES] = {0}, grad_c_y[PAIR_LANES] = {0};
     real m_xx[PAIR_LANES] = {0}, m_xy[PAIR_LANES] = {0}, m_yy[PAIR_LANES] = {0};
     real g_xx[PAIR_LANES] = {0}, g_xy[PAIR_LANES] = {0}, g_yx[PAIR_LANES] = {0}, g_yy[PAIR_LANES] = {0};
-    int near_surface[PAIR_LANES] = {0};
+    real surface_neighbours[PAIR_LANES] = {0}; /* how many surface particles within 2h (surface is 0 or 1) */
     const int i = a - sim->wall_count;
     const int64_t first = nl->fluid_first[i], last = nl->fluid_first[i + 1];
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        /* the block's eight neighbour records, one vector load each, transposed into one vector a field: cheaper
+         * than assembling each field from eight scalar loads */
+        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
+        for (int l = 0; l < PAIR_LANES; l++)
+            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
+        lanes_transpose(record, field); /* field[q][l]: lane l's neighbour's q-th field, in pair_state's order */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
             const int b = index[e];
-            const real dx = dx0[e] + (mxa - st[b].moved_x), dy = dy0[e] + (mya - st[b].moved_y); /* r_ab */
+            const real nb_vx = field[2][l], nb_vy = field[3][l], nb_rho = field[4][l], nb_inv_rho = field[5][l];
+            const real nb_pressure = field[6][l], nb_surface = field[7][l];
+            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]); /* r_ab */
             const real r2 = dx * dx + dy * dy;
             const int inside = r2 < support2 && r2 > 0;
             const real r = REAL_SQRT(r2);
             const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0; /* grad_a W = f r_ab */
-            const real vol = mass * st[b].inv_rho, vf = vol * f;
-            const real dvx = vxa - st[b].vx, dvy = vya - st[b].vy;
-            const real pressure_coef = pair_pressure_coef(mass, pa, st[b].pressure, inv_rhoa, st[b].inv_rho);
-            const real inv_denominator = pair_viscous_denominator(rhoa, st[b].rho, r2, eta2);
+            const real vol = mass * nb_inv_rho, vf = vol * f;
+            const real dvx = vxa - nb_vx, dvy = vya - nb_vy;
+            const real pressure_coef = pair_pressure_coef(mass, pa, nb_pressure, inv_rhoa, nb_inv_rho);
+            const real inv_denominator = pair_viscous_denominator(rhoa, nb_rho, r2, eta2);
             const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
             acc_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, dvx);
             acc_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, dvy);
@@ -123,14 +131,14 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
             g_yx[l] += pair_moment(vf, dvy, dx), g_yy[l] += pair_moment(vf, dvy, dy);
             const real linear_part = antuono ? pair_gradient_part(grad_xa, grad_ya, grad_rho_x[b], grad_rho_y[b], dx, dy)
                                              : pair_hydrostatic_part(rho_h_per_m, dy);
-            diffusion[l] -= pair_diffusion(rhoa, st[b].rho, linear_part, f, vol);
+            diffusion[l] -= pair_diffusion(rhoa, nb_rho, linear_part, f, vol);
             if (!corrector) {
-                const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, rhoa + st[b].rho, inv_denominator) : 0;
+                const real speed = inside ? pair_viscous_speed(h, dvx, dvy, dx, dy, rhoa + nb_rho, inv_denominator) : 0;
                 visc_speed_mps[l] = speed > visc_speed_mps[l] ? speed : visc_speed_mps[l];
             } else {
                 grad_c_x[l] += vf * dx;
                 grad_c_y[l] += vf * dy;
-                near_surface[l] |= inside & (st[b].surface != 0);
+                surface_neighbours[l] += inside ? nb_surface : 0;
                 kernel_w[l] += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
             }
         }
@@ -138,16 +146,14 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
     /* the lanes' totals, each added in lane order (lanes.h) */
     const real zero[PAIR_LANES] = {0};
     const real *const first_eight[8] = {acc_x, acc_y, diffusion, kernel_w, grad_c_x, grad_c_y, m_xx, m_xy};
-    const real *const last_five[8] = {m_yy, g_xx, g_xy, g_yx, g_yy, zero, zero, zero};
+    const real *const last_six[8] = {m_yy, g_xx, g_xy, g_yx, g_yy, surface_neighbours, zero, zero};
     real total[16];
     lanes_totals(first_eight, total);
-    lanes_totals(last_five, total + 8);
+    lanes_totals(last_six, total + 8);
     particle_sums sums = {total[0], total[1], total[2], 0, total[3], total[4], total[5], total[6], total[7],
-                          total[8], total[9], total[10], total[11], total[12], 0, 0};
-    for (int l = 0; l < PAIR_LANES; l++) {
+                          total[8], total[9], total[10], total[11], total[12], total[13] > 0, 0};
+    for (int l = 0; l < PAIR_LANES; l++)
         sums.visc_speed_mps = visc_speed_mps[l] > sums.visc_speed_mps ? visc_speed_mps[l] : sums.visc_speed_mps;
-        sums.near_surface |= near_surface[l];
-    }
     *out = sums;
 }
 

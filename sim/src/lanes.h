@@ -33,21 +33,18 @@ typedef int32_t lanes_mask __attribute__((vector_size(PAIR_LANES * sizeof(int32_
     __builtin_shuffle(a, b, (lanes_mask){i0, i1, i2, i3, i4, i5, i6, i7})
 #endif
 
-/* total[q] = lanes[q][0] + lanes[q][1] + ... + lanes[q][7], added in that order, for q = 0..7 */
-static inline void lanes_totals(const real *const lanes[8], real total[8])
+/* The 8 x 8 transpose: column[l][q] = row[q][l]. Interleaves neighbouring rows, then pairs of rows, then the
+ * halves (24 shuffles). */
+static inline void lanes_transpose(const lanes_vector row[8], lanes_vector column[8])
 {
-    lanes_vector v[8];
-    for (int q = 0; q < 8; q++)
-        memcpy(&v[q], lanes[q], sizeof v[q]);
-    /* the 8 x 8 transpose: interleave neighbouring rows, then pairs of rows, then the halves */
-    const lanes_vector t0 = LANES_SHUFFLE(v[0], v[1], 0, 8, 1, 9, 4, 12, 5, 13);
-    const lanes_vector t1 = LANES_SHUFFLE(v[0], v[1], 2, 10, 3, 11, 6, 14, 7, 15);
-    const lanes_vector t2 = LANES_SHUFFLE(v[2], v[3], 0, 8, 1, 9, 4, 12, 5, 13);
-    const lanes_vector t3 = LANES_SHUFFLE(v[2], v[3], 2, 10, 3, 11, 6, 14, 7, 15);
-    const lanes_vector t4 = LANES_SHUFFLE(v[4], v[5], 0, 8, 1, 9, 4, 12, 5, 13);
-    const lanes_vector t5 = LANES_SHUFFLE(v[4], v[5], 2, 10, 3, 11, 6, 14, 7, 15);
-    const lanes_vector t6 = LANES_SHUFFLE(v[6], v[7], 0, 8, 1, 9, 4, 12, 5, 13);
-    const lanes_vector t7 = LANES_SHUFFLE(v[6], v[7], 2, 10, 3, 11, 6, 14, 7, 15);
+    const lanes_vector t0 = LANES_SHUFFLE(row[0], row[1], 0, 8, 1, 9, 4, 12, 5, 13);
+    const lanes_vector t1 = LANES_SHUFFLE(row[0], row[1], 2, 10, 3, 11, 6, 14, 7, 15);
+    const lanes_vector t2 = LANES_SHUFFLE(row[2], row[3], 0, 8, 1, 9, 4, 12, 5, 13);
+    const lanes_vector t3 = LANES_SHUFFLE(row[2], row[3], 2, 10, 3, 11, 6, 14, 7, 15);
+    const lanes_vector t4 = LANES_SHUFFLE(row[4], row[5], 0, 8, 1, 9, 4, 12, 5, 13);
+    const lanes_vector t5 = LANES_SHUFFLE(row[4], row[5], 2, 10, 3, 11, 6, 14, 7, 15);
+    const lanes_vector t6 = LANES_SHUFFLE(row[6], row[7], 0, 8, 1, 9, 4, 12, 5, 13);
+    const lanes_vector t7 = LANES_SHUFFLE(row[6], row[7], 2, 10, 3, 11, 6, 14, 7, 15);
     const lanes_vector u0 = LANES_SHUFFLE(t0, t2, 0, 1, 8, 9, 4, 5, 12, 13);
     const lanes_vector u1 = LANES_SHUFFLE(t0, t2, 2, 3, 10, 11, 6, 7, 14, 15);
     const lanes_vector u2 = LANES_SHUFFLE(t1, t3, 0, 1, 8, 9, 4, 5, 12, 13);
@@ -56,12 +53,23 @@ static inline void lanes_totals(const real *const lanes[8], real total[8])
     const lanes_vector u5 = LANES_SHUFFLE(t4, t6, 2, 3, 10, 11, 6, 7, 14, 15);
     const lanes_vector u6 = LANES_SHUFFLE(t5, t7, 0, 1, 8, 9, 4, 5, 12, 13);
     const lanes_vector u7 = LANES_SHUFFLE(t5, t7, 2, 3, 10, 11, 6, 7, 14, 15);
-    /* column l: lane l of every quantity */
-    const lanes_vector column[8] = {
-        LANES_SHUFFLE(u0, u4, 0, 1, 2, 3, 8, 9, 10, 11), LANES_SHUFFLE(u1, u5, 0, 1, 2, 3, 8, 9, 10, 11),
-        LANES_SHUFFLE(u2, u6, 0, 1, 2, 3, 8, 9, 10, 11), LANES_SHUFFLE(u3, u7, 0, 1, 2, 3, 8, 9, 10, 11),
-        LANES_SHUFFLE(u0, u4, 4, 5, 6, 7, 12, 13, 14, 15), LANES_SHUFFLE(u1, u5, 4, 5, 6, 7, 12, 13, 14, 15),
-        LANES_SHUFFLE(u2, u6, 4, 5, 6, 7, 12, 13, 14, 15), LANES_SHUFFLE(u3, u7, 4, 5, 6, 7, 12, 13, 14, 15)};
+    column[0] = LANES_SHUFFLE(u0, u4, 0, 1, 2, 3, 8, 9, 10, 11);
+    column[1] = LANES_SHUFFLE(u1, u5, 0, 1, 2, 3, 8, 9, 10, 11);
+    column[2] = LANES_SHUFFLE(u2, u6, 0, 1, 2, 3, 8, 9, 10, 11);
+    column[3] = LANES_SHUFFLE(u3, u7, 0, 1, 2, 3, 8, 9, 10, 11);
+    column[4] = LANES_SHUFFLE(u0, u4, 4, 5, 6, 7, 12, 13, 14, 15);
+    column[5] = LANES_SHUFFLE(u1, u5, 4, 5, 6, 7, 12, 13, 14, 15);
+    column[6] = LANES_SHUFFLE(u2, u6, 4, 5, 6, 7, 12, 13, 14, 15);
+    column[7] = LANES_SHUFFLE(u3, u7, 4, 5, 6, 7, 12, 13, 14, 15);
+}
+
+/* total[q] = lanes[q][0] + lanes[q][1] + ... + lanes[q][7], added in that order, for q = 0..7 */
+static inline void lanes_totals(const real *const lanes[8], real total[8])
+{
+    lanes_vector v[8], column[8];
+    for (int q = 0; q < 8; q++)
+        memcpy(&v[q], lanes[q], sizeof v[q]);
+    lanes_transpose(v, column); /* column l: lane l of every quantity */
     lanes_vector sum = column[0];
     for (int l = 1; l < 8; l++)
         sum += column[l];

@@ -48,6 +48,7 @@ typedef struct cell_span {
 typedef struct pair_state {
     real moved_x, moved_y, vx, vy, rho, inv_rho, pressure, surface;
 } pair_state;
+_Static_assert(sizeof(pair_state) == PAIR_LANES * sizeof(real), "the pair loop loads a record as one vector");
 
 /* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
