@@ -307,12 +307,13 @@ def group_scene():
           near.returncode == 2 and "closer than contacts.margin_dp" in near.stderr, near.stderr)
     # a disc come round the periodic channel meets the back of the upstream wall (its contact slab: front, back
     # and top), not the wall's particles: thrown at it from behind at 3 m/s, it stops a margin short of the back face
-    behind, r, cmd_b = thrown_disc("scene_behind_wall", "0.5,0.35,0.25,3,0,0", 0.4)
+    # (the wall has as many layers again behind its front ones, with their face upstream: sim/src/scene.c)
+    behind, r, cmd_b = thrown_disc("scene_behind_wall", "0.3,0.35,0.25,3,0,0", 0.4)
     layers = re.search(r"^layers = (\d+)", open(os.path.join(behind, "params.ini")).read(), re.M) \
         if r.returncode == 0 else None
     series = boulder_series(behind) if r.returncode == 0 else []
     reach = max(s[1]["points"][0][0] + s[1]["radius_m"][0] for s in series) if series else float("nan")
-    back_face = 1.5 - int(layers.group(1)) * 0.05 if layers else float("nan")
+    back_face = 1.5 - 2 * int(layers.group(1)) * 0.05 if layers else float("nan")
     check("scene: a disc thrown at the upstream wall from behind stops short of its back face (disc front %.3f m, "
           "back face %.3f m)" % (reach, back_face), reach < back_face and reach > back_face - 0.2,
           cmd_b + "\nexit %d\n%s" % (r.returncode, r.stderr[-1500:]))

@@ -560,7 +560,7 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_
         walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m + half_margin, 0, 0, 0, 0, 0, 0};
     if (p->walls.upstream) {
         const double front_m = p->walls.upstream_x_m + half_margin;
-        const double back_m = p->walls.upstream_x_m - p->walls.layers * p->numerics.dp_m - half_margin;
+        const double back_m = scene_upstream_back_m(p) - half_margin;
         const double top_m = p->walls.upstream_height_m + half_margin;
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, front_m, 0, front_m, top_m, 0, 0};
         walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, 0, back_m, top_m, 0, 0};

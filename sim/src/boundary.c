@@ -55,8 +55,7 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
     const kernel2d *k = &sim->kernel;
     const real support2 = k->support2, alpha = k->alpha, inv_h = k->inv_h, grad_coef = k->grad_coef;
     const real mass = (real)sim->mass;
-    const real *restrict moved_x = sim->neighbours.moved_x, *restrict moved_y = sim->neighbours.moved_y;
-    const real *restrict rho = sim->rho, *restrict vx = sim->vx, *restrict vy = sim->vy;
+    const pair_state *restrict st = sim->pair_state;
     /* one partial sum per lane, the lanes added in order at the end (lanes.h; the lists hold whole vectors) */
     real a00[PAIR_LANES] = {0}, a01[PAIR_LANES] = {0}, a02[PAIR_LANES] = {0}, a10[PAIR_LANES] = {0};
     real a11[PAIR_LANES] = {0}, a12[PAIR_LANES] = {0}, a20[PAIR_LANES] = {0}, a21[PAIR_LANES] = {0};
@@ -64,14 +63,21 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
     real r10[PAIR_LANES] = {0}, r11[PAIR_LANES] = {0}, r12[PAIR_LANES] = {0}, r20[PAIR_LANES] = {0};
     real r21[PAIR_LANES] = {0}, r22[PAIR_LANES] = {0};
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        /* the block's eight fluid records, one vector load each, transposed into one vector a field (as in
+         * interaction.c's fluid pair loop) */
+        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
+        for (int l = 0; l < PAIR_LANES; l++)
+            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
+        lanes_transpose(record, field);
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
-            const int j = index[e];
-            const real dx = dx0[e] + (gx - moved_x[j]), dy = dy0[e] + (gy - moved_y[j]);
+            const real moved_x = field[0][l], moved_y = field[1][l], vx = field[2][l], vy = field[3][l];
+            const real rho = field[4][l];
+            const real dx = dx0[e] + (gx - moved_x), dy = dy0[e] + (gy - moved_y);
             const real r2 = dx * dx + dy * dy;
             const real r = REAL_SQRT(r2);
-            const real vol = r2 < support2 ? mass / rho[j] : 0; /* beyond 2h: no contribution */
+            const real vol = r2 < support2 ? mass / rho : 0; /* beyond 2h: no contribution */
             const real w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
             const real f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
             const real wx_vol = f_vol * dx, wy_vol = f_vol * dy; /* gradient at the ghost node */
@@ -79,9 +85,9 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
             a00[l] += w_vol, a01[l] += rx * w_vol, a02[l] += ry * w_vol;
             a10[l] += wx_vol, a11[l] += rx * wx_vol, a12[l] += ry * wx_vol;
             a20[l] += wy_vol, a21[l] += rx * wy_vol, a22[l] += ry * wy_vol;
-            r00[l] += rho[j] * w_vol, r01[l] += rho[j] * wx_vol, r02[l] += rho[j] * wy_vol;
-            r10[l] += vx[j] * w_vol, r11[l] += vx[j] * wx_vol, r12[l] += vx[j] * wy_vol;
-            r20[l] += vy[j] * w_vol, r21[l] += vy[j] * wx_vol, r22[l] += vy[j] * wy_vol;
+            r00[l] += rho * w_vol, r01[l] += rho * wx_vol, r02[l] += rho * wy_vol;
+            r10[l] += vx * w_vol, r11[l] += vx * wx_vol, r12[l] += vx * wy_vol;
+            r20[l] += vy * w_vol, r21[l] += vy * wx_vol, r22[l] += vy * wy_vol;
         }
     }
     const real zero[PAIR_LANES] = {0};
@@ -174,5 +180,8 @@ void boundary_update(surge_sim *sim, int wall_pressure)
             sim->pressure[b] = tait_pressure(sim->rho[b], (real)rho0, (real)sim->b_pa);
             sim->inv_rho[b] = (real)1 / sim->rho[b];
         }
+        sim->wall_state[b] = (wall_pair_state){nl->moved_x[b], nl->moved_y[b], sim->rho[b], sim->pressure[b],
+                                               sim->wall_vx[b], sim->wall_vy[b], sim->wall_cont_vx[b],
+                                               sim->wall_cont_vy[b]};
     }
 }

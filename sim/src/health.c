@@ -34,9 +34,12 @@ static surge_health_check check_particle(const surge_sim *sim, int a, double *va
     *value = x;
     if ((p->walls.left && x < -dp) || (p->walls.right && x > L + dp))
         return SURGE_CHECK_CROSSED_WALL;
-    if (p->walls.upstream && y < p->walls.upstream_height_m && x < p->walls.upstream_x_m - dp &&
-        x > p->walls.upstream_x_m - wall_depth)
-        return SURGE_CHECK_CROSSED_WALL;
+    if (p->walls.upstream && y < p->walls.upstream_height_m && x < p->walls.upstream_x_m - dp) {
+        /* inside the wall, more than dp past its front face or (where it has one) its back face */
+        const double back_m = scene_upstream_back_m(p);
+        if (x > back_m + (back_m < p->walls.upstream_x_m - wall_depth ? dp : 0))
+            return SURGE_CHECK_CROSSED_WALL;
+    }
     *value = y;
     if (y < -wall_depth || y > H + (p->walls.top ? wall_depth : 0.0))
         return SURGE_CHECK_LEFT_DOMAIN;

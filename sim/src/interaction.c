@@ -7,7 +7,7 @@
 #include "pair_terms.h"
 #include "sim_internal.h"
 
-void interaction_prepare(surge_sim *sim)
+void interaction_prepare(surge_sim *sim, int tait)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
@@ -17,8 +17,10 @@ void interaction_prepare(surge_sim *sim)
     for (int i = neighbours_first_moving(sim); i < sim->count; i++) {
         neighbours_track_particle(sim, i);
         if (i >= sim->wall_count) {
-            sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
-            sim->inv_rho[i] = (real)1 / sim->rho[i];
+            if (tait) {
+                sim->pressure[i] = tait_pressure(sim->rho[i], rho0, b);
+                sim->inv_rho[i] = (real)1 / sim->rho[i];
+            }
             sim->pair_state[i] = (pair_state){nl->moved_x[i], nl->moved_y[i], sim->vx[i], sim->vy[i], sim->rho[i],
                                               sim->inv_rho[i], sim->pressure[i], (real)sim->surface[i]};
         }
@@ -165,13 +167,11 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     const neighbour_lists *nl = &sim->neighbours;
     const int32_t *restrict index = nl->wall_index;
     const real *restrict dx0 = nl->wall_dx0, *restrict dy0 = nl->wall_dy0;
-    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
-    const real *restrict wall_vx = sim->wall_vx, *restrict wall_vy = sim->wall_vy;
-    const real *restrict cont_vx = sim->wall_cont_vx, *restrict cont_vy = sim->wall_cont_vy;
+    const wall_pair_state *restrict st = sim->wall_state;
     const real grad_coef = c->grad_coef, inv_h = c->inv_h, alpha = c->alpha, mass = c->mass, eta2 = c->eta2;
     const real h = c->h, support2 = c->support2, four_nu = c->four_nu;
-    const real mxa = moved_x[a], mya = moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
+    const real mxa = nl->moved_x[a], mya = nl->moved_y[a], vxa = sim->vx[a], vya = sim->vy[a], rhoa = rho[a];
     const real pa = pres[a], inv_rhoa = inv_rho[a];
     const int i = a - sim->wall_count;
     const int64_t first = nl->wall_first[i], last = nl->wall_first[i + 1];
@@ -182,28 +182,33 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     real m_xx[PAIR_LANES] = {0}, m_xy[PAIR_LANES] = {0}, m_yy[PAIR_LANES] = {0};
     real g_xx[PAIR_LANES] = {0}, g_xy[PAIR_LANES] = {0}, g_yx[PAIR_LANES] = {0}, g_yy[PAIR_LANES] = {0};
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
+        lanes_vector record[PAIR_LANES], field[PAIR_LANES]; /* as in fluid_pairs */
+        for (int l = 0; l < PAIR_LANES; l++)
+            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
+        lanes_transpose(record, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_pair_state) */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
-            const int b = index[e];
-            const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
+            const real rho_b = field[2][l], pressure_b = field[3][l];
+            const real inv_rho_b = (real)1 / rho_b; /* the bits of inv_rho[b] (boundary_update) */
+            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]);
             const real r2 = dx * dx + dy * dy;
             const int inside = r2 < support2;
             const real r = REAL_SQRT(r2);
             const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
-            const real vf = mass * inv_rho[b] * f;
-            const real pressure_coef = pair_pressure_coef(mass, pa, pres[b], inv_rhoa, inv_rho[b]);
-            const real inv_denominator = pair_viscous_denominator(rhoa, rho[b], r2, eta2);
+            const real vf = mass * inv_rho_b * f;
+            const real pressure_coef = pair_pressure_coef(mass, pa, pressure_b, inv_rhoa, inv_rho_b);
+            const real inv_denominator = pair_viscous_denominator(rhoa, rho_b, r2, eta2);
             const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-            const real nsx = vxa - wall_vx[b], nsy = vya - wall_vy[b];
+            const real nsx = vxa - field[4][l], nsy = vya - field[5][l];
             acc_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
             acc_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
-            const real wdx = vxa - cont_vx[b], wdy = vya - cont_vy[b];
+            const real wdx = vxa - field[6][l], wdy = vya - field[7][l];
             m_xx[l] += pair_moment(vf, dx, dx), m_xy[l] += pair_moment(vf, dx, dy), m_yy[l] += pair_moment(vf, dy, dy);
             g_xx[l] += pair_moment(vf, wdx, dx), g_xy[l] += pair_moment(vf, wdx, dy);
             g_yx[l] += pair_moment(vf, wdy, dx), g_yy[l] += pair_moment(vf, wdy, dy);
             if (!corrector) {
-                const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, rhoa + rho[b], inv_denominator) : 0;
+                const real speed = inside ? pair_viscous_speed(h, nsx, nsy, dx, dy, rhoa + rho_b, inv_denominator) : 0;
                 visc_speed_mps[l] = speed > visc_speed_mps[l] ? speed : visc_speed_mps[l];
             } else {
                 grad_c_x[l] += vf * dx;

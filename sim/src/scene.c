@@ -77,12 +77,12 @@ static void build_walls(const surge_params *p, particle_list *l)
             double x = xlo + (i + 0.5) * dp;
             double gx = x < 0 ? -x : (x > L ? 2 * L - x : x); /* corners mirror through the corner point */
             int bed = WALL_BOTTOM;
-            const double xw = p->walls.upstream_x_m;
-            if (p->walls.upstream && x < xw && x > xw - depth) {
-                /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point; it moves
-                 * with the belt but its no-slip velocity is the fixed wall's (docs/method.md, "The belt-upstream-
-                 * wall corner") */
-                gx = 2 * xw - x;
+            const double xw = p->walls.upstream_x_m, back_m = scene_upstream_back_m(p);
+            if (p->walls.upstream && x < xw && x > back_m) {
+                /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point of the face
+                 * above it (the front's, or the back's behind the middle of the wall); it moves with the belt but its
+                 * no-slip velocity is the fixed wall's (docs/method.md, "The belt-upstream-wall corner") */
+                gx = x > xw - depth ? 2 * xw - x : 2 * back_m - x;
                 bed = WALL_CORNER;
             }
             if (p->walls.bottom)
@@ -100,13 +100,23 @@ static void build_walls(const surge_params *p, particle_list *l)
         }
         if (p->walls.upstream) {
             const long nu = lround(p->walls.upstream_height_m / dp);
-            const double xw = p->walls.upstream_x_m;
+            const double xw = p->walls.upstream_x_m, back_m = scene_upstream_back_m(p);
+            const int back_face = back_m + off < xw - depth; /* this layer of the back face fits behind the front's */
             for (long j = 0; j < nu; j++) {
                 double y = (j + 0.5) * dp;
                 push_wall(l, xw - off, y, xw + off, y, WALL_FIXED);
+                if (back_face)
+                    push_wall(l, back_m + off, y, back_m - off, y, WALL_FIXED);
             }
         }
     }
+}
+
+double scene_upstream_back_m(const surge_params *p)
+{
+    const double dp = p->numerics.dp_m, front_back_m = p->walls.upstream_x_m - p->walls.layers * dp;
+    const long room = lround(floor(front_back_m / dp + 1e-9));
+    return front_back_m - (room < p->walls.layers ? (room > 0 ? room : 0) : p->walls.layers) * dp;
 }
 
 /* Uniform depth that a belt moving at u_b holds steady on the slope: h_n = sqrt(3 nu u_b / (g sin theta)). */
@@ -185,7 +195,7 @@ static int wall_capacity(const surge_params *p)
     n += (p->walls.bottom + p->walls.top) * nx_ext * layers;
     n += (p->walls.left + p->walls.right) * (lround(p->domain.height_m / dp) + 1) * layers;
     if (p->walls.upstream)
-        n += (lround(p->walls.upstream_height_m / dp) + 1) * layers;
+        n += (lround(p->walls.upstream_height_m / dp) + 1) * 2 * layers;
     return (int)n;
 }
 
@@ -196,7 +206,7 @@ static int allocate_state(surge_sim *s, int n)
 #define ALLOC(ptr, len) ok &= ((ptr) = calloc((size_t)(len) > 0 ? (size_t)(len) : 1, sizeof *(ptr))) != NULL
     ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
     ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
-    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->visc_speed_mps, n);
+    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->wall_state, n); ALLOC(s->visc_speed_mps, n);
     ALLOC(s->face_nx, n); ALLOC(s->face_ny, n); ALLOC(s->face_gap_m, n); ALLOC(s->face_vn_mps, n);
     ALLOC(s->face_disc, n); ALLOC(s->face_push_x, n); ALLOC(s->face_push_y, n);
     ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);

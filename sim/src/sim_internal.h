@@ -50,6 +50,14 @@ typedef struct pair_state {
 } pair_state;
 _Static_assert(sizeof(pair_state) == PAIR_LANES * sizeof(real), "the pair loop loads a record as one vector");
 
+/* What a wall neighbour brings to the fluid's wall pair loop, packed the same way (boundary.c fills it with the
+ * wall's mDBC state): its displacement since the build, density, pressure, the no-slip velocity of the viscous term
+ * and the velocity of the continuity term */
+typedef struct wall_pair_state {
+    real moved_x, moved_y, rho, pressure, noslip_vx, noslip_vy, cont_vx, cont_vy;
+} wall_pair_state;
+_Static_assert(sizeof(wall_pair_state) == PAIR_LANES * sizeof(real), "the pair loop loads a record as one vector");
+
 /* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
  * wall_index[wall_first[i] .. wall_first[i+1]), in cell order, each with r_a - r_b at the build (periodic image
@@ -100,6 +108,7 @@ struct surge_sim {
     /* per-particle rates and scratch */
     real *ax, *ay, *drho, *pressure, *inv_rho;
     pair_state *pair_state;    /* the same per-neighbour fields packed (interaction.c) */
+    wall_pair_state *wall_state; /* the walls' (boundary.c) */
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
     real *face_gap_m;          /* the particle's distance from that face (negative past it) */
@@ -156,6 +165,10 @@ static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
 int scene_build(surge_sim *sim, char *err, size_t err_len);
 double scene_expected_speed(const surge_params *p);
 double scene_head_speed(const surge_params *p);
+/* Where the upstream wall's particles end behind it (m): its front layers, then as many layers again with their face
+ * turned upstream where the room behind the wall allows. Fluid that comes round a periodic channel (past a caught
+ * disc, say) meets a wall there, not the back of the front layers, whose mDBC and face act only downstream. */
+double scene_upstream_back_m(const surge_params *p);
 
 /* grid.c */
 int grid_init(surge_sim *sim, char *err, size_t err_len);
@@ -206,8 +219,10 @@ void neighbours_fluid_share(const surge_sim *sim, int *begin, int *end);
  * Tait pressure and 1/density (the explicit scheme's pair terms; the implicit scheme solves for its own) */
 void boundary_update(surge_sim *sim, int wall_pressure);
 /* interaction.c (worksharing): before boundary_update, every moving particle's displacement since the build
- * (neighbours_track) and the fluid's pressure, 1/density and pair_state records; after it, the fluid's rates */
-void interaction_prepare(surge_sim *sim);
+ * (neighbours_track) and the fluid's pair_state records (which the mDBC ghost nodes read), with tait first
+ * the fluid's Tait pressure and 1/density (the explicit scheme; the implicit one solves for its pressure); after it,
+ * the fluid's rates */
+void interaction_prepare(surge_sim *sim, int tait);
 void interaction_compute(surge_sim *sim, int corrector);
 /* boundary.c: the moving walls' speeds at time_s (the start ramp), and the particles' kinds that follow them */
 void boundary_wall_speeds(surge_sim *sim, double time_s);

@@ -27,7 +27,7 @@ static void evaluate_rates(surge_sim *sim, int corrector)
 {
     #pragma omp parallel
     {
-        interaction_prepare(sim);
+        interaction_prepare(sim, 1);
         boundary_update(sim, 1);
         interaction_compute(sim, corrector);
     }

@@ -531,7 +531,7 @@ int step_implicit(surge_sim *sim)
     boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step */
     #pragma omp parallel
     {
-        neighbours_track(sim);
+        interaction_prepare(sim, 0);
         boundary_update(sim, 0); /* the walls' normals and depths (the contact rule) */
     }
     geometry(sim);
