@@ -438,36 +438,48 @@ void boulders_fluid_forces(surge_sim *sim)
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
     const real mass = (real)sim->mass, eta2 = (real)sim->eta2, support2 = sim->kernel.support2;
     const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
-    const real *restrict vx = sim->vx, *restrict vy = sim->vy, *restrict rho = sim->rho;
-    const real *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
-    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    const pair_state *restrict st = sim->pair_state;
     real *restrict fx = sim->ax, *restrict fy = sim->ay; /* wall entries are free scratch */
     #pragma omp parallel for schedule(static)
     for (int k = 0; k < sim->wall_count; k++) {
         fx[k] = fy[k] = 0;
         if (b->of_wall[sim->id[k]] < 0)
             continue;
-        real sum_x = 0, sum_y = 0, sum_viscous = 0;
-        for (int64_t e = nl->wall_fluid_first[k]; e < nl->wall_fluid_first[k + 1]; e++) {
-            const int a = nl->wall_fluid_index[e];
-            /* r_a - r_k, as the fluid's wall loop has it (interaction.c) */
-            const real dx = -(nl->wall_fluid_dx0[e] + (moved_x[k] - moved_x[a]));
-            const real dy = -(nl->wall_fluid_dy0[e] + (moved_y[k] - moved_y[a]));
-            const real r2 = dx * dx + dy * dy;
-            if (r2 >= support2)
-                continue;
-            const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-            /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop) */
-            const real pressure_coef = pair_pressure_coef(mass, pres[a], pres[k], inv_rho[a], inv_rho[k]);
-            const real inv_denominator = pair_viscous_denominator(rho[a], rho[k], r2, eta2);
-            const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-            sum_x += pair_acceleration(pressure_coef, f, dx, viscous_coef, vx[a] - sim->wall_vx[k]);
-            sum_y += pair_acceleration(pressure_coef, f, dy, viscous_coef, vy[a] - sim->wall_vy[k]);
-            sum_viscous += viscous_coef;
+        const real mxk = nl->moved_x[k], myk = nl->moved_y[k], rhok = rho[k], pk = pres[k], inv_rhok = inv_rho[k];
+        const real wall_vx = sim->wall_vx[k], wall_vy = sim->wall_vy[k];
+        const int32_t *restrict index = nl->wall_fluid_index;
+        const real *restrict dx0 = nl->wall_fluid_dx0, *restrict dy0 = nl->wall_fluid_dy0;
+        /* one partial sum per lane over the padded list, fluid records transposed (as in interaction.c) */
+        real sum_x[PAIR_LANES] = {0}, sum_y[PAIR_LANES] = {0}, sum_viscous[PAIR_LANES] = {0};
+        for (int64_t e0 = nl->wall_fluid_first[k]; e0 < nl->wall_fluid_first[k + 1]; e0 += PAIR_LANES) {
+            lanes_vector record[PAIR_LANES], field[PAIR_LANES];
+            for (int l = 0; l < PAIR_LANES; l++)
+                memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
+            lanes_transpose(record, field); /* field[q][l]: lane l's fluid neighbour's q-th field (pair_state) */
+            #pragma omp simd simdlen(PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int64_t e = e0 + l;
+                /* r_a - r_k, as the fluid's wall loop has it (interaction.c) */
+                const real dx = -(dx0[e] + (mxk - field[0][l])), dy = -(dy0[e] + (myk - field[1][l]));
+                const real r2 = dx * dx + dy * dy;
+                const real f = r2 < support2 ? kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)) : 0;
+                /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop); none beyond 2h */
+                const real pressure_coef = pair_pressure_coef(mass, field[6][l], pk, field[5][l], inv_rhok);
+                const real inv_denominator = pair_viscous_denominator(field[4][l], rhok, r2, eta2);
+                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
+                sum_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, field[2][l] - wall_vx);
+                sum_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, field[3][l] - wall_vy);
+                sum_viscous[l] += viscous_coef;
+            }
         }
-        fx[k] = -mass * sum_x;
-        fy[k] = -mass * sum_y;
-        b->spin_coupling[k] = sum_viscous;
+        const real zero[PAIR_LANES] = {0};
+        const real *const lanes[8] = {sum_x, sum_y, sum_viscous, zero, zero, zero, zero, zero};
+        real total[8];
+        lanes_totals(lanes, total);
+        fx[k] = -mass * total[0];
+        fy[k] = -mass * total[1];
+        b->spin_coupling[k] = total[2];
     }
     for (int i = 0; i < b->count; i++) {
         b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = 0;
