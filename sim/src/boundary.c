@@ -183,5 +183,18 @@ void boundary_update(surge_sim *sim, int wall_pressure)
         sim->wall_state[b] = (wall_pair_state){nl->moved_x[b], nl->moved_y[b], sim->rho[b], sim->pressure[b],
                                                sim->wall_vx[b], sim->wall_vy[b], sim->wall_cont_vx[b],
                                                sim->wall_cont_vy[b]};
+        const int disc = sim->boulders.count > 0 ? sim->boulders.of_wall[sim->id[b]] : -1;
+        if (disc < 0) {
+            sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], sim->wall_nx[b], sim->wall_ny[b],
+                                                   sim->wall_depth_m[b], -1, 0, 0};
+        } else {
+            const double period = sim->grid.period_m;
+            double centre_dx = sim->x[b] - sim->boulders.x[disc];
+            if (period > 0)
+                centre_dx -= period * floor(centre_dx / period + 0.5);
+            sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], 0, 0,
+                                                   (real)sim->boulders.radius[disc], (real)disc, (real)centre_dx,
+                                                   (real)(sim->y[b] - sim->boulders.y[disc])};
+        }
     }
 }

@@ -248,36 +248,72 @@ static void disc_face(const surge_sim *sim, int a, int i, wall_face *face)
     }
 }
 
+/* The wall face that entry e of fluid particle a's wall list gives (the candidate interaction_wall_face chose) */
+static void entry_face(const surge_sim *sim, int a, int64_t e, wall_face *face)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const int b = nl->wall_index[e];
+    if (sim->wall_of[b] == WALL_BOULDER) {
+        disc_face(sim, a, sim->boulders.of_wall[sim->id[b]], face);
+        return;
+    }
+    const real dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[b]);
+    const real dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
+    const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
+    *face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b],
+                        sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
+}
+
 wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int *near_boulder)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
+    const int32_t *restrict index = nl->wall_index;
+    const real *restrict dx0 = nl->wall_dx0, *restrict dy0 = nl->wall_dy0;
+    const wall_face_state *restrict st = sim->face_state;
+    const real mxa = nl->moved_x[a], mya = nl->moved_y[a];
     wall_face face = {search_m, 0, 0, 0, -1, -1};
-    int last_disc = -1;
     const int i = a - sim->wall_count;
-    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-        const int b = nl->wall_index[e];
-        const real dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[b]);
-        const real dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
-        const real r2 = dx * dx + dy * dy;
-        if (r2 >= support2)
-            continue;
-        if (sim->wall_of[b] == WALL_BOULDER) { /* the discs among the neighbours, each once per run of its particles */
-            *near_boulder = 1;
-            const int disc = sim->boulders.of_wall[sim->id[b]];
-            if (search_m > 0 && disc != last_disc)
-                disc_face(sim, a, disc, &face);
-            last_disc = disc;
-            continue;
+    /* Whole vectors over the padded list (records transposed as in fluid_pairs): in each lane the candidate with the
+     * smallest gap, the first in list order among equals. A fixed wall's candidate is its face, for a particle on its
+     * side of the wall particle (or within dp/2 behind its centre: one behind the wall, come round a periodic channel,
+     * is not pushed through the whole wall) within dp/2 of the particle's normal line; a disc's is the disc's circle,
+     * its gap here in float from the particle's offset, and exactly (disc_face, in double) for the one chosen. */
+    real best_gap[PAIR_LANES];
+    int64_t best_entry[PAIR_LANES];
+    int32_t boulder[PAIR_LANES];
+    for (int l = 0; l < PAIR_LANES; l++)
+        best_gap[l] = search_m, best_entry[l] = -1, boulder[l] = 0;
+    for (int64_t e0 = nl->wall_first[i]; e0 < nl->wall_first[i + 1]; e0 += PAIR_LANES) {
+        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
+        for (int l = 0; l < PAIR_LANES; l++)
+            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
+        lanes_transpose(record, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_face_state) */
+        #pragma omp simd simdlen(PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]);
+            const real r2 = dx * dx + dy * dy;
+            const int inside = r2 < support2, disc = field[5][l] >= 0;
+            const real along = dx * field[2][l] + dy * field[3][l];
+            const real cx = dx + field[6][l], cy = dy + field[7][l];
+            const real gap = disc ? REAL_SQRT(cx * cx + cy * cy) - field[4][l] : along - field[4][l];
+            const int candidate = inside & (disc | ((along > -half_dp) & (r2 - along * along < half_dp * half_dp)));
+            const int better = candidate & (gap < best_gap[l]);
+            best_gap[l] = better ? gap : best_gap[l];
+            best_entry[l] = better ? e : best_entry[l];
+            boulder[l] |= inside & disc;
         }
-        /* a face counts for a particle on its side of the wall particle (or within dp/2 behind its centre): one
-         * behind the wall, come round a periodic channel, is not pushed through the whole wall */
-        const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
-        if (search_m > 0 && along > -half_dp && r2 - along * along < half_dp * half_dp &&
-            along - sim->wall_depth_m[b] < face.gap_m)
-            face = (wall_face){along - sim->wall_depth_m[b], sim->wall_nx[b], sim->wall_ny[b],
-                               sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
     }
+    int64_t chosen = -1;
+    real chosen_gap = search_m;
+    for (int l = 0; l < PAIR_LANES; l++) {
+        *near_boulder |= boulder[l];
+        if (best_entry[l] >= 0 && (best_gap[l] < chosen_gap || (best_gap[l] == chosen_gap && best_entry[l] < chosen)))
+            chosen = best_entry[l], chosen_gap = best_gap[l];
+    }
+    if (search_m > 0 && chosen >= 0)
+        entry_face(sim, a, chosen, &face);
     return face;
 }
 

@@ -206,7 +206,7 @@ static int allocate_state(surge_sim *s, int n)
 #define ALLOC(ptr, len) ok &= ((ptr) = calloc((size_t)(len) > 0 ? (size_t)(len) : 1, sizeof *(ptr))) != NULL
     ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
     ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
-    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->wall_state, n); ALLOC(s->visc_speed_mps, n);
+    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->wall_state, n); ALLOC(s->face_state, n); ALLOC(s->visc_speed_mps, n);
     ALLOC(s->face_nx, n); ALLOC(s->face_ny, n); ALLOC(s->face_gap_m, n); ALLOC(s->face_vn_mps, n);
     ALLOC(s->face_disc, n); ALLOC(s->face_push_x, n); ALLOC(s->face_push_y, n);
     ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);

@@ -98,7 +98,7 @@ void surge_sim_destroy(surge_sim *sim)
     if (!sim)
         return;
     void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
-                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->pair_state, sim->wall_state, sim->visc_speed_mps,
+                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->pair_state, sim->wall_state, sim->face_state, sim->visc_speed_mps,
                       sim->face_nx, sim->face_ny, sim->face_gap_m, sim->face_vn_mps, sim->face_disc,
                       sim->face_push_x, sim->face_push_y,
                       sim->grad_c_x, sim->grad_c_y, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,

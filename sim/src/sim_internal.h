@@ -58,6 +58,14 @@ typedef struct wall_pair_state {
 } wall_pair_state;
 _Static_assert(sizeof(wall_pair_state) == PAIR_LANES * sizeof(real), "the pair loop loads a record as one vector");
 
+/* What a wall neighbour brings to the wall-face search (interaction_wall_face), packed likewise (boundary.c): a fixed
+ * wall particle its normal and its depth below the face, disc -1; a disc's particle its disc, the disc's radius in
+ * reach_m and its own offset from the disc's centre */
+typedef struct wall_face_state {
+    real moved_x, moved_y, nx, ny, reach_m, disc, centre_dx, centre_dy;
+} wall_face_state;
+_Static_assert(sizeof(wall_face_state) == PAIR_LANES * sizeof(real), "the search loads a record as one vector");
+
 /* Each fluid particle's neighbours within 2h + skin at the last build (neighbours.c): fluid particle a = wall_count
  * + i has the fluid neighbours fluid_index[fluid_first[i] .. fluid_first[i+1]) and the wall neighbours
  * wall_index[wall_first[i] .. wall_first[i+1]), in cell order, each with r_a - r_b at the build (periodic image
@@ -109,6 +117,7 @@ struct surge_sim {
     real *ax, *ay, *drho, *pressure, *inv_rho;
     pair_state *pair_state;    /* the same per-neighbour fields packed (interaction.c) */
     wall_pair_state *wall_state; /* the walls' (boundary.c) */
+    wall_face_state *face_state; /* the walls' for the face search (boundary.c) */
     real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
     real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
     real *face_gap_m;          /* the particle's distance from that face (negative past it) */
