@@ -330,6 +330,19 @@ def group_scene():
     _, lone, _ = surge("scene_catcher_alone", ["check"] + args + ["-s", "walls.upstream=false"])
     check("scene: a disc catcher without the upstream wall is refused, named",
           lone.returncode == 2 and "walls.disc_catcher" in lone.stderr, lone.stderr)
+    # the paper's densest surge, phi = 0.53 of the fluid block: the discs keep the contact margin (2 dp) apart, so the
+    # block holds them at dp = 0.02 m (every seed of five) but not at dp = 0.066 m, which is refused with the area
+    # placed and asked (docs/validation/debris_surge.md, "The densest surge")
+    dense = ["check", "debris_surge.ini", "-s", "boulders.placement=graded", "-s", "boulders.solid_fraction=0.53"]
+    placed = [surge("scene_dense_%d" % seed, dense + ["-s", "numerics.dp_m=0.02", "-s", "boulders.seed=%d" % seed])[1]
+              for seed in range(1, 6)]
+    check("scene: phi = 0.53 is placed at dp = 0.02 m for seeds 1-5 (exit statuses %s)" %
+          " ".join(str(q.returncode) for q in placed), all(q.returncode == 0 for q in placed),
+          "\n".join(q.stderr[-500:] for q in placed))
+    _, coarse, _ = surge("scene_dense_coarse", dense + ["-s", "numerics.dp_m=0.066", "-s", "boulders.seed=1"])
+    check("scene: phi = 0.53 at dp = 0.066 m is refused, naming the area placed and asked",
+          coarse.returncode == 2 and re.search(r"placed \d+ of \d+ discs \(0\.\d+ of the fluid block's area, "
+                                                r"0\.5\d+ asked\)", coarse.stderr), coarse.stderr)
     _, narrow, _ = surge("scene_narrow", ["check"] + args + ["-s", "output.flow_column_m=0.001"])
     check("scene: flow.csv columns narrower than dp/2 are refused", narrow.returncode == 2 and
           "output.flow_column_m" in narrow.stderr, narrow.stderr)
