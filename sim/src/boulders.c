@@ -453,10 +453,8 @@ void boulders_fluid_forces(surge_sim *sim)
         /* one partial sum per lane over the padded list, fluid records transposed (as in interaction.c) */
         real sum_x[PAIR_LANES] = {0}, sum_y[PAIR_LANES] = {0}, sum_viscous[PAIR_LANES] = {0};
         for (int64_t e0 = nl->wall_fluid_first[k]; e0 < nl->wall_fluid_first[k + 1]; e0 += PAIR_LANES) {
-            lanes_vector record[PAIR_LANES], field[PAIR_LANES];
-            for (int l = 0; l < PAIR_LANES; l++)
-                memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
-            lanes_transpose(record, field); /* field[q][l]: lane l's fluid neighbour's q-th field (pair_state) */
+            lanes_vector field[PAIR_LANES];
+            lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's fluid neighbour's q-th field (pair_state) */
             #pragma omp simd simdlen(PAIR_LANES)
             for (int l = 0; l < PAIR_LANES; l++) {
                 const int64_t e = e0 + l;

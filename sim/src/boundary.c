@@ -63,12 +63,8 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
     real r10[PAIR_LANES] = {0}, r11[PAIR_LANES] = {0}, r12[PAIR_LANES] = {0}, r20[PAIR_LANES] = {0};
     real r21[PAIR_LANES] = {0}, r22[PAIR_LANES] = {0};
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
-        /* the block's eight fluid records, one vector load each, transposed into one vector a field (as in
-         * interaction.c's fluid pair loop) */
-        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
-        for (int l = 0; l < PAIR_LANES; l++)
-            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
-        lanes_transpose(record, field);
+        lanes_vector field[PAIR_LANES];
+        lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's fluid neighbour's q-th field */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;

@@ -104,12 +104,8 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
     const int i = a - sim->wall_count;
     const int64_t first = nl->fluid_first[i], last = nl->fluid_first[i + 1];
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
-        /* the block's eight neighbour records, one vector load each, transposed into one vector a field: cheaper
-         * than assembling each field from eight scalar loads */
-        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
-        for (int l = 0; l < PAIR_LANES; l++)
-            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
-        lanes_transpose(record, field); /* field[q][l]: lane l's neighbour's q-th field, in pair_state's order */
+        lanes_vector field[PAIR_LANES];
+        lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's neighbour's q-th field (pair_state) */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
@@ -182,10 +178,8 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
     real m_xx[PAIR_LANES] = {0}, m_xy[PAIR_LANES] = {0}, m_yy[PAIR_LANES] = {0};
     real g_xx[PAIR_LANES] = {0}, g_xy[PAIR_LANES] = {0}, g_yx[PAIR_LANES] = {0}, g_yy[PAIR_LANES] = {0};
     for (int64_t e0 = first; e0 < last; e0 += PAIR_LANES) {
-        lanes_vector record[PAIR_LANES], field[PAIR_LANES]; /* as in fluid_pairs */
-        for (int l = 0; l < PAIR_LANES; l++)
-            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
-        lanes_transpose(record, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_pair_state) */
+        lanes_vector field[PAIR_LANES];
+        lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_pair_state) */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
@@ -285,10 +279,8 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
     for (int l = 0; l < PAIR_LANES; l++)
         best_gap[l] = search_m, best_entry[l] = -1, boulder[l] = 0;
     for (int64_t e0 = nl->wall_first[i]; e0 < nl->wall_first[i + 1]; e0 += PAIR_LANES) {
-        lanes_vector record[PAIR_LANES], field[PAIR_LANES];
-        for (int l = 0; l < PAIR_LANES; l++)
-            memcpy(&record[l], &st[index[e0 + l]], sizeof record[l]);
-        lanes_transpose(record, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_face_state) */
+        lanes_vector field[PAIR_LANES];
+        lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's wall neighbour's q-th field (wall_face_state) */
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;

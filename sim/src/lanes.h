@@ -63,6 +63,19 @@ static inline void lanes_transpose(const lanes_vector row[8], lanes_vector colum
     column[7] = LANES_SHUFFLE(u3, u7, 4, 5, 6, 7, 12, 13, 14, 15);
 }
 
+/* The records of entries index[0..7] of an array of records of 8 reals each (pair_state and the walls' records,
+ * sim_internal.h), one vector load each, transposed: field[q][l] is the q-th field of entry l's record. Cheaper than
+ * assembling each field from eight scalar loads, which is what GCC makes of record[index[l]].field in a vector
+ * loop (docs/performance.md). */
+static inline void lanes_gather_records(const void *records, const int32_t *index, lanes_vector field[8])
+{
+    const char *base = records;
+    lanes_vector record[8];
+    for (int l = 0; l < 8; l++)
+        memcpy(&record[l], base + (size_t)index[l] * sizeof(lanes_vector), sizeof record[l]);
+    lanes_transpose(record, field);
+}
+
 /* total[q] = lanes[q][0] + lanes[q][1] + ... + lanes[q][7], added in that order, for q = 0..7 */
 static inline void lanes_totals(const real *const lanes[8], real total[8])
 {
