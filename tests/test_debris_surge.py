@@ -15,6 +15,7 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
+import json
 import math
 import os
 import re
@@ -68,6 +69,16 @@ rc2, out2, err2 = tool("run", *sick_args)
 check("run: a member the health monitor stopped is skipped the next time, its last_good.vtp kept",
       rc == 0 and rc2 == 0 and stopped and os.path.getmtime(last_good) == stopped and
       "stopped by the health monitor earlier" in out2, err[-1000:] + out2 + err2[-1000:])
+# --continue-stopped takes such a member on from its last good state with a bound it meets, and records that
+rc3, out3, err3 = tool("run", *(sick_args[:-1] + ["health.max_density_deviation=0.5"]), "--continue-stopped")
+sick = os.path.join(WORK, "sick", "n0_s1_dp0.066")
+progress3 = json.load(open(os.path.join(sick, "progress.json")))
+with open(os.path.join(sick, "diagnostics.csv")) as f:
+    last_t = float(list(csv.DictReader(f))[-1]["time_s"])
+check("run: --continue-stopped continues a stopped member from its checkpoint to the end (status %s, last "
+      "diagnostics at %.3f s, continued with %s)" % (progress3.get("status"), last_t, progress3.get("continued_with")),
+      rc3 == 0 and progress3.get("status") == "done" and last_t > 0.19 and "--restart" in out3 and
+      progress3.get("continued_with") == [["health.max_density_deviation=0.5"]], out3 + err3[-1500:])
 
 params = open(os.path.join(RUNS, "n6_s1_dp0.066", "params.ini")).read()
 check("run: --set reaches the member's parameters (params.ini: margin_dp = 2)",

@@ -5,6 +5,7 @@ number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validat
 
   studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--seeds 5] [--dp 0.05] [--end-s 75]
         [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge] [--set NAME=VALUE ...]
+        [--continue-stopped]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
   studies/debris_surge/ensemble.py list [--counts ...] [--seeds ...] [--dp ...]
@@ -12,7 +13,9 @@ number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validat
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
 1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
 from its checkpoint, a finished one is skipped, and so is one the health monitor stopped, whose folder keeps its
-last good state). --member K runs only the K-th member of `list` (0-based), for a
+last good state; --continue-stopped continues such members from that state, passing the --set parameters, which
+must then be live ones such as health.max_density_deviation, and records them in progress.json). --member K runs
+only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
 density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every member's first run; `surge check`
 vets them before any member starts, and each member's params.ini records them. Disc members need --set
@@ -85,10 +88,19 @@ def run_member(args, count, seed, deadline):
     if progress["status"] == "done":
         print("%s: %s: done already" % (TOOL, folder), flush=True)
         return
+    continued = []
     if progress["status"] == "unhealthy":  # the same run would stop again; its last_good.vtp and checkpoint stay
-        print("%s: %s: stopped by the health monitor earlier (see its last_good.vtp); remove the folder to run it "
-              "again, or continue it with surge run --restart" % (TOOL, folder), flush=True)
-        return
+        if not args.continue_stopped:
+            print("%s: %s: stopped by the health monitor earlier (see its last_good.vtp); remove the folder to run it "
+                  "again, or continue it from its last good state with --continue-stopped and a --set that lets it "
+                  "through" % (TOOL, folder), flush=True)
+            return
+        if not os.path.isfile(os.path.join(folder, "checkpoint.bin")):
+            fail("%s: stopped by the health monitor, but its checkpoint.bin (the last good state) is missing" % folder)
+        continued = [item for setting in args.set for item in ("-s", setting)]
+        progress["status"] = "interrupted"  # run_resumable continues an interrupted member from its checkpoint
+        progress["continued_with"] = progress.get("continued_with", []) + [args.set]
+        study.write_progress(folder, progress)
     fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite", "-s", "numerics.dp_m=%g" % args.dp]
     if count > 0:
         fresh += ["-s", "boulders.placement=graded", "-s", "boulders.count=%d" % count, "-s", "boulders.seed=%d" % seed,
@@ -97,7 +109,7 @@ def run_member(args, count, seed, deadline):
         fresh += ["-s", setting]
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
               "-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
-    rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common, deadline)
+    rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common + continued, deadline)
     if rc != 4:
         progress["status"] = "done" if rc == 0 else "unhealthy"
         study.write_progress(folder, progress)
@@ -296,6 +308,9 @@ def main():
                            help="the surge program (default build/surge)")
             p.add_argument("--set", action="append", default=[], type=setting_arg, metavar="NAME=VALUE",
                            help="a parameter for every member, repeatable (vetted by surge check)")
+            p.add_argument("--continue-stopped", action="store_true",
+                           help="continue members the health monitor stopped from their last good state, with the "
+                                "--set parameters (live ones only, e.g. health.max_density_deviation=0.2)")
     c = sub.add_parser("collect", help="the members' statistics: table and box plots")
     c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"),
                    help="the members' folders (default runs/debris_surge)")
