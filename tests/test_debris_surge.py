@@ -69,6 +69,12 @@ rc2, out2, err2 = tool("run", *sick_args)
 check("run: a member the health monitor stopped is skipped the next time, its last_good.vtp kept",
       rc == 0 and rc2 == 0 and stopped and os.path.getmtime(last_good) == stopped and
       "stopped by the health monitor earlier" in out2, err[-1000:] + out2 + err2[-1000:])
+# --continue-stopped refuses a setting a restart cannot change, naming it, and leaves the member as it was
+rc_f, out_f, err_f = tool("run", *(sick_args[:-1] + ["numerics.ch=1.5"]), "--continue-stopped")
+check("run: --continue-stopped with a setting that is not live is refused, named, the member left stopped",
+      rc_f == 2 and "numerics.ch cannot change" in err_f and
+      json.load(open(os.path.join(WORK, "sick", "n0_s1_dp0.066", "progress.json")))["status"] == "unhealthy",
+      out_f + err_f[-1000:])
 # --continue-stopped takes such a member on from its last good state with a bound it meets, and records that
 rc3, out3, err3 = tool("run", *(sick_args[:-1] + ["health.max_density_deviation=0.5"]), "--continue-stopped")
 sick = os.path.join(WORK, "sick", "n0_s1_dp0.066")

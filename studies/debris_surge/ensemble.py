@@ -31,6 +31,7 @@ import argparse
 import csv
 import math
 import os
+import re
 import subprocess
 import sys
 import threading
@@ -115,6 +116,22 @@ def run_member(args, count, seed, deadline):
         study.write_progress(folder, progress)
 
 
+def live_parameters(surge):
+    """The section.key names that `surge params` marks live (those a restart may change)."""
+    listing = subprocess.run([surge, "params"], capture_output=True, text=True)
+    if listing.returncode != 0:
+        fail("%s params failed: %s" % (surge, listing.stderr.strip()[-500:]))
+    live, section = set(), None
+    for line in listing.stdout.splitlines():
+        heading = re.match(r"## \[(\w+)\]", line)
+        if heading:
+            section = heading.group(1)
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if section and len(cells) >= 6 and cells[0].startswith("`") and cells[5] == "yes":
+            live.add("%s.%s" % (section, cells[0].strip("`")))
+    return live
+
+
 def command_run(args):
     chosen = members(args)
     if args.member is not None:
@@ -128,6 +145,11 @@ def command_run(args):
         checked = subprocess.run(vet, capture_output=True, text=True)
         if checked.returncode != 0:
             fail("--set: %s" % (checked.stderr.strip().splitlines() or ["surge check failed"])[-1])
+    if args.continue_stopped:
+        fixed = sorted(set(setting.split("=", 1)[0] for setting in args.set) - live_parameters(args.surge))
+        if fixed:
+            fail("--continue-stopped: %s cannot change when a run continues from its checkpoint (only live "
+                 "parameters can; see surge params)" % ", ".join(fixed))
     deadline = time.time() + args.budget_s if args.budget_s > 0 else None
     os.makedirs(args.runs_dir, exist_ok=True)
     queue, lock = list(chosen), threading.Lock()
