@@ -86,6 +86,21 @@ check("run: --continue-stopped continues a stopped member from its checkpoint to
       rc3 == 0 and progress3.get("status") == "done" and last_t > 0.19 and "--restart" in out3 and
       progress3.get("continued_with") == [["health.max_density_deviation=0.5"]], out3 + err3[-1500:])
 
+# a longer --end-s takes a finished member on from its last checkpoint (not from the start), recorded; the same
+# --end-s again leaves it alone
+rc4, out4, err4 = tool("run", *(sick_args[:sick_args.index("--end-s") + 1] + ["0.3", "--surge", SURGE]))
+progress4 = json.load(open(os.path.join(sick, "progress.json")))
+with open(os.path.join(sick, "diagnostics.csv")) as f:
+    times4 = [float(r["time_s"]) for r in csv.DictReader(f)]
+rc5, out5, err5 = tool("run", *(sick_args[:sick_args.index("--end-s") + 1] + ["0.3", "--surge", SURGE]))
+check("run: a longer --end-s continues a finished member from its checkpoint to the new end (status %s, "
+      "extended from %s, diagnostics %.3f-%.3f s, times increasing), and a second run skips it"
+      % (progress4.get("status"), progress4.get("extended_from_s"), times4[0], times4[-1]),
+      rc4 == 0 and progress4.get("status") == "done" and "--restart" in out4 and
+      [round(t, 2) for t in progress4.get("extended_from_s", [])] == [0.2] and times4[-1] > 0.29 and
+      all(b > a for a, b in zip(times4, times4[1:])) and rc5 == 0 and "done already" in out5,
+      out4 + err4[-1500:] + out5)
+
 params = open(os.path.join(RUNS, "n6_s1_dp0.066", "params.ini")).read()
 check("run: --set reaches the member's parameters (params.ini: margin_dp = 2)",
       re.search(r"^margin_dp = 2$", params, re.M) is not None, params[:2000])

@@ -12,7 +12,9 @@ number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validat
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
 1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
-from its checkpoint, a finished one is skipped, and so is one the health monitor stopped, whose folder keeps its
+from its checkpoint, a finished one is skipped (or, when --end-s asks for more flow than its checkpoint holds,
+continued from there to the new end, recorded in progress.json as extended_from_s), and so is one the health
+monitor stopped, whose folder keeps its
 last good state; --continue-stopped continues such members from that state, passing the --set parameters, which
 must then be live ones such as health.max_density_deviation, and records them in progress.json). --member K runs
 only the K-th member of `list` (0-based), for a
@@ -87,8 +89,17 @@ def run_member(args, count, seed, deadline):
     except ValueError as e:
         fail(str(e))
     if progress["status"] == "done":
-        print("%s: %s: done already" % (TOOL, folder), flush=True)
-        return
+        checkpoint = os.path.join(folder, "checkpoint.bin")
+        try:
+            reached_s = study.checkpoint_time(checkpoint)[1] if os.path.isfile(checkpoint) else None
+        except ValueError as e:
+            fail(str(e))
+        if reached_s is None or reached_s >= args.end_s - 1e-6:
+            print("%s: %s: done already" % (TOOL, folder), flush=True)
+            return
+        progress["status"] = "interrupted"  # a longer --end-s continues a finished member from its last checkpoint
+        progress["extended_from_s"] = progress.get("extended_from_s", []) + [round(reached_s, 6)]
+        study.write_progress(folder, progress)
     continued = []
     if progress["status"] == "unhealthy":  # the same run would stop again; its last_good.vtp and checkpoint stay
         if not args.continue_stopped:
