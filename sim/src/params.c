@@ -137,14 +137,20 @@ static const surge_param_info registry[] = {
     {"implicit", "max_iterations", SURGE_PARAM_INT, "-", 2000, 1, 1000000, true, NULL,
      "Implicit scheme: iterations allowed per linear solve; a solve that needs more fails the run (health).",
      OFF(implicit.max_iterations)},
-    {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 0.1, 0, 1, true, NULL,
+    {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (1 - rho_kernel/rho0)/dt^2 in the "
-     "pressure equation, which holds the particles' spacing at the rest density against drift (0: off).",
+     "pressure equation, which holds the particles' spacing at the rest density against drift (0: off); within a "
+     "kernel's reach of the free surface, where the kernel sum is truncated, only compression counts.",
      OFF(implicit.density_correction)},
     {"implicit", "surface_threshold", SURGE_PARAM_REAL, "-", 1.35, 0, 2, true, NULL,
      "Implicit scheme: a particle whose div r (2 in the bulk) is below this is on the free surface and holds p = 0. "
      "On a square lattice the top row reads 1.15-1.25 and the second 1.49-1.85 for C_h 1.0-1.8 (docs/method.md).",
      OFF(implicit.surface_threshold)},
+    {"implicit", "surface_kernel_margin", SURGE_PARAM_REAL, "-", 0.03, 0, 1, true, NULL,
+     "Implicit scheme: a particle whose kernel sum (fluid and walls, over the lattice's) is below that of the second "
+     "row under a flat free surface (0.988, 0.946, 0.869 at C_h 1.0, 1.3, 1.8) by more than this is on the free "
+     "surface too: at a contact line (a front's foot on the bed) the wall raises div r but not the kernel sum.",
+     OFF(implicit.surface_kernel_margin)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

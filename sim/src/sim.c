@@ -1,5 +1,6 @@
 /* The solver: scene set-up, the choice of time-stepping scheme (step_explicit.c, step_implicit.c), snapshots,
  * diagnostics and the state hash. */
+#include <limits.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,12 +10,12 @@
 
 /* sum_b dp^2 W(r_ab) over a square lattice of spacing dp, the particle itself included: the kernel sum of an
  * incompressible fluid on that lattice is rho0 times this (1.001 at C_h 1.5, 1.006 at C_h 1.0), not rho0 */
-static double lattice_kernel_sum(const kernel2d *k, double dp)
+static double lattice_kernel_sum(const kernel2d *k, double dp, int rows_above)
 {
     const int reach = (int)ceil(2.0 * k->h / dp);
     double sum = 0;
     for (int i = -reach; i <= reach; i++)
-        for (int j = -reach; j <= reach; j++)
+        for (int j = -reach; j <= (rows_above < reach ? rows_above : reach); j++)
             sum += dp * dp * kernel2d_w(k, (real)(dp * sqrt((double)(i * i + j * j))));
     return sum;
 }
@@ -62,7 +63,8 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->derived.particle_mass_kg = sim->mass;
     sim->eta2 = 0.01 * sim->derived.h_m * sim->derived.h_m;
     sim->kernel = kernel2d_make(sim->derived.h_m);
-    sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp);
+    sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp, INT_MAX);
+    sim->second_row_kernel_ratio = lattice_kernel_sum(&sim->kernel, dp, 1) / sim->lattice_kernel_sum;
     sim->list_lookahead_s = p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
                             : 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
                                                                 : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);

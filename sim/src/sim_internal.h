@@ -102,6 +102,8 @@ struct surge_sim {
     kernel2d kernel;
     double rho0, b_pa, eta2, mass;
     double lattice_kernel_sum; /* sum_b dp^2 W_ab over a square lattice at rest: the kernel sum's own bias */
+    double second_row_kernel_ratio; /* the same sum one row under a flat free surface, over lattice_kernel_sum
+                                     * (0.988, 0.946, 0.869 at C_h 1.0, 1.3, 1.8) */
     double gx, gy;             /* body acceleration (tilted gravity + body force) */
     double rho_h_per_m;        /* hydrostatic density gradient rho0 g_n / c0^2 (density diffusion) */
 

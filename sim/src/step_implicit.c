@@ -4,10 +4,12 @@
  * t_n, everything evaluated at the step's start positions:
  *  1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure (so a
  *     fluid at rest stays at rest), no-slip walls by their mDBC mirror 2 v_wall - v_ghost;
- *  2. -lap phi = -(rho0/dt) div v* + alpha rho0 (rho_k/rho0 - 1)/dt^2, phi = 0 on free-surface particles and, at a
- *     wall particle, phi_w = phi_ghost - (rho0/dt) (v*_ghost - v_wall).(r_ghost - r_w): the Neumann condition that
- *     leaves no velocity through the wall (the density source after Asai et al. 2012);
- *  3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi, r_n+1 = r_n + dt v_n+1 + the shift.
+ *  2. -lap phi = -(rho0/dt) div v*, phi = 0 on free-surface particles and, at a wall particle, phi_w = phi_ghost
+ *     with the wall's normal velocity in div v* (the Neumann condition that leaves no velocity through the wall);
+ *     then, with the same operator, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2, the rest-density correction (the
+ *     source after Asai et al. 2012), which moves the particles and not their velocities;
+ *  3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi, r_n+1 = r_n + dt v_n+1 - dt^2 grad psi / rho0 + the
+ *     shift.
  * The pair coefficients of a step are computed once into arrays along the neighbour lists; the solves (BiCGSTAB
  * with a Jacobi preconditioner, matrix-free) then only gather. Every particle gathers in list order and every dot
  * product sums in fixed blocks, so the results do not depend on the thread count. */
@@ -40,6 +42,8 @@ typedef struct implicit_work {
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
     double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
+    double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
+    double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
 } implicit_work;
 
@@ -95,6 +99,7 @@ static int reserve_work(surge_sim *sim)
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
+            GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw))
             return -1;
     }
@@ -109,7 +114,7 @@ void step_implicit_free(surge_sim *sim)
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->wall_x, w->wall_y,
-                      w->neumann_pa, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -239,7 +244,11 @@ static void geometry(surge_sim *sim)
                 grad_c_x += vf * dx, grad_c_y += vf * dy;
             }
         }
-        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold;
+        w->kernel_ratio[i] = mass * (alpha + kernel_w) * inv_lattice / sim->rho0;
+        /* a free-surface particle: div r low, or a kernel sum short of the second row's under a flat surface (a
+         * contact line, where the wall raises div r; docs/method.md) */
+        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold ||
+                          w->kernel_ratio[i] < sim->second_row_kernel_ratio - sim->params.implicit.surface_kernel_margin;
         m_xx = wm_xx, m_xy = wm_xy, m_yy = wm_yy;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
@@ -247,7 +256,6 @@ static void geometry(surge_sim *sim)
         } else {
             w->minv_xx[i] = 1, w->minv_xy[i] = 0, w->minv_yy[i] = 1;
         }
-        w->kernel_ratio[i] = mass * (alpha + kernel_w) * inv_lattice / sim->rho0;
         w->weighted_rx[i] = wrx, w->weighted_ry[i] = wry;
         sim->div_r[a] = div_r;
         sim->inv_rho[a] = (real)(1.0 / sim->rho0);
@@ -509,7 +517,7 @@ static void fail_solve(surge_sim *sim, const char *what, int iterations, double 
              "in %d iterations; implicit.max_iterations = %d, tolerance %g; try a smaller implicit.cfl)",
              surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, t_n, what, residual,
              iterations, sim->params.implicit.max_iterations,
-             what[0] == 'p' ? sim->params.implicit.pressure_tolerance : sim->params.implicit.viscous_tolerance);
+             what[0] != 'v' ? sim->params.implicit.pressure_tolerance : sim->params.implicit.viscous_tolerance);
 }
 
 int step_implicit(surge_sim *sim)
@@ -628,8 +636,11 @@ int step_implicit(surge_sim *sim)
         }
         /* div v = tr(G M^-1) */
         const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
-        const double compression = sim->near_surface[a] ? 0.0 : w->kernel_ratio[i] - 1.0;
-        w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v + alpha * rho0 * compression / (dt * dt);
+        /* near the surface the kernel sum is truncated: a deficit there is not an expansion, an excess is a
+         * compression (clumped particles, which nothing else pushes apart where the pressure is near 0) */
+        const double compression = sim->near_surface[a] ? fmax(0.0, w->kernel_ratio[i] - 1.0) : w->kernel_ratio[i] - 1.0;
+        w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
+        w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v;
         w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
         w->x[i] = 0; /* the correction starts from none */
     }
@@ -641,6 +652,32 @@ int step_implicit(surge_sim *sim)
         sim_restore_step_start(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
+    }
+    /* 2b. the rest-density correction psi, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2 with the same operator, moves
+     * the particles by -dt^2 grad psi / rho0 and leaves their velocities alone: a spacing error is not a flow, and
+     * in one equation with the divergence its kicks were 0.34 u_max in Poiseuille's start-up (docs/method.md) */
+    if (alpha > 0) {
+        memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
+        memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
+        memset(w->x, 0, (size_t)nf * sizeof *w->x);
+        const int density_iterations = solve(sim, pressure_operator, nf, prm->implicit.pressure_tolerance,
+                                             prm->implicit.max_iterations, &residual);
+        if (density_iterations < 0) {
+            fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
+            sim_restore_step_start(sim);
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
+        sim->pressure_iterations += density_iterations;
+        wall_pressures(sim, w->x);
+        pressure_gradient(sim, w->x);
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i], w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i];
+        memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
+    } else {
+        memset(w->density_dx, 0, (size_t)nf * sizeof *w->density_dx);
+        memset(w->density_dy, 0, (size_t)nf * sizeof *w->density_dy);
     }
     wall_pressures(sim, w->x);
 
@@ -678,7 +715,8 @@ int step_implicit(surge_sim *sim)
     shifting_compute(sim, dt);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
-        double dx = dt * sim->vx[a] + sim->shift_x[a], dy = dt * sim->vy[a] + sim->shift_y[a];
+        double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first];
+        double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first];
         /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
          * at the reach (the explicit scheme's face repulsion acts over many small steps; one large step needs the
          * constraint itself; docs/method.md) */

@@ -112,6 +112,7 @@ typedef struct surge_params {
         int max_iterations;        /* per solve; more is a health failure */
         double density_correction; /* alpha: weight of the rest-density source in the pressure equation */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
+        double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */
