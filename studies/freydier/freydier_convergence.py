@@ -4,7 +4,8 @@ its own folder, resumable from checkpoints, and appends one row per finished run
 error against wall time (one point per run).
 
   studies/freydier/freydier_convergence.py run [--cases id1,id2] [--dp 0.001,0.0005] [--ch 1,1.3,1.5,1.8,2.2]
-        [--shifting lind] [--shape block] [--continuity renormalised|plain] [--end-s 40] [--threads 2]
+        [--shifting lind] [--shape block] [--continuity renormalised|plain] [--scheme explicit|implicit]
+        [--end-s 40] [--threads 2]
         [--budget-s SECONDS]
         [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
   studies/freydier/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
@@ -35,7 +36,8 @@ sys.path.insert(0, os.path.join(ROOT, "tools"))
 from surgepy import cli_checks, study  # noqa: E402
 
 COLUMNS = ["case", "dp_m", "ch", "shifting", "shape", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity", "corner"]
+           "zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970", "status", "continuity", "corner",
+           "scheme"]
 METRICS = ["zeta_f", "zeta_h", "zeta_fs", "zeta_u_076", "zeta_u_150", "zeta_u_970"]
 
 
@@ -47,10 +49,17 @@ PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked")
 CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene.c)
 
 
-def run_name(case, dp, ch, shifting, shape, continuity):
-    """Runs with the plain continuity equation keep the names they had before the choice existed."""
-    return "%s_dp%g_ch%g_%s_%s%s_corner-%s" % (case, dp, ch, shifting, shape,
-                                              "" if continuity == "plain" else "_" + continuity, CORNER)
+def run_name(case, dp, ch, shifting, shape, continuity, scheme):
+    """Runs with the plain continuity equation, or the explicit scheme, keep the names they had before the choice
+    existed."""
+    return "%s_dp%g_ch%g_%s_%s%s_corner-%s%s" % (case, dp, ch, shifting, shape,
+                                                "" if continuity == "plain" else "_" + continuity, CORNER,
+                                                "" if scheme == "explicit" else "_" + scheme)
+
+
+def scheme_of(row):
+    """Rows written before the scheme column existed ran the explicit scheme."""
+    return row.get("scheme") or "explicit"
 
 
 def continuity_of(row):
@@ -66,11 +75,11 @@ def corner_of(row):
 def finished(rows):
     """Grid points with a successful run; a failed one stays in the CSV as a record and is run again (fresh)."""
     return {(r["case"], float(r["dp_m"]), float(r["ch"]), r["shifting"], r.get("shape", "block"),
-             continuity_of(r)) for r in rows if r["status"] == "ok" and corner_of(r) == CORNER}
+             continuity_of(r), scheme_of(r)) for r in rows if r["status"] == "ok" and corner_of(r) == CORNER}
 
 
 def run_one(args, case, dp, ch, deadline):
-    name = run_name(case, dp, ch, args.shifting, args.shape, args.continuity)
+    name = run_name(case, dp, ch, args.shifting, args.shape, args.continuity, args.scheme)
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.progress_interval_s=60", "--threads",
               str(args.threads)]
@@ -78,13 +87,13 @@ def run_one(args, case, dp, ch, deadline):
              "-s", "numerics.dp_m=%g" % dp, "-s", "numerics.ch=%g" % ch, "-s", "walls.layers=0",
              "-s", "shifting.form=%s" % args.shifting, "-s", "fluid.shape=%s" % args.shape,
              "-s", "numerics.continuity_correction=%s" % ("true" if args.continuity == "renormalised" else "false"),
-             "-o", folder, "--overwrite"]  # the study owns its folders: a fresh start replaces a failed piece
+             "-s", "numerics.scheme=%s" % args.scheme, "-o", folder, "--overwrite"]  # the study owns its folders: a fresh start replaces a failed piece
     rc, progress = study.run_resumable("freydier_convergence: " + name, folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
     steps, sim_time = study.particle_steps("freydier_convergence", folder)
     row = {"case": case, "dp_m": dp, "ch": ch, "shifting": args.shifting, "shape": args.shape,
-           "continuity": args.continuity, "corner": CORNER,
+           "continuity": args.continuity, "corner": CORNER, "scheme": args.scheme,
            "threads": args.threads, "wall_s": "%.1f" % progress["wall_s"], "particle_steps": steps,
            "sim_time_s": "%.3f" % sim_time}
     if rc == 0:
@@ -116,7 +125,7 @@ def command_run(args):
     for case in args.cases:
         for dp in args.dp:
             for ch in args.ch:
-                if (case, dp, ch, args.shifting, args.shape, args.continuity) in done:
+                if (case, dp, ch, args.shifting, args.shape, args.continuity, args.scheme) in done:
                     continue
                 if deadline and time.time() > deadline:
                     print("freydier_convergence: budget spent; run again to continue", flush=True)
@@ -150,7 +159,8 @@ def command_chart(args):
             for continuity in ("plain", "renormalised"):
                 for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
                     sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp
-                           and continuity_of(r) == continuity and corner_of(r) == CORNER]
+                           and continuity_of(r) == continuity and corner_of(r) == CORNER
+                           and scheme_of(r) == "explicit"]
                     if not sel:
                         continue
                     xs = [float(r["wall_s"]) for r in sel]
@@ -161,6 +171,18 @@ def command_chart(args):
                     for r, x, y in zip(sel, xs, ys):
                         ax.annotate("C_h %s, %s thr" % (r["ch"], r["threads"]), (x, y), fontsize=6, xytext=(3, 3),
                                     textcoords="offset points")
+        for case in ("id1", "id2"):
+            for dp in sorted({float(r["dp_m"]) for r in rows if r["case"] == case}):
+                sel = [r for r in rows if r["case"] == case and float(r["dp_m"]) == dp and scheme_of(r) == "implicit"
+                       and corner_of(r) == CORNER]
+                if not sel:
+                    continue
+                xs, ys = [float(r["wall_s"]) for r in sel], [float(r[metric]) for r in sel]
+                ax.scatter(xs, ys, marker="*", s=90, color=colour_of[dp],
+                           label="%s dp=%g mm, implicit scheme" % (case.upper(), dp * 1e3))
+                for r, x, y in zip(sel, xs, ys):
+                    ax.annotate("C_h %s, %s thr" % (r["ch"], r["threads"]), (x, y), fontsize=6, xytext=(3, 3),
+                                textcoords="offset points")
         ax.axhline(targets[metric], color="grey", ls="--", lw=1)
         ax.set_xscale("log")
         ax.set_yscale("log")
@@ -188,6 +210,8 @@ def main():
     run.add_argument("--shape", default="block", choices=["block", "lubrication"])
     run.add_argument("--continuity", default="renormalised", choices=["renormalised", "plain"],
                      help="numerics.continuity_correction true (renormalised, the default) or false (plain)")
+    run.add_argument("--scheme", default="explicit", choices=["explicit", "implicit"],
+                     help="numerics.scheme (docs/method.md); implicit runs are drawn as stars")
     run.add_argument("--end-s", type=cli_checks.positive, default=40.0)
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
