@@ -134,14 +134,24 @@ static const surge_param_info registry[] = {
     {"implicit", "viscous_tolerance", SURGE_PARAM_REAL, "-", 1e-8, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the implicit viscous solve stops.",
      OFF(implicit.viscous_tolerance)},
+    {"implicit", "density_tolerance", SURGE_PARAM_REAL, "-", 1e-2, 1e-14, 0.5, true, NULL,
+     "Implicit scheme: relative residual at which the rest-density solve (psi, which moves particles back to the "
+     "rest spacing) stops; what it leaves is corrected at the next step (1e-2 needs about a tenth of 1e-6's "
+     "iterations; docs/method.md).",
+     OFF(implicit.density_tolerance)},
     {"implicit", "max_iterations", SURGE_PARAM_INT, "-", 2000, 1, 1000000, true, NULL,
      "Implicit scheme: iterations allowed per linear solve; a solve that needs more fails the run (health).",
      OFF(implicit.max_iterations)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
-     "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (1 - rho_kernel/rho0)/dt^2 in the "
-     "pressure equation, which holds the particles' spacing at the rest density against drift (0: off); within a "
-     "kernel's reach of the free surface, where the kernel sum is truncated, only compression counts.",
+     "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "
+     "solve (psi) that moves the particles back to the rest spacing against drift (0: off); within a kernel's reach "
+     "of the free surface, where the kernel sum is truncated, only compression counts.",
      OFF(implicit.density_correction)},
+    {"implicit", "anti_clumping", SURGE_PARAM_REAL, "-", 1, 0, 10, true, NULL,
+     "Implicit scheme: w in the shift -2 w (rho_kernel/rho0 - 1) h^2 grad C that moves particles whose kernel sum is "
+     "above the rest density's away from the neighbours crowding them, free-surface particles included; zero where "
+     "the spacing is at rest or wider (0: off; docs/method.md).",
+     OFF(implicit.anti_clumping)},
     {"implicit", "surface_threshold", SURGE_PARAM_REAL, "-", 1.35, 0, 2, true, NULL,
      "Implicit scheme: a particle whose div r (2 in the bulk) is below this is on the free surface and holds p = 0. "
      "On a square lattice the top row reads 1.15-1.25 and the second 1.49-1.85 for C_h 1.0-1.8 (docs/method.md).",

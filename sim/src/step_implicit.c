@@ -517,7 +517,8 @@ static void fail_solve(surge_sim *sim, const char *what, int iterations, double 
              "in %d iterations; implicit.max_iterations = %d, tolerance %g; try a smaller implicit.cfl)",
              surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, t_n, what, residual,
              iterations, sim->params.implicit.max_iterations,
-             what[0] != 'v' ? sim->params.implicit.pressure_tolerance : sim->params.implicit.viscous_tolerance);
+             what[0] == 'v' ? sim->params.implicit.viscous_tolerance
+             : what[0] == 'r' ? sim->params.implicit.density_tolerance : sim->params.implicit.pressure_tolerance);
 }
 
 int step_implicit(surge_sim *sim)
@@ -614,7 +615,7 @@ int step_implicit(surge_sim *sim)
         w->neumann_pa[kw] = 0;
         w->wall_x[kw] = gvx - into * sim->ghost_dx[kw], w->wall_y[kw] = gvy - into * sim->ghost_dy[kw];
     }
-    const double alpha = prm->implicit.density_correction;
+    const double alpha = prm->implicit.density_correction, h = sim->derived.h_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
@@ -660,7 +661,7 @@ int step_implicit(surge_sim *sim)
         memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
         memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
         memset(w->x, 0, (size_t)nf * sizeof *w->x);
-        const int density_iterations = solve(sim, pressure_operator, nf, prm->implicit.pressure_tolerance,
+        const int density_iterations = solve(sim, pressure_operator, nf, prm->implicit.density_tolerance,
                                              prm->implicit.max_iterations, &residual);
         if (density_iterations < 0) {
             fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
@@ -672,8 +673,25 @@ int step_implicit(surge_sim *sim)
         wall_pressures(sim, w->x);
         pressure_gradient(sim, w->x);
         #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < nf; i++)
-            w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i], w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i];
+        for (int i = 0; i < nf; i++) {
+            /* plus a shift where the kernel sum says compressed, -2 w (rho_k/rho0 - 1) h^2 grad C with grad C =
+             * sum_b V_b grad W_ab (walls by their wetness): zero on a regular lattice and where the spacing is at
+             * rest or wider, it pushes apart particles that have closed on each other, also on the free surface,
+             * where psi is 0 (docs/method.md) */
+            const double compression = fmax(0.0, w->kernel_ratio[i] - 1.0);
+            double sx = 0, sy = 0;
+            if (compression > 0) {
+                for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                    sx += w->fluid_gx[e], sy += w->fluid_gy[e];
+                for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+                    const double wet = w->wetness[nl->wall_index[e]];
+                    sx += wet * w->wall_gx[e], sy += wet * w->wall_gy[e];
+                }
+            }
+            const double shift = 2.0 * prm->implicit.anti_clumping * compression * h * h;
+            w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i] - shift * sx;
+            w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i] - shift * sy;
+        }
         memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
     } else {
         memset(w->density_dx, 0, (size_t)nf * sizeof *w->density_dx);

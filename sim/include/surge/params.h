@@ -109,8 +109,10 @@ typedef struct surge_params {
         double cfl;                /* dt = cfl min(h / u_max, sqrt(h / |g|)) */
         double pressure_tolerance; /* relative residual of the pressure Poisson solve */
         double viscous_tolerance;  /* relative residual of the implicit viscous solve */
+        double density_tolerance;  /* relative residual of the rest-density solve (psi) */
         int max_iterations;        /* per solve; more is a health failure */
-        double density_correction; /* alpha: weight of the rest-density source in the pressure equation */
+        double density_correction; /* alpha: weight of the rest-density source (psi's solve) */
+        double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
         double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
     } implicit;
