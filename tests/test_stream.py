@@ -491,7 +491,8 @@ def group_inputs():
 
     # idle TCP connections cannot take the file descriptors the outputs need (issue #24, D2): the run starts with
     # a soft limit of 256 open files, 400 plain connections arrive at its control and publisher ports, and it must
-    # still write every snapshot and finish
+    # still write every snapshot and finish. It starts paused and is resumed once the connections are held, so a
+    # fast machine cannot finish the run before they arrive (it did: 202 connected, 2026-11-26)
     import resource
     import socket
     probe = socket.socket()
@@ -503,7 +504,7 @@ def group_inputs():
     shutil.rmtree(out, ignore_errors=True)
     proc = subprocess.Popen([SURGE, "run", TANK, "-o", out, "--threads", "1", "-s", "time.end_s=0.3", "-s",
                              "output.snapshot_interval_s=0.01", "-s", "output.progress_interval_s=0", "--control",
-                             str(port), "--publish", str(port + 1)], stdout=subprocess.DEVNULL,
+                             str(port), "--publish", str(port + 1), "--paused"], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"),
                             preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (min(256, hard), hard)))
     held = []
@@ -514,6 +515,12 @@ def group_inputs():
                 held.append(socket.create_connection(("127.0.0.1", target), timeout=1))
             except OSError:
                 time.sleep(0.01)
+    resume = ctx.socket(zmq.REQ)
+    resume.setsockopt(zmq.LINGER, 0)
+    resume.connect("tcp://127.0.0.1:%d" % port)
+    resume.send(b'{"cmd": "resume"}')
+    resumed = resume.poll(20000)
+    resume.close()
     try:
         _, err_text = proc.communicate(timeout=120)
     except subprocess.TimeoutExpired:
@@ -523,8 +530,9 @@ def group_inputs():
         c.close()
     snaps = [f for f in os.listdir(out) if f.startswith("snap_")] if os.path.isdir(out) else []
     check("inputs: 400 idle TCP connections under a 256-file limit cost no output (%d connected)" % len(held),
-          proc.returncode == 0 and len(held) >= 300 and len(snaps) >= 25,
-          "exit %s, %d snapshots: %s" % (proc.returncode, len(snaps), (err_text or "").strip()[-400:]))
+          proc.returncode == 0 and len(held) >= 300 and len(snaps) >= 25 and resumed,
+          "exit %s, %d snapshots, resume answered %s: %s" % (proc.returncode, len(snaps), bool(resumed),
+                                                             (err_text or "").strip()[-400:]))
 
 
 # ---------------------------------------------------------------------------------------------------------------
