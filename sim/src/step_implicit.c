@@ -29,6 +29,8 @@ typedef struct implicit_work {
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
     real *wall_w, *wall_gx, *wall_gy;    /* per wall-list entry */
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
+    real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (assemble_pressure) */
+    double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
     uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
     real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
     double *wall_sum;                    /* per fixed wall: sum of dp^2 W of the walls at its ghost node (fixed) */
@@ -77,12 +79,12 @@ static int reserve_work(surge_sim *sim)
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
     const size_t me = (size_t)nl->wall_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
-        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe))
+        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe))
             return -1;
         w->fluid_cap = fe;
     }
     if (we > w->wall_cap || !w->wall_w) {
-        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we))
+        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we))
             return -1;
         w->wall_cap = we;
     }
@@ -95,7 +97,7 @@ static int reserve_work(surge_sim *sim)
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(fixed, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
@@ -111,7 +113,8 @@ void step_implicit_free(surge_sim *sim)
     implicit_work *w = sim->implicit;
     if (!w)
         return;
-    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w, w->dry, w->wetness, w->wall_sum,
+    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
+                      w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
@@ -360,29 +363,51 @@ static void pressure_gradient(surge_sim *sim, const double *x)
 
 /* -lap p, corrected for the kernel's truncation: sum_b w_ab (p_a - p_b - r_ab . grad p_a), which is exact (zero)
  * for a linear field also next to the free surface and the walls, where the plain sum is not; p = 0 held on
- * free-surface particles (their rows are the identity) */
+ * free-surface particles (their rows are the identity). With grad p_a = M^-1 sum_b V_b (p_b - p_a) f r_ab (walls
+ * by their wetness) and u_a = M^-1 sum_b w_ab r_ab, each neighbour's term is (w_ab + q_ab)(p_a - p_b) with
+ * q_ab = u_a . V_b f r_ab: the step's coefficients, computed once here for the two solves (phi and psi) that use
+ * them, so that an iteration is one gather (a free-surface neighbour's coefficient is 0, its p held at 0). */
+static void assemble_pressure(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const double wrx = w->weighted_rx[i], wry = w->weighted_ry[i];
+        const double ux = w->minv_xx[i] * wrx + w->minv_xy[i] * wry, uy = w->minv_xy[i] * wrx + w->minv_yy[i] * wry;
+        double diag = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const double c = w->fluid_w[e] + ux * w->fluid_gx[e] + uy * w->fluid_gy[e];
+            diag += c;
+            w->fluid_pc[e] = (real)(w->fixed[nl->fluid_index[e] - sim->wall_count] ? 0.0 : -c);
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const double c = w->wall_w[e] + w->wetness[nl->wall_index[e]] * (ux * w->wall_gx[e] + uy * w->wall_gy[e]);
+            diag += c;
+            w->wall_pc[e] = (real)-c;
+        }
+        w->pressure_diag[i] = w->fixed[i] ? 1.0 : diag;
+    }
+}
+
+/* The operator of assemble_pressure applied to x, the walls at the values wall_pressures() gives them */
 static void pressure_operator(surge_sim *sim, const double *x, double *out)
 {
     implicit_work *w = sim->implicit;
     const neighbour_lists *nl = &sim->neighbours;
     const int nf = sim->count - sim->wall_count;
     wall_pressures(sim, x);
-    pressure_gradient(sim, x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
-        if (w->fixed[i]) {
-            out[i] = x[i];
-            continue;
+        double sum = w->pressure_diag[i] * x[i];
+        if (!w->fixed[i]) {
+            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                sum += w->fluid_pc[e] * x[nl->fluid_index[e] - sim->wall_count];
+            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+                sum += w->wall_pc[e] * w->wall_x[nl->wall_index[e]];
         }
-        const double pa = x[i];
-        double sum = 0;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int j = nl->fluid_index[e] - sim->wall_count;
-            sum += w->fluid_w[e] * (pa - (w->fixed[j] ? 0.0 : x[j]));
-        }
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
-            sum += w->wall_w[e] * (pa - w->wall_x[nl->wall_index[e]]);
-        out[i] = sum - (w->weighted_rx[i] * w->grad_x[i] + w->weighted_ry[i] * w->grad_y[i]);
+        out[i] = sum;
     }
 }
 
@@ -645,6 +670,7 @@ int step_implicit(surge_sim *sim)
         w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
         w->x[i] = 0; /* the correction starts from none */
     }
+    assemble_pressure(sim);
     iterations = solve(sim, pressure_operator, nf, prm->implicit.pressure_tolerance, prm->implicit.max_iterations,
                        &residual);
     sim->pressure_iterations = iterations, sim->pressure_residual = residual;
