@@ -2,7 +2,7 @@
 # Installs the Debian packages surge needs (when missing; apt-get, as root) and builds it in Release into build/.
 set -e
 cd "$(dirname "$0")/.."
-packages="build-essential cmake pkg-config libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core ffmpeg libzmq3-dev libcjson-dev python3 python3-numpy python3-zmq python3-matplotlib"
+packages="build-essential cmake pkg-config libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core ffmpeg libzmq3-dev libcjson-dev libhypre-dev python3 python3-numpy python3-zmq python3-matplotlib"
 missing=""
 for p in $packages; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"

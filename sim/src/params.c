@@ -142,6 +142,12 @@ static const surge_param_info registry[] = {
     {"implicit", "max_iterations", SURGE_PARAM_INT, "-", 2000, 1, 1000000, true, NULL,
      "Implicit scheme: iterations allowed per linear solve; a solve that needs more fails the run (health).",
      OFF(implicit.max_iterations)},
+    {"implicit", "preconditioner", SURGE_PARAM_ENUM, "-", SURGE_PRECONDITIONER_AUTO, 0, 2, false, "jacobi|amg|auto",
+     "Implicit scheme: how the linear solves are preconditioned: jacobi (matrix-free BiCGSTAB with the diagonal, on "
+     "the neighbour lists), amg (the assembled matrices, hypre's BoomerAMG-preconditioned BiCGSTAB: a few iterations "
+     "after a setup each step) or auto (amg from 2,500 fluid particles, where it starts to pay; docs/method.md, "
+     "\"Linear solvers\").",
+     OFF(implicit.preconditioner)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "
      "solve (psi) that moves the particles back to the rest spacing against drift (0: off); within a kernel's reach "

@@ -17,6 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "amg.h"
 #include "pair_terms.h"
 #include "sim_internal.h"
 
@@ -31,6 +32,12 @@ typedef struct implicit_work {
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
+    amg_system *amg;                     /* implicit.preconditioner = amg: the assembled matrix's solver */
+    int pressure_by_multigrid;           /* this step's pressure solves use amg (there is a free surface) */
+    int64_t *matrix_first;               /* amg: the assembled pressure matrix, row i's entries from matrix_first[i] */
+    int32_t *matrix_col;
+    double *matrix_val;
+    size_t matrix_cap;
     uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
     real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
     double *wall_sum;                    /* per fixed wall: sum of dp^2 W of the walls at its ghost node (fixed) */
@@ -121,6 +128,10 @@ void step_implicit_free(surge_sim *sim)
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
+    amg_destroy(w->amg);
+    free(w->matrix_first);
+    free(w->matrix_col);
+    free(w->matrix_val);
     free(w);
     sim->implicit = NULL;
 }
@@ -391,6 +402,108 @@ static void assemble_pressure(surge_sim *sim)
     }
 }
 
+/* An operator on the fluid particles as a matrix, for the multigrid solver: row i holds diag[i], each fluid
+ * neighbour's fluid_scale fluid_coef[e] and each wet wall neighbour's wall_scale wall_coef[e] times the weights of
+ * the interpolation at the wall's ghost node (mirror_w over the ghost's fluid neighbours), since the operators
+ * take a wall's value from there; repeated columns are summed, in the order they first appear. With
+ * honour_fixed, a free-surface particle's row is its diagonal alone (the pressure). Returns -1 when out of
+ * memory. */
+static int assemble_matrix(surge_sim *sim, const double *diag, const real *fluid_coef, double fluid_scale,
+                           const real *wall_coef, double wall_scale, int honour_fixed)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int first = sim->wall_count, nf = sim->count - first;
+    if (!w->matrix_first && !(w->matrix_first = malloc((size_t)(nf + 1) * sizeof *w->matrix_first)))
+        return -1;
+    /* an upper bound of each row's entries, before repeated columns are summed */
+    int64_t *row_first = w->matrix_first;
+    row_first[0] = 0;
+    for (int i = 0; i < nf; i++) {
+        int64_t count = 1;
+        if (!(honour_fixed && w->fixed[i])) {
+            count += nl->fluid_first[i + 1] - nl->fluid_first[i];
+            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+                const int kw = nl->wall_index[e];
+                count += w->dry[kw] ? 0 : nl->wall_fluid_first[kw + 1] - nl->wall_fluid_first[kw];
+            }
+        }
+        row_first[i + 1] = row_first[i] + count;
+    }
+    const size_t bound = (size_t)row_first[nf];
+    if (bound > w->matrix_cap || !w->matrix_col) {
+        int32_t *col = realloc(w->matrix_col, bound * sizeof *col);
+        if (col)
+            w->matrix_col = col;
+        double *val = col ? realloc(w->matrix_val, bound * sizeof *val) : NULL;
+        if (!val)
+            return -1;
+        w->matrix_val = val, w->matrix_cap = bound;
+    }
+    int32_t *restrict col = w->matrix_col;
+    double *restrict val = w->matrix_val;
+    int32_t *merged = malloc((size_t)nf * sizeof *merged);  /* per row: its entries after summing */
+    int failed = merged == NULL;
+    #pragma omp parallel if (wide(sim) && !failed)
+    {
+        int32_t *slot = malloc((size_t)nf * sizeof *slot); /* per column: its place in the current row, or -1 */
+        if (!slot) {
+            #pragma omp atomic write
+            failed = 1;
+        }
+        for (int i = 0; slot && i < nf; i++)
+            slot[i] = -1;
+        #pragma omp for schedule(static)
+        for (int i = 0; i < nf; i++) {
+            if (!slot)
+                continue;
+            const int64_t base = row_first[i];
+            int count = 0;
+#define ADD_ENTRY(column, value)                                                                                    \
+    do {                                                                                                            \
+        const int c_ = (column);                                                                                    \
+        if (slot[c_] < 0)                                                                                           \
+            slot[c_] = count, col[base + count] = c_, val[base + count++] = 0;                                      \
+        val[base + slot[c_]] += (value);                                                                            \
+    } while (0)
+            ADD_ENTRY(i, diag[i]);
+            if (!(honour_fixed && w->fixed[i])) {
+                for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                    if (fluid_coef[e] != 0)
+                        ADD_ENTRY(nl->fluid_index[e] - first, fluid_scale * fluid_coef[e]);
+                for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+                    const int kw = nl->wall_index[e];
+                    if (w->dry[kw])
+                        continue;
+                    for (int64_t m = nl->wall_fluid_first[kw]; m < nl->wall_fluid_first[kw + 1]; m++)
+                        ADD_ENTRY(nl->wall_fluid_index[m] - first, wall_scale * wall_coef[e] * w->mirror_w[m]);
+                }
+            }
+#undef ADD_ENTRY
+            for (int k = 0; k < count; k++)
+                slot[col[base + k]] = -1;
+            merged[i] = count;
+        }
+        free(slot);
+    }
+    if (failed) {
+        free(merged);
+        return -1;
+    }
+    /* close the gaps the summing left */
+    int64_t to = 0;
+    for (int i = 0; i < nf; i++) {
+        const int64_t from = row_first[i];
+        memmove(col + to, col + from, (size_t)merged[i] * sizeof *col);
+        memmove(val + to, val + from, (size_t)merged[i] * sizeof *val);
+        row_first[i] = to;
+        to += merged[i];
+    }
+    row_first[nf] = to;
+    free(merged);
+    return 0;
+}
+
 /* The operator of assemble_pressure applied to x, the walls at the values wall_pressures() gives them */
 static void pressure_operator(surge_sim *sim, const double *x, double *out)
 {
@@ -546,6 +659,79 @@ static void fail_solve(surge_sim *sim, const char *what, int iterations, double 
              : what[0] == 'r' ? sim->params.implicit.density_tolerance : sim->params.implicit.pressure_tolerance);
 }
 
+/* Whether this step's solves use the multigrid (implicit.preconditioner) */
+static int multigrid(const surge_sim *sim)
+{
+    const int preconditioner = sim->params.implicit.preconditioner;
+    return preconditioner == SURGE_PRECONDITIONER_AMG ||
+           (preconditioner == SURGE_PRECONDITIONER_AUTO && sim->count - sim->wall_count >= SURGE_AMG_MIN_FLUID_PARTICLES);
+}
+
+/* The multigrid solver on the matrix of assemble_matrix (its arguments after the first, what names the system);
+ * a health failure (with the reason) when it cannot be built */
+static int multigrid_setup(surge_sim *sim, const char *what, const double *diag, const real *fluid_coef,
+                           double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed)
+{
+    implicit_work *w = sim->implicit;
+    char reason[160] = "";
+    if (!w->amg)
+        w->amg = amg_create(reason, sizeof reason);
+    const int nf = sim->count - sim->wall_count;
+    if (w->amg && assemble_matrix(sim, diag, fluid_coef, fluid_scale, wall_coef, wall_scale, honour_fixed) != 0)
+        snprintf(reason, sizeof reason, "out of memory for the assembled %s matrix", what);
+    else if (w->amg && amg_setup(w->amg, nf, w->matrix_first, w->matrix_col, w->matrix_val) != 0)
+        snprintf(reason, sizeof reason, "hypre could not build the multigrid hierarchy of the %s matrix", what);
+    if (!reason[0])
+        return 0;
+    sim->health = (surge_health){.check = SURGE_CHECK_SOLVER, .particle_id = -1, .step = sim->step + 1,
+                                 .time_s = sim->time_s};
+    snprintf(sim->health.message, sizeof sim->health.message, "health check failed: %s at step %lld, t = %.9g s (%s)",
+             surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, sim->time_s, reason);
+    return -1;
+}
+
+/* The viscous solve by multigrid: the two components one after the other on the same matrix, the walls' mirrored
+ * velocities 2 v_wall - v_ghost (v_wall at a dry wall) moved to the right-hand side; the iterations of both */
+static int viscous_multigrid_solve(surge_sim *sim, double dt_nu, double *residual)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    if (multigrid_setup(sim, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0) != 0)
+        return -2;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        double cx = 0, cy = 0;
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int kw = nl->wall_index[e];
+            const double keep = w->dry[kw] ? 1.0 : 2.0;
+            cx += w->wall_w[e] * keep * mirror_wall_vx(sim, kw), cy += w->wall_w[e] * keep * sim->vy[kw];
+        }
+        w->r[i] = w->rhs[i] + dt_nu * cx, w->r[nf + i] = w->rhs[nf + i] + dt_nu * cy;
+    }
+    int total = 0;
+    *residual = 0;
+    for (int c = 0; c < 2; c++) {
+        double component_residual = 0;
+        const int iterations = amg_solve(w->amg, w->r + c * nf, w->x + c * nf, sim->params.implicit.viscous_tolerance,
+                                         sim->params.implicit.max_iterations, &component_residual);
+        *residual = fmax(*residual, component_residual);
+        if (iterations < 0)
+            return -1;
+        total += iterations;
+    }
+    return total;
+}
+
+/* A solve of the pressure operator (phi or psi) from the guess in x, by the preconditioner the parameters choose */
+static int pressure_solve(surge_sim *sim, double tolerance, double *residual)
+{
+    const int nf = sim->count - sim->wall_count, max_iterations = sim->params.implicit.max_iterations;
+    if (sim->implicit->pressure_by_multigrid)
+        return amg_solve(sim->implicit->amg, sim->implicit->rhs, sim->implicit->x, tolerance, max_iterations, residual);
+    return solve(sim, pressure_operator, nf, tolerance, max_iterations, residual);
+}
+
 int step_implicit(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count, nf = n - first;
@@ -605,9 +791,15 @@ int step_implicit(surge_sim *sim)
     double residual = 0;
     int iterations = 0;
     if (dt_nu > 0) {
-        iterations = solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance, prm->implicit.max_iterations,
-                           &residual);
+        iterations = multigrid(sim)
+                         ? viscous_multigrid_solve(sim, dt_nu, &residual)
+                         : solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance,
+                                 prm->implicit.max_iterations, &residual);
         sim->viscous_iterations = iterations, sim->viscous_residual = residual;
+        if (iterations == -2) {
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
         if (iterations < 0) {
             fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, t_n);
             boundary_wall_speeds(sim, t_n);
@@ -671,8 +863,19 @@ int step_implicit(surge_sim *sim)
         w->x[i] = 0; /* the correction starts from none */
     }
     assemble_pressure(sim);
-    iterations = solve(sim, pressure_operator, nf, prm->implicit.pressure_tolerance, prm->implicit.max_iterations,
-                       &residual);
+    /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
+     * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
+    int free_surface = 0;
+    for (int i = 0; i < nf && !free_surface; i++)
+        free_surface = w->fixed[i];
+    w->pressure_by_multigrid = multigrid(sim) && free_surface;
+    if (w->pressure_by_multigrid &&
+        multigrid_setup(sim, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1) != 0) {
+        sim_restore_step_start(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    iterations = pressure_solve(sim, prm->implicit.pressure_tolerance, &residual);
     sim->pressure_iterations = iterations, sim->pressure_residual = residual;
     if (iterations < 0) {
         fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
@@ -687,8 +890,7 @@ int step_implicit(surge_sim *sim)
         memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
         memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
         memset(w->x, 0, (size_t)nf * sizeof *w->x);
-        const int density_iterations = solve(sim, pressure_operator, nf, prm->implicit.density_tolerance,
-                                             prm->implicit.max_iterations, &residual);
+        const int density_iterations = pressure_solve(sim, prm->implicit.density_tolerance, &residual);
         if (density_iterations < 0) {
             fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
             sim_restore_step_start(sim);

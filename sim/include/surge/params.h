@@ -19,6 +19,16 @@ typedef enum surge_scheme {
     SURGE_SCHEME_IMPLICIT = 1, /* incompressible projection with implicit viscosity (step_implicit.c) */
 } surge_scheme;
 
+typedef enum surge_preconditioner {
+    SURGE_PRECONDITIONER_JACOBI = 0, /* matrix-free BiCGSTAB on the neighbour lists, diagonal preconditioner */
+    SURGE_PRECONDITIONER_AMG = 1,    /* the assembled matrix, hypre's BoomerAMG-preconditioned BiCGSTAB */
+    SURGE_PRECONDITIONER_AUTO = 2,   /* amg from SURGE_AMG_MIN_FLUID_PARTICLES fluid particles, jacobi below */
+} surge_preconditioner;
+
+/* Where the multigrid starts to pay: on the Freydier front (C_h 1.3, one thread) jacobi was faster with 2,040 fluid
+ * particles and amg with 2,940 (docs/method.md, "Linear solvers") */
+#define SURGE_AMG_MIN_FLUID_PARTICLES 2500
+
 typedef enum surge_diffusion_form {
     SURGE_DIFFUSION_FOURTAKAS = 0, /* Fourtakas et al. 2019: density differences less their hydrostatic part */
     SURGE_DIFFUSION_ANTUONO = 1,   /* Antuono et al. 2010 (delta-SPH): less the renormalised density gradient */
@@ -111,6 +121,7 @@ typedef struct surge_params {
         double viscous_tolerance;  /* relative residual of the implicit viscous solve */
         double density_tolerance;  /* relative residual of the rest-density solve (psi) */
         int max_iterations;        /* per solve; more is a health failure */
+        int preconditioner;        /* surge_preconditioner, for the solves */
         double density_correction; /* alpha: weight of the rest-density source (psi's solve) */
         double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */

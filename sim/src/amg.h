@@ -1,0 +1,23 @@
+/* Algebraic multigrid for the implicit scheme's assembled systems: hypre's BoomerAMG as the preconditioner of
+ * hypre's BiCGSTAB, on one MPI rank (docs/method.md, "Linear solvers"). */
+#ifndef SURGE_AMG_H
+#define SURGE_AMG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+typedef struct amg_system amg_system;
+
+/* NULL when MPI or hypre cannot start (the message in err) */
+amg_system *amg_create(char *err, size_t err_len);
+void amg_destroy(amg_system *amg);
+
+/* The matrix of n rows, row i's entries cols[row_first[i] .. row_first[i+1]) (no repeated column in a row), and
+ * the multigrid hierarchy built on it; -1 when hypre reports an error. */
+int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *cols, const double *values);
+
+/* Solves A x = rhs from the guess in x to |rhs - A x| <= tolerance |rhs|; returns the iterations, or -1 when
+ * max_iterations pass first or hypre reports an error; *residual: the relative residual reached. */
+int amg_solve(amg_system *amg, const double *rhs, double *x, double tolerance, int max_iterations, double *residual);
+
+#endif
