@@ -209,7 +209,7 @@ static int allocate_state(surge_sim *s, int n)
     ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->wall_state, n); ALLOC(s->face_state, n); ALLOC(s->visc_speed_mps, n);
     ALLOC(s->face_nx, n); ALLOC(s->face_ny, n); ALLOC(s->face_gap_m, n); ALLOC(s->face_vn_mps, n);
     ALLOC(s->face_disc, n); ALLOC(s->face_push_x, n); ALLOC(s->face_push_y, n);
-    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);
+    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->surface_nx, n); ALLOC(s->surface_ny, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);
     ALLOC(s->shift_x, n); ALLOC(s->shift_y, n); ALLOC(s->shift_div, n);
     ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
     ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);

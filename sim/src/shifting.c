@@ -33,13 +33,11 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
     double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
     if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->shifting.form == SURGE_SHIFT_LIND && sim->near_surface[a]) {
         /* the implicit scheme's Lind form (Lind et al. 2012): dr = -(A_L/2) h^2 grad C per step, and in the free-surface
-         * layer only along the surface (n = -grad C / |grad C|), where nothing else keeps the particles apart (their
-         * pressure is 0) */
-        const double g2 = (double)sim->grad_c_x[a] * sim->grad_c_x[a] + (double)sim->grad_c_y[a] * sim->grad_c_y[a];
-        if (g2 > 0) {
-            const double along = (dx * sim->grad_c_x[a] + dy * sim->grad_c_y[a]) / g2;
-            dx -= along * sim->grad_c_x[a], dy -= along * sim->grad_c_y[a];
-        }
+         * layer only along the surface, where nothing else keeps the particles apart (their pressure is 0). The
+         * surface's normal is the neighbours' grad C averaged: the particle's own is the shift's direction, so
+         * projecting on it would leave nothing (as it did before 2026-11-26, eleventh session) */
+        const double along = dx * sim->surface_nx[a] + dy * sim->surface_ny[a];
+        dx -= along * sim->surface_nx[a], dy -= along * sim->surface_ny[a];
     }
     const double max_shift = p->shifting.max_shift_dp * p->numerics.dp_m;
     const double len = sqrt(dx * dx + dy * dy);

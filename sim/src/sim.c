@@ -103,7 +103,7 @@ void surge_sim_destroy(surge_sim *sim)
                       sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->pair_state, sim->wall_state, sim->face_state, sim->visc_speed_mps,
                       sim->face_nx, sim->face_ny, sim->face_gap_m, sim->face_vn_mps, sim->face_disc,
                       sim->face_push_x, sim->face_push_y,
-                      sim->grad_c_x, sim->grad_c_y, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
+                      sim->grad_c_x, sim->grad_c_y, sim->surface_nx, sim->surface_ny, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
                       sim->near_surface, sim->kind,
                       sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy, sim->wall_cont_vx, sim->wall_cont_vy, sim->wall_nx, sim->wall_ny, sim->wall_depth_m,
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};

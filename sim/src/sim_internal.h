@@ -127,6 +127,8 @@ struct surge_sim {
     int32_t *face_disc;        /* the disc whose face pushes the particle this evaluation (-1: none) */
     real *face_push_x, *face_push_y; /* and the push, an acceleration; the disc takes the reaction */
     real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
+    real *surface_nx, *surface_ny; /* implicit scheme, near the free surface: the neighbours' grad C averaged, as a
+                                    * unit vector (the surface's normal, along which its shift does not act) */
     real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
     real *div_r;
     real *shift_x, *shift_y;   /* this step's shifting displacement (m) */

@@ -288,6 +288,14 @@ static void geometry(surge_sim *sim)
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1] && !near; e++)
             near = w->fluid_w[e] != 0 && sim->surface[nl->fluid_index[e]];
         sim->near_surface[a] = (uint8_t)near;
+        /* the surface's normal for the shift (shifting.c): the neighbours' grad C, weighted as the Laplacian */
+        double nx = 0, ny = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1] && near; e++) {
+            const int b = nl->fluid_index[e];
+            nx += w->fluid_w[e] * sim->grad_c_x[b], ny += w->fluid_w[e] * sim->grad_c_y[b];
+        }
+        const double length = sqrt(nx * nx + ny * ny);
+        sim->surface_nx[a] = (real)(length > 0 ? nx / length : 0), sim->surface_ny[a] = (real)(length > 0 ? ny / length : 0);
     }
 }
 
