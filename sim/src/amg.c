@@ -22,6 +22,8 @@ struct amg_system {
     int n;
     HYPRE_IJMatrix matrix;
     HYPRE_IJVector rhs, x;
+    HYPRE_ParCSRMatrix a;      /* the objects behind matrix, rhs and x, as the solver takes them */
+    HYPRE_ParVector b, xv;
     HYPRE_Solver krylov, multigrid;
     HYPRE_BigInt *rows;        /* 0 .. n-1 */
     HYPRE_Int *row_sizes;      /* per row: its entries */
@@ -121,12 +123,10 @@ int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *c
     HYPRE_ParCSRBiCGSTABCreate(MPI_COMM_SELF, &amg->krylov);
     HYPRE_BiCGSTABSetPrecond(amg->krylov, (HYPRE_PtrToSolverFcn)HYPRE_BoomerAMGSolve,
                              (HYPRE_PtrToSolverFcn)HYPRE_BoomerAMGSetup, amg->multigrid);
-    HYPRE_ParCSRMatrix a;
-    HYPRE_ParVector b, x;
-    HYPRE_IJMatrixGetObject(amg->matrix, (void **)&a);
-    HYPRE_IJVectorGetObject(amg->rhs, (void **)&b);
-    HYPRE_IJVectorGetObject(amg->x, (void **)&x);
-    HYPRE_BiCGSTABSetup(amg->krylov, (HYPRE_Matrix)a, (HYPRE_Vector)b, (HYPRE_Vector)x);
+    HYPRE_IJMatrixGetObject(amg->matrix, (void **)&amg->a);
+    HYPRE_IJVectorGetObject(amg->rhs, (void **)&amg->b);
+    HYPRE_IJVectorGetObject(amg->x, (void **)&amg->xv);
+    HYPRE_BiCGSTABSetup(amg->krylov, (HYPRE_Matrix)amg->a, (HYPRE_Vector)amg->b, (HYPRE_Vector)amg->xv);
     return HYPRE_GetError() ? -1 : 0;
 }
 
@@ -149,12 +149,7 @@ int amg_solve(amg_system *amg, const double *rhs, double *x, double tolerance, i
     HYPRE_IJVectorSetValues(amg->x, amg->n, amg->rows, x);
     HYPRE_BiCGSTABSetTol(amg->krylov, tolerance);
     HYPRE_BiCGSTABSetMaxIter(amg->krylov, max_iterations);
-    HYPRE_ParCSRMatrix a;
-    HYPRE_ParVector b, xv;
-    HYPRE_IJMatrixGetObject(amg->matrix, (void **)&a);
-    HYPRE_IJVectorGetObject(amg->rhs, (void **)&b);
-    HYPRE_IJVectorGetObject(amg->x, (void **)&xv);
-    HYPRE_BiCGSTABSolve(amg->krylov, (HYPRE_Matrix)a, (HYPRE_Vector)b, (HYPRE_Vector)xv);
+    HYPRE_BiCGSTABSolve(amg->krylov, (HYPRE_Matrix)amg->a, (HYPRE_Vector)amg->b, (HYPRE_Vector)amg->xv);
     HYPRE_Int iterations = 0;
     HYPRE_Real relative = INFINITY;
     HYPRE_BiCGSTABGetNumIterations(amg->krylov, &iterations);
@@ -163,7 +158,7 @@ int amg_solve(amg_system *amg, const double *rhs, double *x, double tolerance, i
     *residual = relative;
     const int failed = HYPRE_GetError() != 0;
     HYPRE_ClearAllErrors();
-    if (failed || !(relative <= tolerance) || iterations >= max_iterations)
+    if (failed || !(relative <= tolerance)) /* hypre stops at max_iterations */
         return -1;
     return (int)iterations;
 }
