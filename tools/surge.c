@@ -678,18 +678,18 @@ static void report_resolution(const surge_sim *sim, int verbose)
         double dt_implicit = p->numerics.dt_fixed_s;
         if (!(dt_implicit > 0))
             dt_implicit = p->implicit.cfl * fmin(g > 0 ? sqrt(h / g) : INFINITY, u > 0 ? h / u : INFINITY);
-        const int amg = p->implicit.preconditioner == SURGE_PRECONDITIONER_AMG ||
-                        (p->implicit.preconditioner == SURGE_PRECONDITIONER_AUTO &&
-                         d->fluid_count >= SURGE_AMG_MIN_FLUID_PARTICLES);
+        const bool amg = surge_implicit_uses_amg(p, d->fluid_count, false);
+        const bool viscous_amg = surge_implicit_uses_amg(p, d->fluid_count, true);
         if (verbose || bytes > 4e9)
             fprintf(out, "%sestimated memory %.3g MB (%.0f list entries per fluid particle); implicit scheme: dt = %.3g "
                     "s at the scene's expected speed %.3g m/s (it follows the flow's own speed: longer where the flow "
-                    "is slower); solves by %s (implicit.preconditioner = %s); the cost per step follows the linear "
-                    "solves' iterations (diagnostics.csv), not estimated here\n", verbose ? "  " : "surge: ",
-                    bytes / 1e6, entries, dt_implicit, u,
+                    "is slower); pressure solves by %s, viscous solves by %s (implicit.preconditioner = %s); the cost "
+                    "per step follows the linear solves' iterations (diagnostics.csv), not estimated here\n",
+                    verbose ? "  " : "surge: ", bytes / 1e6, entries, dt_implicit, u,
                     amg ? "hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
+                    viscous_amg ? "hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
                     p->implicit.preconditioner == SURGE_PRECONDITIONER_AUTO
-                        ? (amg ? "auto, from 2,500 fluid particles" : "auto, below 2,500 fluid particles")
+                        ? "auto: amg for the pressure from 2,500 fluid particles, for the viscous solve from 30,000"
                         : (amg ? "amg" : "jacobi"));
         return;
     }

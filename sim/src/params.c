@@ -131,8 +131,9 @@ static const surge_param_info registry[] = {
     {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
      OFF(implicit.pressure_tolerance)},
-    {"implicit", "viscous_tolerance", SURGE_PARAM_REAL, "-", 1e-8, 1e-14, 0.1, true, NULL,
-     "Implicit scheme: relative residual at which the implicit viscous solve stops.",
+    {"implicit", "viscous_tolerance", SURGE_PARAM_REAL, "-", 1e-5, 1e-14, 0.1, true, NULL,
+     "Implicit scheme: relative residual at which the implicit viscous solve stops (from v_n; backward Euler's own "
+     "error in a step is far larger; docs/method.md).",
      OFF(implicit.viscous_tolerance)},
     {"implicit", "density_tolerance", SURGE_PARAM_REAL, "-", 1e-2, 1e-14, 0.5, true, NULL,
      "Implicit scheme: relative residual at which the rest-density solve (psi, which moves particles back to the "
@@ -145,8 +146,8 @@ static const surge_param_info registry[] = {
     {"implicit", "preconditioner", SURGE_PARAM_ENUM, "-", SURGE_PRECONDITIONER_AUTO, 0, 2, false, "jacobi|amg|auto",
      "Implicit scheme: how the linear solves are preconditioned: jacobi (matrix-free BiCGSTAB with the diagonal, on "
      "the neighbour lists), amg (the assembled matrices, hypre's BoomerAMG-preconditioned BiCGSTAB: a few iterations "
-     "after a setup each step) or auto (amg from 2,500 fluid particles, where it starts to pay; docs/method.md, "
-     "\"Linear solvers\").",
+     "after a setup each step) or auto (amg for the pressure from 2,500 fluid particles and for the viscous solve from "
+     "30,000, where it starts to pay; docs/method.md, \"Linear solvers\").",
      OFF(implicit.preconditioner)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "
@@ -716,6 +717,13 @@ int surge_params_wall_layers(const surge_params *p)
     const double support = 2.0 * p->numerics.ch * sqrt(2.0) * p->numerics.dp_m;
     const int needed = (int)ceil(support / p->numerics.dp_m - 1e-9);
     return p->walls.layers > 0 ? p->walls.layers : needed;
+}
+
+bool surge_implicit_uses_amg(const surge_params *p, int fluid_count, bool viscous)
+{
+    return p->implicit.preconditioner == SURGE_PRECONDITIONER_AMG ||
+           (p->implicit.preconditioner == SURGE_PRECONDITIONER_AUTO &&
+            fluid_count >= (viscous ? SURGE_AMG_MIN_FLUID_PARTICLES_VISCOUS : SURGE_AMG_MIN_FLUID_PARTICLES));
 }
 
 int surge_params_validate(const surge_params *p, char *err, size_t err_len)

@@ -667,12 +667,10 @@ static void fail_solve(surge_sim *sim, const char *what, int iterations, double 
              : what[0] == 'r' ? sim->params.implicit.density_tolerance : sim->params.implicit.pressure_tolerance);
 }
 
-/* Whether this step's solves use the multigrid (implicit.preconditioner) */
-static int multigrid(const surge_sim *sim)
+/* Whether this step's pressure (or viscous) solves use the multigrid (implicit.preconditioner) */
+static int multigrid(const surge_sim *sim, bool viscous)
 {
-    const int preconditioner = sim->params.implicit.preconditioner;
-    return preconditioner == SURGE_PRECONDITIONER_AMG ||
-           (preconditioner == SURGE_PRECONDITIONER_AUTO && sim->count - sim->wall_count >= SURGE_AMG_MIN_FLUID_PARTICLES);
+    return surge_implicit_uses_amg(&sim->params, sim->count - sim->wall_count, viscous);
 }
 
 /* The multigrid solver on the matrix of assemble_matrix (its arguments after the first, what names the system);
@@ -770,7 +768,7 @@ int step_implicit(surge_sim *sim)
     }
 
     /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure,
-     * from the guess without viscosity */
+     * from the guess v_n */
     const double rho0 = sim->rho0, dt_nu = dt * prm->fluid.viscosity_m2ps;
     const neighbour_lists *nl = &sim->neighbours;
     double *by_id = sim->implicit_pressure_by_id;
@@ -793,13 +791,13 @@ int step_implicit(surge_sim *sim)
             sum_w += w->wall_w[e];
         w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
         w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
-        w->x[i] = w->rhs[i], w->x[nf + i] = w->rhs[nf + i];
+        w->x[i] = sim->vx_n[a], w->x[nf + i] = sim->vy_n[a]; /* slow flows change little in a step */
         w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
     }
     double residual = 0;
     int iterations = 0;
     if (dt_nu > 0) {
-        iterations = multigrid(sim)
+        iterations = multigrid(sim, 1)
                          ? viscous_multigrid_solve(sim, dt_nu, &residual)
                          : solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance,
                                  prm->implicit.max_iterations, &residual);
@@ -876,7 +874,7 @@ int step_implicit(surge_sim *sim)
     int free_surface = 0;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
-    w->pressure_by_multigrid = multigrid(sim) && free_surface;
+    w->pressure_by_multigrid = multigrid(sim, 0) && free_surface;
     if (w->pressure_by_multigrid &&
         multigrid_setup(sim, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1) != 0) {
         sim_restore_step_start(sim);

@@ -22,12 +22,14 @@ typedef enum surge_scheme {
 typedef enum surge_preconditioner {
     SURGE_PRECONDITIONER_JACOBI = 0, /* matrix-free BiCGSTAB on the neighbour lists, diagonal preconditioner */
     SURGE_PRECONDITIONER_AMG = 1,    /* the assembled matrix, hypre's BoomerAMG-preconditioned BiCGSTAB */
-    SURGE_PRECONDITIONER_AUTO = 2,   /* amg from SURGE_AMG_MIN_FLUID_PARTICLES fluid particles, jacobi below */
+    SURGE_PRECONDITIONER_AUTO = 2,   /* amg from the sizes below, jacobi under them */
 } surge_preconditioner;
 
-/* Where the multigrid starts to pay: on the Freydier front (C_h 1.3, one thread) jacobi was faster with 2,040 fluid
- * particles and amg with 2,940 (docs/method.md, "Linear solvers") */
+/* Where the multigrid starts to pay (docs/method.md, "Linear solvers"), on the Freydier front, one thread: for the
+ * pressure, jacobi was faster with 2,040 fluid particles and amg with 2,940 (C_h 1.3); for the viscous solve, which
+ * starts from v_n, jacobi was faster with 18,361 and they were level with 32,642 (C_h 1.8) */
 #define SURGE_AMG_MIN_FLUID_PARTICLES 2500
+#define SURGE_AMG_MIN_FLUID_PARTICLES_VISCOUS 30000
 
 typedef enum surge_diffusion_form {
     SURGE_DIFFUSION_FOURTAKAS = 0, /* Fourtakas et al. 2019: density differences less their hydrostatic part */
@@ -238,6 +240,9 @@ int surge_params_load_text(surge_params *p, const char *text, const char *source
 int surge_params_override(surge_params *p, const char *assignment, bool live_only, char *err, size_t err_len);
 /* walls.layers, or the automatic value (ceil(2h/dp)) when it is 0. */
 int surge_params_wall_layers(const surge_params *p);
+/* Whether the implicit scheme solves its pressure (viscous = false) or viscous (true) systems by the multigrid with
+ * fluid_count fluid particles: implicit.preconditioner, auto by the sizes above. */
+bool surge_implicit_uses_amg(const surge_params *p, int fluid_count, bool viscous);
 /* Checks that the parameters together describe a scene that can be built (block inside the box...). */
 int surge_params_validate(const surge_params *p, char *err, size_t err_len);
 
