@@ -152,7 +152,8 @@ static const surge_param_info registry[] = {
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "
      "solve (psi) that moves the particles back to the rest spacing against drift (0: off); within a kernel's reach "
-     "of the free surface, where the kernel sum is truncated, only compression counts.",
+     "of the free surface, where the kernel sum is truncated, it is read against a flat surface's kernel sum at the "
+     "particle's depth, and next to a partly dry wall only compression counts.",
      OFF(implicit.density_correction)},
     {"implicit", "anti_clumping", SURGE_PARAM_REAL, "-", 1, 0, 10, true, NULL,
      "Implicit scheme: w in the shift -2 w (rho_kernel/rho0 - 1) h^2 grad C that moves particles whose kernel sum is "

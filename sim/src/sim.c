@@ -65,6 +65,8 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->kernel = kernel2d_make(sim->derived.h_m);
     sim->lattice_kernel_sum = lattice_kernel_sum(&sim->kernel, dp, INT_MAX);
     sim->second_row_kernel_ratio = lattice_kernel_sum(&sim->kernel, dp, 1) / sim->lattice_kernel_sum;
+    for (int k = 0; k < SURGE_KERNEL_ROWS; k++)
+        sim->row_kernel_ratio[k] = lattice_kernel_sum(&sim->kernel, dp, k) / sim->lattice_kernel_sum;
     sim->list_lookahead_s = p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
                             : 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
                                                                 : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);

@@ -96,6 +96,8 @@ typedef struct neighbour_lists {
     size_t ghost_fluid_capacity;
 } neighbour_lists;
 
+#define SURGE_KERNEL_ROWS 8 /* rows under a flat surface whose kernel sums are kept; 2 C_h < 7 */
+
 struct surge_sim {
     surge_params params;
     surge_derived derived;
@@ -104,6 +106,7 @@ struct surge_sim {
     double lattice_kernel_sum; /* sum_b dp^2 W_ab over a square lattice at rest: the kernel sum's own bias */
     double second_row_kernel_ratio; /* the same sum one row under a flat free surface, over lattice_kernel_sum
                                      * (0.988, 0.946, 0.869 at C_h 1.0, 1.3, 1.8) */
+    double row_kernel_ratio[SURGE_KERNEL_ROWS]; /* the same with k rows above (k = 0: the surface row itself) */
     double gx, gy;             /* body acceleration (tilted gravity + body force) */
     double rho_h_per_m;        /* hydrostatic density gradient rho0 g_n / c0^2 (density diffusion) */
 

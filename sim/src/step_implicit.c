@@ -48,6 +48,8 @@ typedef struct implicit_work {
     double *grad_x, *grad_y;             /* scratch: the pressure gradient inside the operator */
     double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
     uint8_t *fixed;                      /* free-surface particle: p = 0 */
+    double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
+                                          * free surface, where that can be read (else 0) */
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
     double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
@@ -104,7 +106,7 @@ static int reserve_work(surge_sim *sim)
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
@@ -123,7 +125,7 @@ void step_implicit_free(surge_sim *sim)
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
-                      w->grad_y, w->pressure_n, w->fixed, w->wall_x, w->wall_y,
+                      w->grad_y, w->pressure_n, w->fixed, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
@@ -296,6 +298,24 @@ static void geometry(surge_sim *sim)
         }
         const double length = sqrt(nx * nx + ny * ny);
         sim->surface_nx[a] = (real)(length > 0 ? nx / length : 0), sim->surface_ny[a] = (real)(length > 0 ? ny / length : 0);
+        /* the kernel sum at rest spacing at this depth under a flat surface (the nearest surface particle's distance
+         * in rows, between the lattice's rows), where no wall in reach is partly dry (a contact line, where the
+         * walls' share is uncertain): 0 where it cannot be read */
+        double depth2 = near && !sim->surface[a] ? INFINITY : 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1] && depth2 > 0; e++) {
+            const int b = nl->fluid_index[e];
+            if (!sim->surface[b] || w->fluid_w[e] == 0)
+                continue;
+            const double dx = nl->fluid_dx0[e] + (moved_x[a] - moved_x[b]), dy = nl->fluid_dy0[e] + (moved_y[a] - moved_y[b]);
+            depth2 = fmin(depth2, dx * dx + dy * dy);
+        }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1] && depth2 > 0; e++)
+            if (w->wall_w[e] != 0 && w->wetness[nl->wall_index[e]] < 1)
+                depth2 = 0;
+        const double rows = sqrt(depth2) / sim->params.numerics.dp_m;
+        const int row = rows < SURGE_KERNEL_ROWS - 1 ? (int)rows : SURGE_KERNEL_ROWS - 2;
+        const double f = fmin(1.0, rows - row);
+        w->expected_ratio[i] = depth2 > 0 ? (1 - f) * sim->row_kernel_ratio[row] + f * sim->row_kernel_ratio[row + 1] : 0;
     }
 }
 
@@ -860,9 +880,12 @@ int step_implicit(surge_sim *sim)
         }
         /* div v = tr(G M^-1) */
         const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
-        /* near the surface the kernel sum is truncated: a deficit there is not an expansion, an excess is a
-         * compression (clumped particles, which nothing else pushes apart where the pressure is near 0) */
-        const double compression = sim->near_surface[a] ? fmax(0.0, w->kernel_ratio[i] - 1.0) : w->kernel_ratio[i] - 1.0;
+        /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
+         * where that cannot be read (a partly dry wall in reach), a deficit is not an expansion and only an excess
+         * counts (clumped particles, which nothing else pushes apart where the pressure is near 0) */
+        const double compression = !sim->near_surface[a] ? w->kernel_ratio[i] - 1.0
+                                   : w->expected_ratio[i] > 0 ? w->kernel_ratio[i] / w->expected_ratio[i] - 1.0
+                                   : fmax(0.0, w->kernel_ratio[i] - 1.0);
         w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
         w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v;
         w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
