@@ -96,7 +96,7 @@ typedef struct neighbour_lists {
     size_t ghost_fluid_capacity;
 } neighbour_lists;
 
-#define SURGE_KERNEL_ROWS 8 /* rows under a flat surface whose kernel sums are kept; 2 C_h < 7 */
+#define SURGE_KERNEL_ROWS 13 /* rows under a flat surface whose kernel sums are kept: a kernel reaches 2 sqrt(2) C_h <= 11.4 rows (C_h <= 4) */
 
 struct surge_sim {
     surge_params params;

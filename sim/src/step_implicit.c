@@ -817,7 +817,7 @@ int step_implicit(surge_sim *sim)
     double residual = 0;
     int iterations = 0;
     if (dt_nu > 0) {
-        iterations = multigrid(sim, 1)
+        iterations = multigrid(sim, true)
                          ? viscous_multigrid_solve(sim, dt_nu, &residual)
                          : solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance,
                                  prm->implicit.max_iterations, &residual);
@@ -897,7 +897,7 @@ int step_implicit(surge_sim *sim)
     int free_surface = 0;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
-    w->pressure_by_multigrid = multigrid(sim, 0) && free_surface;
+    w->pressure_by_multigrid = multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
         multigrid_setup(sim, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1) != 0) {
         sim_restore_step_start(sim);
