@@ -897,6 +897,28 @@ static int test_implicit_clump(void)
     return failures;
 }
 
+/* implicit.preconditioner = auto: the pressure by the multigrid from 2,500 fluid particles, the viscous solve
+ * (which starts from v_n) from 30,000 (docs/method.md, "Linear solvers"); amg and jacobi take both */
+static int test_implicit_auto(void)
+{
+    surge_params p = surge_default_params();
+    p.implicit.preconditioner = SURGE_PRECONDITIONER_AUTO;
+    const struct { int fluid; bool viscous, amg; } cases[] = {
+        {2499, false, false}, {2500, false, true}, {18361, false, true}, {18361, true, false},
+        {29999, true, false}, {30000, true, true}, {73442, true, true}};
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char what[96];
+        snprintf(what, sizeof what, "implicit_auto: %d fluid particles, %s solve, amg wanted %d", cases[k].fluid,
+                 cases[k].viscous ? "viscous" : "pressure", cases[k].amg);
+        expect_below(what, surge_implicit_uses_amg(&p, cases[k].fluid, cases[k].viscous) != cases[k].amg, 0.5);
+    }
+    p.implicit.preconditioner = SURGE_PRECONDITIONER_AMG;
+    expect_below("implicit_auto: amg takes the small viscous solve", !surge_implicit_uses_amg(&p, 100, true), 0.5);
+    p.implicit.preconditioner = SURGE_PRECONDITIONER_JACOBI;
+    expect_below("implicit_auto: jacobi keeps the large pressure solve", surge_implicit_uses_amg(&p, 100000, false), 0.5);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -927,6 +949,8 @@ int main(int argc, char **argv)
         return test_diffusion_linear() ? 1 : 0;
     if (!strcmp(argv[1], "face_search"))
         return test_face_search() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_auto"))
+        return test_implicit_auto() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_clump"))
         return test_implicit_clump() ? 1 : 0;
     if (!strcmp(argv[1], "fluid_share"))
