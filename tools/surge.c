@@ -686,10 +686,10 @@ static void report_resolution(const surge_sim *sim, int verbose)
                     "is slower); pressure solves by %s, viscous solves by %s (implicit.preconditioner = %s); the cost "
                     "per step follows the linear solves' iterations (diagnostics.csv), not estimated here\n",
                     verbose ? "  " : "surge: ", bytes / 1e6, entries, dt_implicit, u,
-                    amg ? "hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
-                    viscous_amg ? "hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
+                    amg ? "BiCGSTAB with hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
+                    viscous_amg ? "BiCGSTAB with hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
                     p->implicit.preconditioner == SURGE_PRECONDITIONER_AUTO
-                        ? "auto: amg for the pressure from 2,500 fluid particles, for the viscous solve from 30,000"
+                        ? "auto: amg for the pressure from 2,500 fluid particles, for the viscous solve from 10,000"
                         : (amg ? "amg" : "jacobi"));
         return;
     }

@@ -1,17 +1,17 @@
-/* hypre's BoomerAMG-preconditioned BiCGSTAB on one rank. The pressure operator is not symmetric (its truncation
- * correction), hence BiCGSTAB rather than PCG. BoomerAMG's settings are those hypre recommends for 2D problems
- * on one rank with cheap setup: HMIS coarsening, extended+i interpolation with at most 4 entries a row, strength
- * threshold 0.5, hybrid forward Gauss-Seidel smoothing, one V-cycle per application (the hypre reference
- * manual, "BoomerAMG"). hypre is built without threads here, so its results do not depend on the thread count. */
+/* hypre's BoomerAMG on one rank, as the preconditioner of the implicit scheme's own BiCGSTAB: one V-cycle per
+ * application on a sparse stand-in of the operator (step_implicit.c). BoomerAMG's settings are those hypre
+ * recommends for 2D problems on one rank with cheap setup: HMIS coarsening, extended+i interpolation with at most
+ * 4 entries a row, strength threshold 0.5, one level of aggressive coarsening, hybrid forward Gauss-Seidel
+ * smoothing (the hypre reference manual, "BoomerAMG"; on the Freydier front threshold 0.25, no aggressive level,
+ * symmetric or l1 Gauss-Seidel were all slower, docs/method.md). hypre is built without threads here, so its
+ * results do not depend on the thread count. */
 #include "amg.h"
 
-#include <math.h>
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "HYPRE.h"
-#include "HYPRE_krylov.h"
 #include "HYPRE_parcsr_ls.h"
 #include "HYPRE_utilities.h"
 
@@ -24,7 +24,7 @@ struct amg_system {
     HYPRE_IJVector rhs, x;
     HYPRE_ParCSRMatrix a;      /* the objects behind matrix, rhs and x, as the solver takes them */
     HYPRE_ParVector b, xv;
-    HYPRE_Solver krylov, multigrid;
+    HYPRE_Solver multigrid;
     HYPRE_BigInt *rows;        /* 0 .. n-1 */
     HYPRE_Int *row_sizes;      /* per row: its entries */
 };
@@ -39,8 +39,6 @@ static void finalize_mpi(void)
 
 static void release(amg_system *amg)
 {
-    if (amg->krylov)
-        HYPRE_ParCSRBiCGSTABDestroy(amg->krylov);
     if (amg->multigrid)
         HYPRE_BoomerAMGDestroy(amg->multigrid);
     if (amg->matrix)
@@ -49,7 +47,7 @@ static void release(amg_system *amg)
         HYPRE_IJVectorDestroy(amg->rhs);
     if (amg->x)
         HYPRE_IJVectorDestroy(amg->x);
-    amg->krylov = amg->multigrid = NULL, amg->matrix = NULL, amg->rhs = amg->x = NULL;
+    amg->multigrid = NULL, amg->matrix = NULL, amg->rhs = amg->x = NULL;
 }
 
 amg_system *amg_create(char *err, size_t err_len)
@@ -120,45 +118,23 @@ int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *c
     HYPRE_BoomerAMGSetRelaxType(amg->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
     HYPRE_BoomerAMGSetMaxIter(amg->multigrid, 1);
     HYPRE_BoomerAMGSetTol(amg->multigrid, 0.0);
-    HYPRE_ParCSRBiCGSTABCreate(MPI_COMM_SELF, &amg->krylov);
-    HYPRE_BiCGSTABSetPrecond(amg->krylov, (HYPRE_PtrToSolverFcn)HYPRE_BoomerAMGSolve,
-                             (HYPRE_PtrToSolverFcn)HYPRE_BoomerAMGSetup, amg->multigrid);
     HYPRE_IJMatrixGetObject(amg->matrix, (void **)&amg->a);
     HYPRE_IJVectorGetObject(amg->rhs, (void **)&amg->b);
     HYPRE_IJVectorGetObject(amg->x, (void **)&amg->xv);
-    HYPRE_BiCGSTABSetup(amg->krylov, (HYPRE_Matrix)amg->a, (HYPRE_Vector)amg->b, (HYPRE_Vector)amg->xv);
+    HYPRE_BoomerAMGSetup(amg->multigrid, amg->a, amg->b, amg->xv);
     return HYPRE_GetError() ? -1 : 0;
 }
 
-int amg_solve(amg_system *amg, const double *rhs, double *x, double tolerance, int max_iterations, double *residual)
+int amg_vcycle(amg_system *amg, const double *rhs, double *x)
 {
-    *residual = INFINITY;
-    if (!amg->krylov)
+    if (!amg->multigrid)
         return -1;
-    double rhs_norm2 = 0;
-    for (int i = 0; i < amg->n; i++)
-        rhs_norm2 += rhs[i] * rhs[i];
-    if (rhs_norm2 == 0) { /* nothing to solve: the answer is 0, whatever the guess */
-        for (int i = 0; i < amg->n; i++)
-            x[i] = 0;
-        *residual = 0;
-        return 0;
-    }
     HYPRE_ClearAllErrors();
     HYPRE_IJVectorSetValues(amg->rhs, amg->n, amg->rows, rhs);
-    HYPRE_IJVectorSetValues(amg->x, amg->n, amg->rows, x);
-    HYPRE_BiCGSTABSetTol(amg->krylov, tolerance);
-    HYPRE_BiCGSTABSetMaxIter(amg->krylov, max_iterations);
-    HYPRE_BiCGSTABSolve(amg->krylov, (HYPRE_Matrix)amg->a, (HYPRE_Vector)amg->b, (HYPRE_Vector)amg->xv);
-    HYPRE_Int iterations = 0;
-    HYPRE_Real relative = INFINITY;
-    HYPRE_BiCGSTABGetNumIterations(amg->krylov, &iterations);
-    HYPRE_BiCGSTABGetFinalRelativeResidualNorm(amg->krylov, &relative);
+    HYPRE_ParVectorSetConstantValues(amg->xv, 0.0);
+    HYPRE_BoomerAMGSolve(amg->multigrid, amg->a, amg->b, amg->xv);
     HYPRE_IJVectorGetValues(amg->x, amg->n, amg->rows, x);
-    *residual = relative;
     const int failed = HYPRE_GetError() != 0;
     HYPRE_ClearAllErrors();
-    if (failed || !(relative <= tolerance)) /* hypre stops at max_iterations */
-        return -1;
-    return (int)iterations;
+    return failed ? -1 : 0;
 }

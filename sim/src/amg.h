@@ -1,5 +1,5 @@
-/* Algebraic multigrid for the implicit scheme's assembled systems: hypre's BoomerAMG as the preconditioner of
- * hypre's BiCGSTAB, on one MPI rank (docs/method.md, "Linear solvers"). */
+/* Algebraic multigrid for the implicit scheme's solves: hypre's BoomerAMG, one V-cycle at a time as the
+ * preconditioner of the scheme's own BiCGSTAB, on one MPI rank (docs/method.md, "Linear solvers"). */
 #ifndef SURGE_AMG_H
 #define SURGE_AMG_H
 
@@ -16,8 +16,7 @@ void amg_destroy(amg_system *amg);
  * the multigrid hierarchy built on it; -1 when hypre reports an error. */
 int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *cols, const double *values);
 
-/* Solves A x = rhs from the guess in x to |rhs - A x| <= tolerance |rhs|; returns the iterations, or -1 when
- * max_iterations pass first or hypre reports an error; *residual: the relative residual reached. */
-int amg_solve(amg_system *amg, const double *rhs, double *x, double tolerance, int max_iterations, double *residual);
+/* One V-cycle of the hierarchy on rhs from zero, x ~ A^-1 rhs; -1 when hypre reports an error (or no setup). */
+int amg_vcycle(amg_system *amg, const double *rhs, double *x);
 
 #endif

@@ -144,10 +144,11 @@ static const surge_param_info registry[] = {
      "Implicit scheme: iterations allowed per linear solve; a solve that needs more fails the run (health).",
      OFF(implicit.max_iterations)},
     {"implicit", "preconditioner", SURGE_PARAM_ENUM, "-", SURGE_PRECONDITIONER_AUTO, 0, 2, false, "jacobi|amg|auto",
-     "Implicit scheme: how the linear solves are preconditioned: jacobi (matrix-free BiCGSTAB with the diagonal, on "
-     "the neighbour lists), amg (the assembled matrices, hypre's BoomerAMG-preconditioned BiCGSTAB: a few iterations "
-     "after a setup each step) or auto (amg for the pressure from 2,500 fluid particles and for the viscous solve from "
-     "30,000, where it starts to pay; docs/method.md, \"Linear solvers\").",
+     "Implicit scheme: how the linear solves (matrix-free BiCGSTAB on the neighbour lists) are preconditioned: jacobi "
+     "(the diagonal), amg (a V-cycle of hypre's BoomerAMG, built each step on a sparse stand-in of the operator: the "
+     "nearest neighbours' entries, the others moved to the diagonal; a few iterations after a setup) or auto (amg for "
+     "the pressure from 2,500 fluid particles and for the viscous solve from 10,000, where it starts to pay; "
+     "docs/method.md, \"Linear solvers\").",
      OFF(implicit.preconditioner)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "

@@ -21,15 +21,16 @@ typedef enum surge_scheme {
 
 typedef enum surge_preconditioner {
     SURGE_PRECONDITIONER_JACOBI = 0, /* matrix-free BiCGSTAB on the neighbour lists, diagonal preconditioner */
-    SURGE_PRECONDITIONER_AMG = 1,    /* the assembled matrix, hypre's BoomerAMG-preconditioned BiCGSTAB */
+    SURGE_PRECONDITIONER_AMG = 1,    /* matrix-free BiCGSTAB, a V-cycle of hypre's BoomerAMG on a sparse stand-in */
     SURGE_PRECONDITIONER_AUTO = 2,   /* amg from the sizes below, jacobi under them */
 } surge_preconditioner;
 
 /* Where the multigrid starts to pay (docs/method.md, "Linear solvers"), on the Freydier front, one thread: for the
  * pressure, jacobi was faster with 2,040 fluid particles and amg with 2,940 (C_h 1.3); for the viscous solve, which
- * starts from v_n, jacobi was faster with 18,361 and they were level with 32,642 (C_h 1.8) */
+ * starts from v_n, jacobi was faster with 4,591, they were level with 8,161 and amg was faster with 18,361 (C_h 1.8,
+ * the multigrid on the sparse stand-in) */
 #define SURGE_AMG_MIN_FLUID_PARTICLES 2500
-#define SURGE_AMG_MIN_FLUID_PARTICLES_VISCOUS 30000
+#define SURGE_AMG_MIN_FLUID_PARTICLES_VISCOUS 10000
 
 typedef enum surge_diffusion_form {
     SURGE_DIFFUSION_FOURTAKAS = 0, /* Fourtakas et al. 2019: density differences less their hydrostatic part */
