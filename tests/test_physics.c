@@ -274,12 +274,10 @@ static int test_restart(const char *dir, const char *case_name)
     return failures;
 }
 
-/* A linear solve of the implicit scheme that cannot converge in the iterations allowed stops the step with the
- * solver check, naming the solve, and leaves the state as it was (the film, one iteration allowed). */
-/* The multigrid solves (implicit.preconditioner = amg) against the matrix-free ones on the Freydier front (walls, the
- * belt, the upstream wall, a free surface; dp 2 mm, C_h 1.3): the assembled matrices must be the operators, so 20
- * steps from the same start give the same velocities to the solves' tolerances, where a wrong coefficient would
- * differ by the velocities' own size. */
+/* The multigrid-preconditioned solves (implicit.preconditioner = amg) against the diagonal's on the Freydier front
+ * (walls, the belt, the upstream wall, a free surface; dp 2 mm, C_h 1.3): both iterate on the same matrix-free
+ * operators, so 20 steps from the same start give the same velocities to the solves' tolerances, where a solve
+ * that stopped short or a preconditioner that changed the answer would differ by the velocities' own size. */
 static int test_preconditioners(void)
 {
     surge_snapshot snap[2] = {{0}};
@@ -316,6 +314,8 @@ static int test_preconditioners(void)
     return failures;
 }
 
+/* A linear solve of the implicit scheme that cannot converge in the iterations allowed stops the step with the
+ * solver check, naming the solve, and leaves the state as it was (the film, one iteration allowed). */
 static int test_solver_failure(void)
 {
     const char *overrides[] = {"numerics.dp_m=0.0125", "domain.length_m=0.25", "fluid.x1_m=0.25", "numerics.ch=1.3",

@@ -36,11 +36,11 @@ typedef struct implicit_work {
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
-    amg_system *amg;                     /* implicit.preconditioner = amg: the assembled matrix's solver */
+    amg_system *amg;                     /* implicit.preconditioner = amg: the V-cycles of the stand-in's hierarchy */
     int pressure_by_multigrid;           /* this step's pressure solves use amg (there is a free surface) */
     int vcycle_blocks;                   /* solve()'s preconditioner: 0 the diagonal, else one V-cycle of amg's
                                           * hierarchy on each of this many blocks of nf unknowns */
-    int64_t *matrix_first;               /* amg: the assembled pressure matrix, row i's entries from matrix_first[i] */
+    int64_t *matrix_first;               /* amg: the sparse stand-in, row i's entries from matrix_first[i] */
     int32_t *matrix_col;
     double *matrix_val;
     size_t matrix_cap;
@@ -437,8 +437,11 @@ static void assemble_pressure(surge_sim *sim)
     }
 }
 
-/* The multigrid's sparse stand-in for an operator (assemble_matrix's arguments): of each row's fluid entries only
- * those at least SPARSE_KEEP of the row's largest (the nearest neighbours) stay; the others, and each wet wall
+/* The multigrid's sparse stand-in for an operator on the fluid particles whose row i is diag[i], fluid_scale
+ * fluid_coef[e] for each fluid neighbour and wall_scale wall_coef[e] for each wet wall neighbour, whose value the
+ * operator takes from the wall's ghost node (with honour_fixed a free-surface particle's row is its diagonal
+ * alone, the pressure's). Of each row's fluid entries only those at least SPARSE_KEEP of the row's largest (the
+ * nearest neighbours) stay; the others, and each wet wall
  * neighbour's entry (its ghost's interpolation taken at the particle itself), are added to the diagonal, which
  * keeps every row's sum: the same operator on a constant and on smooth fields, a few entries a row instead of a
  * kernel's 80. A preconditioner only: the solve iterates on the operator itself. -1 when out of memory. */
@@ -679,8 +682,8 @@ static int multigrid(const surge_sim *sim, bool viscous)
     return surge_implicit_uses_amg(&sim->params, sim->count - sim->wall_count, viscous);
 }
 
-/* The multigrid solver on the matrix of assemble_matrix (its arguments after the first, what names the system);
- * a health failure (with the reason) when it cannot be built */
+/* The multigrid hierarchy on the sparse stand-in of assemble_sparse (its arguments after the first; what names the
+ * system); a health failure (with the reason) when it cannot be built */
 static int multigrid_setup(surge_sim *sim, const char *what, const double *diag, const real *fluid_coef,
                            double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed)
 {
@@ -690,7 +693,7 @@ static int multigrid_setup(surge_sim *sim, const char *what, const double *diag,
         w->amg = amg_create(reason, sizeof reason);
     const int nf = sim->count - sim->wall_count;
     if (w->amg && assemble_sparse(sim, diag, fluid_coef, fluid_scale, wall_coef, wall_scale, honour_fixed) != 0)
-        snprintf(reason, sizeof reason, "out of memory for the assembled %s matrix", what);
+        snprintf(reason, sizeof reason, "out of memory for the %s matrix's sparse stand-in", what);
     else if (w->amg && amg_setup(w->amg, nf, w->matrix_first, w->matrix_col, w->matrix_val) != 0)
         snprintf(reason, sizeof reason, "hypre could not build the multigrid hierarchy of the %s matrix", what);
     if (!reason[0])
