@@ -11,7 +11,7 @@ int grid_init(surge_sim *sim, char *err, size_t err_len)
 {
     const surge_params *p = &sim->params;
     cell_grid *g = &sim->grid;
-    const double support = 2.0 * sim->derived.h_m + p->numerics.neighbour_skin_h * sim->derived.h_m;
+    const double support = 2.0 * sim->derived.h_m + sim_neighbour_skin_m(sim);
     const double wall_depth = p->walls.layers * p->numerics.dp_m;
     if (p->domain.periodic_x) {
         g->period_m = p->domain.length_m;

@@ -324,7 +324,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
     const real mass = c.mass, alpha = c.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
     /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
-    const real face_reach_m = (real)(sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m);
+    const real face_reach_m = (real)sim_contact_reach_m(sim);
     const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
     const real surface_threshold = (real)sim->params.shifting.surface_threshold;
     const real face_stiffness = (real)(0.1 * sim->derived.c0_mps * sim->derived.c0_mps / sim->params.numerics.dp_m);

@@ -45,7 +45,7 @@ void neighbours_fluid_share(const surge_sim *sim, int *begin, int *end)
 int neighbours_init(surge_sim *sim, char *err, size_t err_len)
 {
     neighbour_lists *nl = &sim->neighbours;
-    nl->skin_m = sim->params.numerics.neighbour_skin_h * sim->derived.h_m;
+    nl->skin_m = sim_neighbour_skin_m(sim);
     const size_t n = (size_t)sim->count, nf = (size_t)(sim->count - sim->wall_count);
     nl->x_build = malloc((n + 1) * sizeof *nl->x_build);
     nl->y_build = malloc((n + 1) * sizeof *nl->y_build);

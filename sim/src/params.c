@@ -60,7 +60,8 @@ static const surge_param_info registry[] = {
     {"walls", "face_repulsion_reach_dp", SURGE_PARAM_REAL, "dp", 0.25, 0, 0.5, true, NULL,
      "A fluid particle closer than this to the face of the wall particle straight below it, or to a disc's circle, is "
      "pushed back along the wall normal, 0.1 c0^2/dp (1 - d/reach)^2, and loses its velocity toward the face; no "
-     "shift brings a particle closer than this (0: off; docs/method.md).", OFF(walls.face_repulsion_reach_dp)},
+     "shift brings a particle closer than this (0: off; the explicit scheme's; the implicit scheme's is "
+     "implicit.contact_reach_dp; docs/method.md).", OFF(walls.face_repulsion_reach_dp)},
     {"walls", "upstream_x_m", SURGE_PARAM_REAL, "m", 0.012, -1e4, 1e4, false, NULL,
      "Position of the upstream wall's fluid face.", OFF(walls.upstream_x_m)},
     {"walls", "upstream_height_m", SURGE_PARAM_REAL, "m", 0.06, 1e-6, 1e4, false, NULL,
@@ -113,7 +114,8 @@ static const surge_param_info registry[] = {
      OFF(numerics.continuity_correction)},
     {"numerics", "neighbour_skin_h", SURGE_PARAM_REAL, "h", 0.2, 0, 2, false, NULL,
      "Skin of the neighbour lists in units of h: each fluid particle lists its neighbours within 2h + skin and "
-     "the lists are reused until a particle may have moved skin/2 (0: rebuilt every step; docs/method.md).",
+     "the lists are reused until a particle may have moved skin/2 (0: rebuilt every step; the explicit scheme's: the "
+     "implicit scheme's lists have no skin and are built at every step; docs/method.md).",
      OFF(numerics.neighbour_skin_h)},
     {"numerics", "viscous_dt_limit", SURGE_PARAM_BOOL, "-", 1, 0, 1, false, NULL,
      "Include the viscous limit dt_nu = h^2/nu0 in the time step.", OFF(numerics.viscous_dt_limit)},
@@ -126,8 +128,9 @@ static const surge_param_info registry[] = {
      "(incompressible projection with implicit viscosity, time step at the flow's own speed; for slow viscous "
      "flows; no boulders yet; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
 
-    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.25, 1e-4, 2, false, NULL,
-     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)).", OFF(implicit.cfl)},
+    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, false, NULL,
+     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)) (0.5 compresses the belt-wall corner of the Freydier "
+     "front; docs/validation/stability.md).", OFF(implicit.cfl)},
     {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
      OFF(implicit.pressure_tolerance)},
@@ -170,6 +173,12 @@ static const surge_param_info registry[] = {
      "row under a flat free surface (0.988, 0.946, 0.869 at C_h 1.0, 1.3, 1.8) by more than this is on the free "
      "surface too: at a contact line (a front's foot on the bed) the wall raises div r but not the kernel sum.",
      OFF(implicit.surface_kernel_margin)},
+    {"implicit", "contact_reach_dp", SURGE_PARAM_REAL, "dp", 0.45, 0, 0.5, true, NULL,
+     "Implicit scheme: the contact distance (the explicit scheme's is walls.face_repulsion_reach_dp): a fluid particle "
+     "within it of the nearest wall face loses its velocity toward the face, and no step or shift ends closer. 0.45, "
+     "just inside the lattice's 0.5, lets the belt-wall corner run at cfl 0.35 where 0.25 compressed it; at 0.5 the "
+     "rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
+     OFF(implicit.contact_reach_dp)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

@@ -47,7 +47,7 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
     }
     /* no closer to a wall face than the reach of its repulsion: a shift does not carry fluid into a wall */
     const double toward_face_m = -(dx * sim->face_nx[a] + dy * sim->face_ny[a]);
-    const double room_m = fmax(0.0, sim->face_gap_m[a] - p->walls.face_repulsion_reach_dp * p->numerics.dp_m);
+    const double room_m = fmax(0.0, sim->face_gap_m[a] - sim_contact_reach_m(sim));
     if (toward_face_m > room_m) {
         dx += (toward_face_m - room_m) * sim->face_nx[a];
         dy += (toward_face_m - room_m) * sim->face_ny[a];

@@ -177,6 +177,24 @@ static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
     return x;
 }
 
+/* The contact distance of the scheme in use (m): no step or shift ends closer to a wall face (the explicit scheme's
+ * face repulsion acts within it) */
+static inline double sim_contact_reach_m(const surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    return (p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? p->implicit.contact_reach_dp
+                                                         : p->walls.face_repulsion_reach_dp) * p->numerics.dp_m;
+}
+
+/* The neighbour lists' skin (m). The implicit scheme's lists have none: its step moves the fastest particle 0.1-0.35 h,
+ * past half of any skin, so its lists are built at every step anyway, and a skin's pairs beyond the kernel's support
+ * only cost (12 % of a step on the Freydier front at 0.2 h; docs/method.md) */
+static inline double sim_neighbour_skin_m(const surge_sim *sim)
+{
+    return sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
+                                                                 : sim->params.numerics.neighbour_skin_h * sim->derived.h_m;
+}
+
 /* scene.c */
 int scene_build(surge_sim *sim, char *err, size_t err_len);
 double scene_expected_speed(const surge_params *p);

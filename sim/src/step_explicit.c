@@ -94,7 +94,7 @@ int step_explicit(surge_sim *sim)
         boulders_restore(sim);
         return -1;
     }
-    const double face_reach_m = sim->params.walls.face_repulsion_reach_dp * sim->params.numerics.dp_m;
+    const double face_reach_m = sim_contact_reach_m(sim);
     #pragma omp parallel
     {
         shifting_compute(sim, dt);

@@ -25,6 +25,7 @@
 #define DOT_BLOCK 4096        /* dot products: partial sums over fixed blocks, added in order */
 #define MIN_SHEPARD_SUM 0.1   /* a ghost node with less fluid around it is dry (as boundary.c) */
 #define MIN_DETERMINANT 1e-3  /* below it the first-order interpolation falls back to Shepard's (as boundary.c) */
+#define CONTACT_ROUNDING_DP 1e-4 /* a gap this close to the contact distance (dp) is at it */
 #define SPARSE_KEEP 0.3       /* the multigrid's stand-in keeps entries at least this fraction of the row's largest:
                                * on a lattice the 20 neighbours within 2.3 dp at C_h 1.8, the 8 within 1.9 dp at
                                * C_h 1.3 (0.2 and 0.5 were slower on the Freydier front, docs/method.md) */
@@ -54,7 +55,6 @@ typedef struct implicit_work {
     double *grad_x, *grad_y;             /* scratch: the pressure gradient inside the operator */
     double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
     uint8_t *fixed;                      /* free-surface particle: p = 0 */
-    double *row_scratch;                 /* per fluid particle: assemble_sparse's threshold */
     double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
                                           * free surface, where that can be read (else 0) */
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
@@ -113,7 +113,7 @@ static int reserve_work(surge_sim *sim)
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(row_scratch, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
@@ -132,7 +132,7 @@ void step_implicit_free(surge_sim *sim)
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
-                      w->grad_y, w->pressure_n, w->fixed, w->row_scratch, w->expected_ratio, w->wall_x, w->wall_y,
+                      w->grad_y, w->pressure_n, w->fixed, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
@@ -451,49 +451,38 @@ static int assemble_sparse(surge_sim *sim, const double *diag, const real *fluid
     implicit_work *w = sim->implicit;
     const neighbour_lists *nl = &sim->neighbours;
     const int first = sim->wall_count, nf = sim->count - first;
-    const double keep = SPARSE_KEEP;
+    /* each row is written once, where it has room for all its entries (fluid_first[i] + i: its fluid neighbours and
+     * the diagonal), then the rows are closed up */
+    const size_t room = (size_t)nl->fluid_first[nf] + (size_t)nf;
     if (!w->matrix_first && !(w->matrix_first = malloc((size_t)(nf + 1) * sizeof *w->matrix_first)))
         return -1;
-    int64_t *row_first = w->matrix_first;
-    double *restrict smallest_kept = w->row_scratch;
-    #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int i = 0; i < nf; i++) {
-        int64_t count = 1;
-        double largest = 0;
-        if (!(honour_fixed && w->fixed[i])) {
-            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-                largest = fabs((double)fluid_coef[e]) > largest ? fabs((double)fluid_coef[e]) : largest;
-            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-                count += fluid_coef[e] != 0 && fabs((double)fluid_coef[e]) >= keep * largest;
-        }
-        smallest_kept[i] = keep * largest;
-        row_first[i + 1] = count;
-    }
-    row_first[0] = 0;
-    for (int i = 0; i < nf; i++)
-        row_first[i + 1] += row_first[i];
-    const size_t total = (size_t)row_first[nf];
-    if (total > w->matrix_cap || !w->matrix_col) {
-        int32_t *col = realloc(w->matrix_col, total * sizeof *col);
+    if (room > w->matrix_cap || !w->matrix_col) {
+        int32_t *col = realloc(w->matrix_col, room * sizeof *col);
         if (col)
             w->matrix_col = col;
-        double *val = col ? realloc(w->matrix_val, total * sizeof *val) : NULL;
+        double *val = col ? realloc(w->matrix_val, room * sizeof *val) : NULL;
         if (!val)
             return -1;
-        w->matrix_val = val, w->matrix_cap = total;
+        w->matrix_val = val, w->matrix_cap = room;
     }
+    int64_t *row_first = w->matrix_first;
     int32_t *restrict col = w->matrix_col;
     double *restrict val = w->matrix_val;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
-        int64_t at = row_first[i];
+        const int64_t start = nl->fluid_first[i] + i;
+        int64_t at = start;
         double d = diag[i];
         col[at] = i;
         if (!(honour_fixed && w->fixed[i])) {
+            double largest = 0;
+            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                largest = fabs((double)fluid_coef[e]) > largest ? fabs((double)fluid_coef[e]) : largest;
+            const double smallest_kept = SPARSE_KEEP * largest;
             for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
                 if (fluid_coef[e] == 0)
                     continue;
-                if (fabs((double)fluid_coef[e]) >= smallest_kept[i])
+                if (fabs((double)fluid_coef[e]) >= smallest_kept)
                     ++at, col[at] = nl->fluid_index[e] - first, val[at] = fluid_scale * fluid_coef[e];
                 else
                     d += fluid_scale * fluid_coef[e];
@@ -501,7 +490,15 @@ static int assemble_sparse(surge_sim *sim, const double *diag, const real *fluid
             for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) /* the weights sum to 1 */
                 d += w->dry[nl->wall_index[e]] ? 0.0 : wall_scale * wall_coef[e];
         }
-        val[row_first[i]] = d;
+        val[start] = d;
+        row_first[i + 1] = at + 1 - start;
+    }
+    row_first[0] = 0;
+    for (int i = 0; i < nf; i++) {
+        const int64_t start = nl->fluid_first[i] + i, count = row_first[i + 1];
+        row_first[i + 1] = row_first[i] + count;
+        memmove(col + row_first[i], col + start, (size_t)count * sizeof *col);
+        memmove(val + row_first[i], val + start, (size_t)count * sizeof *val);
     }
     return 0;
 }
@@ -544,10 +541,12 @@ static double dot(const implicit_work *w, const double *a, const double *b, int 
     return sum;
 }
 
-/* The linear part of the affine operator: F(x) - F(0) (offset holds F(0)) */
-static void apply_linear(surge_sim *sim, affine_operator op, const double *x, double *out, int n)
+/* The linear part of the operator: F(x) - F(0) (offset holds F(0)), or F(x) itself where F is linear */
+static void apply_linear(surge_sim *sim, affine_operator op, int linear, const double *x, double *out, int n)
 {
     op(sim, x, out);
+    if (linear)
+        return;
     const double *offset = sim->implicit->offset;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++)
@@ -571,19 +570,23 @@ static int precondition(surge_sim *sim, const double *in, double *out, int n)
     return 0;
 }
 
-/* Solves F(x) = rhs for the affine operator op (n unknowns) by BiCGSTAB with the Jacobi preconditioner diag (van
- * der Vorst 1992), from the guess in x, to |residual| <= tolerance |rhs - F(0)|. Returns the iterations, or -1 when
- * max_iterations pass first or the method breaks down; *residual: the relative residual reached. */
-static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, int max_iterations, double *residual)
+/* Solves F(x) = rhs for the affine operator op (n unknowns) by BiCGSTAB, preconditioned as precondition() says
+ * (van der Vorst 1992), to |residual| <= tolerance |rhs - F(0)|: from the guess in x, or, where homogeneous, from
+ * x = 0 with F linear (F(0) = 0; neither needs an operator call before the iterations). Returns the iterations, or
+ * -1 when max_iterations pass first or the method breaks down; *residual: the relative residual reached. */
+static int solve(surge_sim *sim, affine_operator op, int n, int homogeneous, double tolerance, int max_iterations,
+                 double *residual)
 {
     implicit_work *w = sim->implicit;
     double *x = w->x, *r = w->r, *rhat = w->rhat, *p = w->p, *v = w->v, *s = w->s, *t = w->t, *y = w->y, *z = w->z;
-    op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
-    apply_linear(sim, op, x, r, n);
+    if (!homogeneous) {
+        op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
+        apply_linear(sim, op, 0, x, r, n);
+    }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++) {
-        const double b = w->rhs[i] - w->offset[i];
-        r[i] = b - r[i];
+        const double b = homogeneous ? w->rhs[i] : w->rhs[i] - w->offset[i];
+        r[i] = homogeneous ? b : b - r[i];
         rhat[i] = b; /* the shadow residual: the right-hand side (nonzero whenever there is work) */
         p[i] = v[i] = 0;
     }
@@ -607,7 +610,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
             p[i] = r[i] + beta * (p[i] - omega * v[i]);
         if (precondition(sim, p, y, n) != 0)
             return -1;
-        apply_linear(sim, op, y, v, n);
+        apply_linear(sim, op, homogeneous, y, v, n);
         const double rv = dot(w, rhat, v, n);
         if (rv == 0)
             return -1;
@@ -624,7 +627,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, double tolerance, in
         }
         if (precondition(sim, s, z, n) != 0)
             return -1;
-        apply_linear(sim, op, z, t, n);
+        apply_linear(sim, op, homogeneous, z, t, n);
         const double tt = dot(w, t, t, n);
         omega = tt > 0 ? dot(w, t, s, n) / tt : 0;
         #pragma omp parallel for schedule(static) if (wide(sim))
@@ -705,12 +708,13 @@ static int multigrid_setup(surge_sim *sim, const char *what, const double *diag,
     return -1;
 }
 
-/* A solve of the pressure operator (phi or psi) from the guess in x, by the preconditioner the parameters choose */
+/* A solve of the pressure operator (phi or psi; linear, the walls' Neumann offsets being 0 in step 2) from x = 0,
+ * by the preconditioner the parameters choose */
 static int pressure_solve(surge_sim *sim, double tolerance, double *residual)
 {
     const int nf = sim->count - sim->wall_count, max_iterations = sim->params.implicit.max_iterations;
     sim->implicit->vcycle_blocks = sim->implicit->pressure_by_multigrid;
-    const int iterations = solve(sim, pressure_operator, nf, tolerance, max_iterations, residual);
+    const int iterations = solve(sim, pressure_operator, nf, 1, tolerance, max_iterations, residual);
     sim->implicit->vcycle_blocks = 0;
     return iterations;
 }
@@ -779,7 +783,7 @@ int step_implicit(surge_sim *sim)
             iterations = -2;
         else {
             w->vcycle_blocks = multigrid(sim, true) ? 2 : 0;
-            iterations = solve(sim, viscous_operator, 2 * nf, prm->implicit.viscous_tolerance,
+            iterations = solve(sim, viscous_operator, 2 * nf, 0, prm->implicit.viscous_tolerance,
                                prm->implicit.max_iterations, &residual);
             w->vcycle_blocks = 0;
         }
@@ -937,14 +941,17 @@ int step_implicit(surge_sim *sim)
     for (int kw = 0; kw < first; kw++)
         sim->pressure[kw] = (real)(w->dry[kw] ? 0.0 : ghost_value(sim, kw, w->pressure_n) -
                                    rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
-    const double face_reach_m = prm->walls.face_repulsion_reach_dp * prm->numerics.dp_m;
+    const double face_reach_m = sim_contact_reach_m(sim);
+    /* a particle the contact rule on positions (below) left at the reach is in contact: its gap, read back in
+     * single precision, may come out a rounding either side of the reach */
+    const double contact_m = face_reach_m + CONTACT_ROUNDING_DP * prm->numerics.dp_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         double vx1 = w->x[i], vy1 = w->x[nf + i];
         /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md) */
         const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0)
+        if (sim->face_gap_m[a] < contact_m && approach_mps < 0)
             vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }

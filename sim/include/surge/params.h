@@ -129,6 +129,7 @@ typedef struct surge_params {
         double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
         double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
+        double contact_reach_dp;   /* no step or shift ends closer than this to a wall face (dp) */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */
