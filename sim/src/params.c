@@ -128,9 +128,10 @@ static const surge_param_info registry[] = {
      "(incompressible projection with implicit viscosity, time step at the flow's own speed; for slow viscous "
      "flows; no boulders yet; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
 
-    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, false, NULL,
-     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)) (0.5 compresses the belt-wall corner of the Freydier "
-     "front; docs/validation/stability.md).", OFF(implicit.cfl)},
+    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, true, NULL,
+     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)), taken at each step, so a run may continue from its "
+     "checkpoint with another (at cfl 0.5 the Freydier front compresses against its upstream wall; "
+     "docs/validation/stability.md).", OFF(implicit.cfl)},
     {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
      OFF(implicit.pressure_tolerance)},
