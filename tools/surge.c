@@ -677,7 +677,7 @@ static void report_resolution(const surge_sim *sim, int verbose)
         const double g = p->body.gravity_mps2, u = d->expected_speed_mps;
         double dt_implicit = p->numerics.dt_fixed_s;
         if (!(dt_implicit > 0))
-            dt_implicit = p->implicit.cfl * fmin(g > 0 ? sqrt(h / g) : INFINITY, u > 0 ? h / u : INFINITY);
+            dt_implicit = surge_implicit_dt_s(p, h, g, u);
         const bool amg = surge_implicit_uses_amg(p, d->fluid_count, false);
         const bool viscous_amg = surge_implicit_uses_amg(p, d->fluid_count, true);
         if (verbose || bytes > 4e9)

@@ -128,10 +128,14 @@ static const surge_param_info registry[] = {
      "(incompressible projection with implicit viscosity, time step at the flow's own speed; for slow viscous "
      "flows; no boulders yet; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
 
-    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, true, NULL,
-     "Implicit scheme: dt = cfl min(h / u_max, sqrt(h / |g|)), taken at each step, so a run may continue from its "
-     "checkpoint with another (at cfl 0.5 the Freydier front compresses against its upstream wall; "
-     "docs/validation/stability.md).", OFF(implicit.cfl)},
+    {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.25, 1e-4, 2, true, NULL,
+     "Implicit scheme: the advective limit, dt <= cfl h / u_max (at C_h 1.8 a particle at u_max then moves 0.64 dp a "
+     "step; at 0.85 dp the Freydier front compressed against its upstream wall, where the flow turns; "
+     "docs/validation/stability.md). Taken at each step: a run may continue from its checkpoint with another.",
+     OFF(implicit.cfl)},
+    {"implicit", "force_cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, true, NULL,
+     "Implicit scheme: the body-force limit, dt <= force_cfl sqrt(h / |g|), the period of the shortest surface wave "
+     "the kernel resolves (docs/method.md).", OFF(implicit.force_cfl)},
     {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
      OFF(implicit.pressure_tolerance)},
@@ -729,6 +733,16 @@ int surge_params_wall_layers(const surge_params *p)
     const double support = 2.0 * p->numerics.ch * sqrt(2.0) * p->numerics.dp_m;
     const int needed = (int)ceil(support / p->numerics.dp_m - 1e-9);
     return p->walls.layers > 0 ? p->walls.layers : needed;
+}
+
+double surge_implicit_dt_s(const surge_params *p, double h_m, double g_mps2, double u_max_mps)
+{
+    double dt = INFINITY;
+    if (g_mps2 > 0)
+        dt = p->implicit.force_cfl * sqrt(h_m / g_mps2);
+    if (u_max_mps > 0)
+        dt = fmin(dt, p->implicit.cfl * h_m / u_max_mps);
+    return dt;
 }
 
 bool surge_implicit_uses_amg(const surge_params *p, int fluid_count, bool viscous)

@@ -645,7 +645,7 @@ static int solve(surge_sim *sim, affine_operator op, int n, int homogeneous, dou
     return -1;
 }
 
-/* dt = cfl min(h / u_max, sqrt(h / |g|)) from the velocities at the step's start */
+/* dt = min(cfl h / u_max, force_cfl sqrt(h / |g|)) from the velocities at the step's start */
 static double implicit_dt(const surge_sim *sim)
 {
     const surge_params *p = &sim->params;
@@ -658,12 +658,11 @@ static double implicit_dt(const surge_sim *sim)
         max_v2 = v2 > max_v2 ? v2 : max_v2;
     }
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
-    double dt = g > 0 ? sqrt(h / g) : INFINITY;
-    if (max_v2 > 0)
-        dt = fmin(dt, h / sqrt(max_v2));
-    if (!isfinite(dt)) /* no gravity and at rest: the walls' speeds set the scale */
-        dt = h / fmax(fabs(p->walls.bottom_speed_mps) + fabs(p->walls.top_speed_mps), 1e-12);
-    return p->implicit.cfl * dt;
+    const double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
+    if (isfinite(dt))
+        return dt;
+    /* no gravity and at rest: the walls' speeds set the scale */
+    return p->implicit.cfl * h / fmax(fabs(p->walls.bottom_speed_mps) + fabs(p->walls.top_speed_mps), 1e-12);
 }
 
 static void fail_solve(surge_sim *sim, const char *what, int iterations, double residual, double t_n)

@@ -119,7 +119,8 @@ typedef struct surge_params {
         int scheme;               /* surge_scheme */
     } numerics;
     struct { /* the implicit scheme (numerics.scheme = implicit) */
-        double cfl;                /* dt = cfl min(h / u_max, sqrt(h / |g|)) */
+        double cfl;                /* the advective limit: dt <= cfl h / u_max */
+        double force_cfl;          /* the body-force limit: dt <= force_cfl sqrt(h / |g|) */
         double pressure_tolerance; /* relative residual of the pressure Poisson solve */
         double viscous_tolerance;  /* relative residual of the implicit viscous solve */
         double density_tolerance;  /* relative residual of the rest-density solve (psi) */
@@ -245,6 +246,10 @@ int surge_params_wall_layers(const surge_params *p);
 /* Whether the implicit scheme solves its pressure (viscous = false) or viscous (true) systems by the multigrid with
  * fluid_count fluid particles: implicit.preconditioner, auto by the sizes above. */
 bool surge_implicit_uses_amg(const surge_params *p, int fluid_count, bool viscous);
+
+/* The implicit scheme's time step (s) with smoothing length h_m, gravity g_mps2 and largest speed u_max_mps:
+ * min(implicit.cfl h / u_max, implicit.force_cfl sqrt(h / g)); infinite with neither speed nor gravity. */
+double surge_implicit_dt_s(const surge_params *p, double h_m, double g_mps2, double u_max_mps);
 /* Checks that the parameters together describe a scene that can be built (block inside the box...). */
 int surge_params_validate(const surge_params *p, char *err, size_t err_len);
 
