@@ -919,10 +919,33 @@ static int test_implicit_auto(void)
     return failures;
 }
 
+/* The implicit scheme's time step: the smaller of the advective limit cfl h / u_max and the body-force limit
+ * force_cfl sqrt(h / g), each with its own coefficient (the Freydier front at dp 0.25 mm, C_h 1.8: h = 0.636 mm) */
+static int test_implicit_dt(void)
+{
+    surge_params p = surge_default_params();
+    p.implicit.cfl = 0.25, p.implicit.force_cfl = 0.35;
+    const double h = 0.636e-3, g = 9.81;
+    expect_below("implicit_dt: the belt's speed, the advective limit 0.25 h / u (relative error)",
+                 fabs(surge_implicit_dt_s(&p, h, g, 0.0725) / (0.25 * h / 0.0725) - 1), 1e-12);
+    expect_below("implicit_dt: slow, the body-force limit 0.35 sqrt(h / g) (relative error)",
+                 fabs(surge_implicit_dt_s(&p, h, g, 0.01) / (0.35 * sqrt(h / g)) - 1), 1e-12);
+    expect_below("implicit_dt: no gravity, the advective limit (relative error)",
+                 fabs(surge_implicit_dt_s(&p, h, 0, 0.01) / (0.25 * h / 0.01) - 1), 1e-12);
+    expect_below("implicit_dt: neither speed nor gravity is unbounded (1 = bounded)",
+                 isfinite(surge_implicit_dt_s(&p, h, 0, 0)) != 0, 0.5);
+    p.implicit.force_cfl = 0.1;
+    expect_below("implicit_dt: force_cfl alone moves the body-force limit (relative error)",
+                 fabs(surge_implicit_dt_s(&p, h, g, 0.01) / (0.1 * sqrt(h / g)) - 1), 1e-12);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
         return 2;
+    if (!strcmp(argv[1], "implicit_dt"))
+        return test_implicit_dt() ? 1 : 0;
     if (!strcmp(argv[1], "kernel"))
         return test_kernel() ? 1 : 0;
     if (!strcmp(argv[1], "eos"))
