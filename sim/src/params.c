@@ -181,7 +181,8 @@ static const surge_param_info registry[] = {
     {"implicit", "contact_reach_dp", SURGE_PARAM_REAL, "dp", 0.45, 0, 0.5, true, NULL,
      "Implicit scheme: the contact distance (the explicit scheme's is walls.face_repulsion_reach_dp): a fluid particle "
      "within it of the nearest wall face loses its velocity toward the face, and no step or shift ends closer. 0.45, "
-     "just inside the lattice's 0.5, lets the belt-wall corner run at cfl 0.35 where 0.25 compressed it; at 0.5 the "
+     "just inside the lattice's 0.5, lets the belt-wall corner run at implicit.force_cfl 0.35 where 0.25 compressed it; "
+     "at 0.5 the "
      "rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
      OFF(implicit.contact_reach_dp)},
 
