@@ -661,8 +661,10 @@ static void report_resolution(const surge_sim *sim, int verbose)
         fprintf(out, "surge: warning: the smallest disc's radius (%g m) is %.1f dp, fewer than 4: its surface is "
                         "too coarse for the fluid's forces on it; dp <= %g m gives 4\n",
                 d->smallest_boulder_radius_m, d->smallest_boulder_radius_m / dp, d->smallest_boulder_radius_m / 4);
-    /* list entries per fluid particle: the particles within 2h + skin; 12 bytes each, about 200 bytes of state */
-    const double reach = (2.0 + p->numerics.neighbour_skin_h) * h;
+    /* list entries per fluid particle: the particles within 2h + skin (the implicit scheme's lists have none); 12
+     * bytes each, about 200 bytes of state */
+    const double skin_h = p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0 : p->numerics.neighbour_skin_h;
+    const double reach = (2.0 + skin_h) * h;
     const double entries = SURGE_PI_CLI * reach * reach / (dp * dp);
     const double bytes = d->fluid_count * (12 * entries + 200) + d->wall_count * (6 * entries + 150);
     double dt = p->numerics.dt_fixed_s;
