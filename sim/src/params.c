@@ -182,8 +182,7 @@ static const surge_param_info registry[] = {
      "Implicit scheme: the contact distance (the explicit scheme's is walls.face_repulsion_reach_dp): a fluid particle "
      "within it of the nearest wall face loses its velocity toward the face, and no step or shift ends closer. 0.45, "
      "just inside the lattice's 0.5, lets the belt-wall corner run at implicit.force_cfl 0.35 where 0.25 compressed it; "
-     "at 0.5 the "
-     "rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
+     "at 0.5 the rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
      OFF(implicit.contact_reach_dp)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
