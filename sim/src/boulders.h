@@ -18,8 +18,12 @@ typedef struct boulder_set {
     double *fx, *fy, *torque;                             /* fluid force and torque on each disc (eq. 10) */
     double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
     double *spin_damping;   /* -d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit */
+    double *drag_stiffness; /* -d(force)/d(velocity) (kg/(m s)) with the fluid held still: the viscous drag's */
     double *omega_forces;   /* the omega the last fluid forces were computed with */
     double *angle_build;    /* orientation at the last neighbour-list build (where the ghosts' lists were made) */
+    double *wetted;         /* the fraction of the disc's surface the fluid wets (boulders_fluid_forces) */
+    double *step_ax, *step_ay; /* implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt */
+    double *step_ax_n, *step_ay_n; /* and over the one before (a rolled-back step restores them) */
     real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */
     /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
     int32_t *of_wall;

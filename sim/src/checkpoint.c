@@ -11,6 +11,7 @@
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
+ *             (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
  * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
@@ -100,10 +101,16 @@ static int write_implicit_pressure(FILE *f, const surge_sim *sim)
 {
     if (!sim->implicit_pressure_by_id)
         return 0;
-    return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double));
+    const boulder_set *b = &sim->boulders;
+    const size_t n = (size_t)b->count * sizeof(double);
+    return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)) |
+           (b->count > 0 ? write_all(f, b->step_ax, n) | write_all(f, b->step_ay, n) | write_all(f, b->step_ax_n, n) |
+                               write_all(f, b->step_ay_n, n)
+                         : 0);
 }
 
-/* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit */
+/* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit (and had
+ * no boulders) */
 static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
 {
     if (!sim->implicit_pressure_by_id || version < 5)
@@ -112,6 +119,15 @@ static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
         return -1;
     for (int i = 0; i < sim->count; i++) /* outside the state hash: finite and not absurd (1e12 Pa) */
         if (!(fabs(sim->implicit_pressure_by_id[i]) < 1e12))
+            return -1;
+    boulder_set *b = &sim->boulders;
+    const size_t n = (size_t)b->count * sizeof(double);
+    if (b->count > 0 && (read_all(f, b->step_ax, n) || read_all(f, b->step_ay, n) || read_all(f, b->step_ax_n, n) ||
+                         read_all(f, b->step_ay_n, n)))
+        return -1;
+    for (int i = 0; i < b->count; i++) /* outside the state hash too: finite and not absurd (1e6 m/s^2) */
+        if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
+              fabs(b->step_ay_n[i]) < 1e6))
             return -1;
     return 0;
 }

@@ -126,7 +126,7 @@ static const surge_param_info registry[] = {
     {"numerics", "scheme", SURGE_PARAM_ENUM, "-", SURGE_SCHEME_EXPLICIT, 0, 1, false, "explicit|implicit",
      "Time stepping: explicit (weakly-compressible SPH, time step at the speed of sound; the paper's) or implicit "
      "(incompressible projection with implicit viscosity, time step at the flow's own speed; for slow viscous "
-     "flows; no boulders yet; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
+     "flows; docs/method.md, \"The implicit scheme\").", OFF(numerics.scheme)},
 
     {"implicit", "cfl", SURGE_PARAM_REAL, "-", 0.25, 1e-4, 2, true, NULL,
      "Implicit scheme: the advective limit, dt <= cfl h / u_max (at C_h 1.8 a particle at u_max then moves 0.64 dp a "
@@ -184,6 +184,16 @@ static const surge_param_info registry[] = {
      "just inside the lattice's 0.5, lets the belt-wall corner run at implicit.force_cfl 0.35 where 0.25 compressed it; "
      "at 0.5 the rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
      OFF(implicit.contact_reach_dp)},
+    {"implicit", "added_mass", SURGE_PARAM_REAL, "-", 1, 0, 10, true, NULL,
+     "Implicit scheme: the boulders' added-mass estimate, in fluid masses of the wetted disc (1: a circle in "
+     "unbounded fluid). The fluid answers a disc's acceleration a step late; stepping the disc with this mass on both "
+     "sides keeps a disc lighter than the fluid stable (0: no estimate; docs/method.md, \"Boulders in the implicit "
+     "scheme\").", OFF(implicit.added_mass)},
+    {"implicit", "pair_distance_dp", SURGE_PARAM_REAL, "dp", 0.5, 0, 0.9, true, NULL,
+     "Implicit scheme: two fluid particles closer than this lose their speed toward each other (a perfectly inelastic "
+     "collision, momentum kept) and are moved apart to it. A pair that has closed on itself has no kernel gradient "
+     "left to part it (grad W(0) = 0), and in the debris surge such pairs gathered by the hundred and set off jets "
+     "(0: none; docs/method.md, \"Close pairs\").", OFF(implicit.pair_distance_dp)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "
@@ -769,11 +779,6 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
              p->render.color_min);
         return -1;
     }
-    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->boulders.placement != SURGE_BOULDERS_NONE) {
-        fail(err, err_len, "numerics.scheme = implicit does not take boulders yet (boulders.placement must be none); "
-             "use numerics.scheme = explicit for scenes with boulders");
-        return -1;
-    }
     const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
     const double support = 2.0 * p->numerics.ch * sqrt(2.0) * dp;
     const int layers = surge_params_wall_layers(p);
@@ -834,6 +839,14 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
     if (!p->walls.bottom && !p->walls.top && !p->walls.left && !p->walls.right && !p->walls.upstream &&
         p->body.gravity_mps2 > 0) {
         fail(err, err_len, "the scene has gravity but no walls: enable walls.bottom");
+        return -1;
+    }
+    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->boulders.placement != SURGE_BOULDERS_NONE && p->walls.top &&
+        p->fluid.depth_m > p->domain.height_m - dp) {
+        fail(err, err_len, "numerics.scheme = implicit takes boulders only under a free surface: here the fluid "
+             "(fluid.depth_m = %g m) fills the domain up to its lid (walls.top, domain.height_m = %g m). Lower "
+             "fluid.depth_m, or use numerics.scheme = explicit (docs/method.md, \"Boulders in the implicit scheme\")",
+             p->fluid.depth_m, p->domain.height_m);
         return -1;
     }
     double n_estimate = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m / (dp * dp);

@@ -273,18 +273,23 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
 /* boulders.c */
 int boulders_define(surge_sim *sim, char *err, size_t err_len);   /* the discs of the case, before the walls */
 int boulders_particle_count(const surge_sim *sim);
+int boulders_particles_of(const surge_sim *sim, int disc);   /* the particles of one disc */
 /* Appends disc particles to the wall arrays from index first (ids too); ghost offsets follow the discs. */
 void boulders_create_particles(surge_sim *sim, int first);
 int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc */
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);
-void boulders_fluid_forces(surge_sim *sim);                   /* eq. 10, after interaction_compute */
+/* eq. 10, after interaction_compute; the pressures taken relative to reference_pa[disc] (NULL: 0) */
+void boulders_fluid_forces(surge_sim *sim, const double *reference_pa);
 /* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target). */
 void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy);
 void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step start, moves to the half step */
 int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
+/* the implicit scheme's full step from the fluid forces, with added_mass (implicit.added_mass) */
+int boulders_advance_implicit(surge_sim *sim, double dt_s, double added_mass);
+void boulders_restore_implicit(surge_sim *sim);               /* roll-back of boulders_advance_implicit */
 void boulders_free(boulder_set *b);
 
 /* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass; worksharing) */

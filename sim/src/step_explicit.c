@@ -31,7 +31,7 @@ static void evaluate_rates(surge_sim *sim, int corrector)
         boundary_update(sim, 1);
         interaction_compute(sim, corrector);
     }
-    boulders_fluid_forces(sim);
+    boulders_fluid_forces(sim, NULL);
 }
 
 int step_explicit(surge_sim *sim)

@@ -31,10 +31,14 @@
                                * C_h 1.3 (0.2 and 0.5 were slower on the Freydier front, docs/method.md) */
 
 typedef struct implicit_work {
-    size_t fluid_cap, wall_cap, mirror_cap; /* entries the per-entry arrays hold */
+    size_t fluid_cap, wall_cap, mirror_cap, ghost_cap; /* entries the per-entry arrays hold */
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
     real *wall_w, *wall_gx, *wall_gy;    /* per wall-list entry */
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
+    real *ghost_w;                       /* the same for a disc particle's ghost list (ghost_span) */
+    double *mirror_vx, *mirror_vy;       /* per wall: the wall velocity no-slip mirrors about (mirror_velocities) */
+    double *disc_reference_pa;           /* per disc: the mean pressure of its particles (disc_forces) */
+    int disc_cap;
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
     amg_system *amg;                     /* implicit.preconditioner = amg: the V-cycles of the stand-in's hierarchy */
@@ -55,6 +59,7 @@ typedef struct implicit_work {
     double *grad_x, *grad_y;             /* scratch: the pressure gradient inside the operator */
     double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
     uint8_t *fixed;                      /* free-surface particle: p = 0 */
+    uint8_t *near_disc;                  /* per fluid particle: a disc particle within the kernel's support */
     double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
                                           * free surface, where that can be read (else 0) */
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
@@ -62,6 +67,7 @@ typedef struct implicit_work {
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
     double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
     double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
+    double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (part_close_pairs) */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
 } implicit_work;
 
@@ -93,7 +99,7 @@ static int reserve_work(surge_sim *sim)
     const neighbour_lists *nl = &sim->neighbours;
     const size_t nf = (size_t)(sim->count - sim->wall_count), nw = (size_t)sim->wall_count;
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
-    const size_t me = (size_t)nl->wall_fluid_first[nw];
+    const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
         if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe))
             return -1;
@@ -109,16 +115,28 @@ static int reserve_work(surge_sim *sim)
             return -1;
         w->mirror_cap = me;
     }
+    if (sim->boulders.count > w->disc_cap || !w->disc_reference_pa) {
+        if (GROW(disc_reference_pa, (size_t)sim->boulders.count))
+            return -1;
+        w->disc_cap = sim->boulders.count;
+    }
+    if (ge > w->ghost_cap || !w->ghost_w) {
+        if (GROW(ghost_w, ge))
+            return -1;
+        w->ghost_cap = ge;
+    }
     if (!w->minv_xx) {
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
             GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
-            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw))
+            GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
+            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
+            GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
             return -1;
     }
     return 0;
@@ -130,10 +148,11 @@ void step_implicit_free(surge_sim *sim)
     if (!w)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
+                      w->ghost_w, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
-                      w->grad_y, w->pressure_n, w->fixed, w->expected_ratio, w->wall_x, w->wall_y,
-                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -145,9 +164,47 @@ void step_implicit_free(surge_sim *sim)
     sim->implicit = NULL;
 }
 
-/* The walls' own share of each fixed wall's ghost node's kernel sum, sum_k dp^2 W(r_ghost - r_k): walls do not move
- * in the scenes this scheme takes, so it is computed once. With the fluid's share it says whether the node lies in
- * the fluid (about 1, also in a corner, where walls fill three quadrants) or above its surface (less). */
+/* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
+ * ghost turns with the disc); r_ghost - r_j = dx0[e] - moved_j + shift, and weight[e] the entry's mirror weight */
+typedef struct ghost_span {
+    int64_t from, to;
+    const int32_t *index;
+    const real *dx0, *dy0;
+    real *weight;
+    real shift_x, shift_y;
+} ghost_span;
+
+static inline ghost_span ghost_span_of(const surge_sim *sim, int kw)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    implicit_work *w = sim->implicit;
+    if (sim->wall_of[kw] != WALL_BOULDER)
+        return (ghost_span){nl->wall_fluid_first[kw], nl->wall_fluid_first[kw + 1], nl->wall_fluid_index,
+                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, 0, 0};
+    return (ghost_span){nl->ghost_fluid_first[kw], nl->ghost_fluid_first[kw + 1], nl->ghost_fluid_index,
+                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w,
+                        nl->moved_x[kw] + (sim->ghost_dx[kw] - nl->ghost_dx_build[kw]),
+                        nl->moved_y[kw] + (sim->ghost_dy[kw] - nl->ghost_dy_build[kw])};
+}
+
+/* The velocity each wall's no-slip mirrors about: its own; the belt-wall corner's, the fixed upstream wall's; a disc
+ * particle's, the disc's surface's at its ghost's mirror line (as boundary.c) */
+static void mirror_velocities(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int kw = 0; kw < sim->wall_count; kw++) {
+        double vx = sim->wall_of[kw] == WALL_CORNER ? 0.0 : sim->vx[kw], vy = sim->vy[kw];
+        if (sim->wall_of[kw] == WALL_BOULDER)
+            boulders_surface_velocity(sim, kw, &vx, &vy);
+        w->mirror_vx[kw] = vx, w->mirror_vy[kw] = vy;
+    }
+}
+
+/* The walls' own share of each wall's ghost node's kernel sum, sum_k dp^2 W(r_ghost - r_k): computed once where no
+ * wall moves across the kernel (belts move along themselves), at every step where discs move. With the fluid's
+ * share it says whether the node lies in the fluid (about 1, also in a corner, where walls fill three quadrants) or
+ * above its surface (less). */
 static void wall_sums(surge_sim *sim)
 {
     implicit_work *w = sim->implicit;
@@ -183,16 +240,17 @@ static void geometry(surge_sim *sim)
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
     const int first = sim->wall_count, n = sim->count;
-    if (!w->wall_sum_ready)
+    if (!w->wall_sum_ready || sim->boulders.count > 0)
         wall_sums(sim);
     /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
      * the node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned */
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
+        const ghost_span g = ghost_span_of(sim, kw);
         double a[3][3] = {{0}};
-        for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
-            const int j = nl->wall_fluid_index[e];
-            const real dx = nl->wall_fluid_dx0[e] - moved_x[j], dy = nl->wall_fluid_dy0[e] - moved_y[j]; /* r_g - r_j */
+        for (int64_t e = g.from; e < g.to; e++) {
+            const int j = g.index[e];
+            const real dx = g.dx0[e] - moved_x[j] + g.shift_x, dy = g.dy0[e] - moved_y[j] + g.shift_y; /* r_g - r_j */
             const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
             if (r2 >= support2)
                 continue;
@@ -218,16 +276,16 @@ static void geometry(surge_sim *sim)
         /* the node's kernel sum of fluid and walls: 1.00 in the fluid (corners included), 0.77 level with the top
          * row next to the tank's side wall, 0.58 a dp above it (C_h 1.8); wetness ramps from 0 at 0.6 to 1 at 0.75 */
         w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.6) / 0.15));
-        for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
-            const int j = nl->wall_fluid_index[e];
-            const real dx = nl->wall_fluid_dx0[e] - moved_x[j], dy = nl->wall_fluid_dy0[e] - moved_y[j];
+        for (int64_t e = g.from; e < g.to; e++) {
+            const int j = g.index[e];
+            const real dx = g.dx0[e] - moved_x[j] + g.shift_x, dy = g.dy0[e] - moved_y[j] + g.shift_y;
             const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
             double c = 0;
             if (r2 < support2 && !w->dry[kw]) {
                 const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
                 c = row[0] * kernel2d_w_inside(alpha, inv_h, r) * vol + row[1] * f_vol * dx + row[2] * f_vol * dy;
             }
-            w->mirror_w[e] = (real)c;
+            g.weight[e] = (real)c;
         }
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -268,10 +326,19 @@ static void geometry(surge_sim *sim)
             }
         }
         w->kernel_ratio[i] = mass * (alpha + kernel_w) * inv_lattice / sim->rho0;
+        /* the nearest wall face within dp, for the contact rule and shifting (as the explicit scheme's) */
+        int near_disc = 0;
+        const wall_face face = interaction_wall_face(sim, a, (real)sim->params.numerics.dp_m, &near_disc);
+        sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
+        sim->face_vn_mps[a] = face.vn_mps, sim->face_disc[a] = face.disc;
+        w->near_disc[i] = (uint8_t)near_disc;
         /* a free-surface particle: div r low, or a kernel sum short of the second row's under a flat surface (a
-         * contact line, where the wall raises div r; docs/method.md) */
+         * contact line, where the wall raises div r; docs/method.md). Not the latter next to a disc, whose rings
+         * fill its circle less evenly than a wall's rows their half-plane: a particle 0.7 dp off a disc of radius 5
+         * dp has 0.87 of the lattice's kernel sum in fluid at rest */
         sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold ||
-                          w->kernel_ratio[i] < sim->second_row_kernel_ratio - sim->params.implicit.surface_kernel_margin;
+                          (!near_disc && w->kernel_ratio[i] < sim->second_row_kernel_ratio -
+                                                                  sim->params.implicit.surface_kernel_margin);
         m_xx = wm_xx, m_xy = wm_xy, m_yy = wm_yy;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
@@ -284,11 +351,6 @@ static void geometry(surge_sim *sim)
         sim->inv_rho[a] = (real)(1.0 / sim->rho0);
         sim->grad_c_x[a] = grad_c_x, sim->grad_c_y[a] = grad_c_y;
         w->fixed[i] = (uint8_t)sim->surface[a];
-        /* the nearest wall face within dp, for the contact rule and shifting (as the explicit scheme's) */
-        int near_boulder = 0;
-        const wall_face face = interaction_wall_face(sim, a, (real)sim->params.numerics.dp_m, &near_boulder);
-        sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
-        sim->face_vn_mps[a] = face.vn_mps;
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
@@ -329,18 +391,21 @@ static void geometry(surge_sim *sim)
 /* The interpolated value at wall kw's ghost node of the fluid field x */
 static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
 {
-    const neighbour_lists *nl = &sim->neighbours;
-    const implicit_work *w = sim->implicit;
+    const ghost_span g = ghost_span_of(sim, kw);
     double sum = 0;
-    for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++)
-        sum += w->mirror_w[e] * x[nl->wall_fluid_index[e] - sim->wall_count];
+    for (int64_t e = g.from; e < g.to; e++)
+        sum += g.weight[e] * x[g.index[e] - sim->wall_count];
     return sum;
 }
 
-/* The wall's own velocity that no-slip mirrors about (the belt-wall corner: the fixed upstream wall's) */
-static inline double mirror_wall_vx(const surge_sim *sim, int kw)
+/* The fluid's velocity interpolated at wall kw's ghost node */
+static inline void ghost_velocity(const surge_sim *sim, int kw, double *vx, double *vy)
 {
-    return sim->wall_of[kw] == WALL_CORNER ? 0.0 : sim->vx[kw];
+    const ghost_span g = ghost_span_of(sim, kw);
+    double sx = 0, sy = 0;
+    for (int64_t e = g.from; e < g.to; e++)
+        sx += g.weight[e] * sim->vx[g.index[e]], sy += g.weight[e] * sim->vy[g.index[e]];
+    *vx = sx, *vy = sy;
 }
 
 /* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost; x = (vx | vy). */
@@ -352,7 +417,7 @@ static void viscous_operator(surge_sim *sim, const double *x, double *out)
     const double dt_nu = sim->dt_s * sim->params.fluid.viscosity_m2ps;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
-        const double ux = mirror_wall_vx(sim, kw), uy = sim->vy[kw];
+        const double ux = w->mirror_vx[kw], uy = w->mirror_vy[kw];
         const double gx = w->dry[kw] ? ux : ghost_value(sim, kw, x), gy = w->dry[kw] ? uy : ghost_value(sim, kw, x + nf);
         w->wall_x[kw] = 2.0 * ux - gx, w->wall_y[kw] = 2.0 * uy - gy;
     }
@@ -657,6 +722,11 @@ static double implicit_dt(const surge_sim *sim)
         const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
         max_v2 = v2 > max_v2 ? v2 : max_v2;
     }
+    const boulder_set *b = &sim->boulders;
+    for (int i = 0; i < b->count; i++) { /* a disc's surface moves with it */
+        const double v = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
+        max_v2 = fmax(max_v2, v * v);
+    }
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
     const double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
     if (isfinite(dt))
@@ -718,6 +788,76 @@ static int pressure_solve(surge_sim *sim, double tolerance, double *residual)
     return iterations;
 }
 
+/* Close pairs (implicit.pair_distance_dp, docs/method.md): each fluid particle closer than the distance to another
+ * loses half their speed toward each other and moves half the way to the distance apart (the MPS collision model,
+ * Lee et al. 2011, at restitution 0), from the step's velocities and positions, so each pair's changes are equal and
+ * opposite and momentum is kept. */
+static void part_close_pairs(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double reach = sim->params.implicit.pair_distance_dp * sim->params.numerics.dp_m, reach2 = reach * reach;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        double dvx = 0, dvy = 0, dx = 0, dy = 0;
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
+            const int b = nl->fluid_index[e];
+            const double rx = nl->fluid_dx0[e] + (moved_x[a] - moved_x[b]), ry = nl->fluid_dy0[e] + (moved_y[a] - moved_y[b]);
+            const double r2 = rx * rx + ry * ry;
+            if (r2 >= reach2 || r2 == 0)
+                continue;
+            const double r = sqrt(r2), nx = rx / r, ny = ry / r;
+            const double closing = ((double)sim->vx[a] - sim->vx[b]) * nx + ((double)sim->vy[a] - sim->vy[b]) * ny;
+            if (closing < 0)
+                dvx -= 0.5 * closing * nx, dvy -= 0.5 * closing * ny;
+            dx += 0.5 * (reach - r) * nx, dy += 0.5 * (reach - r) * ny;
+        }
+        w->pair_dvx[i] = dvx, w->pair_dvy[i] = dvy, w->pair_dx[i] = dx, w->pair_dy[i] = dy;
+    }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        sim->vx[first + i] += (real)w->pair_dvx[i], sim->vy[first + i] += (real)w->pair_dvy[i];
+}
+
+/* eq. 10 with the step's answer: the fluid's v_n+1 and p_n+1 at the step's start positions (the walls' pressures
+ * continued from their ghosts, the disc particles' velocities mirrored about the disc's surface), summed over each
+ * disc's particles by boulders_fluid_forces as the explicit scheme's pair forces are, relative to the mean pressure
+ * of the disc's particles, and the reactions of the contact rule. The fluid's density is rho0 (the scheme holds
+ * it). */
+static void disc_forces(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const real rho0 = (real)sim->rho0, inv_rho0 = (real)(1.0 / sim->rho0);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int kw = 0; kw < sim->wall_count; kw++) {
+        if (sim->wall_of[kw] != WALL_BOULDER)
+            continue;
+        double gvx = w->mirror_vx[kw], gvy = w->mirror_vy[kw];
+        if (!w->dry[kw])
+            ghost_velocity(sim, kw, &gvx, &gvy);
+        sim->wall_vx[kw] = (real)(2.0 * w->mirror_vx[kw] - gvx);
+        sim->wall_vy[kw] = (real)(2.0 * w->mirror_vy[kw] - gvy);
+        sim->rho[kw] = rho0, sim->inv_rho[kw] = inv_rho0;
+    }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int a = sim->wall_count; a < sim->count; a++)
+        sim->pair_state[a] = (pair_state){nl->moved_x[a], nl->moved_y[a], sim->vx[a], sim->vy[a], rho0, inv_rho0,
+                                          sim->pressure[a], (real)sim->surface[a]};
+    const boulder_set *b = &sim->boulders;
+    double *reference = w->disc_reference_pa;
+    memset(reference, 0, (size_t)b->count * sizeof *reference);
+    for (int kw = 0; kw < sim->wall_count; kw++) /* in index order: the same sums whatever the thread count */
+        if (sim->wall_of[kw] == WALL_BOULDER)
+            reference[b->of_wall[sim->id[kw]]] += sim->pressure[kw];
+    for (int i = 0; i < b->count; i++)
+        reference[i] /= boulders_particles_of(sim, i);
+    boulders_fluid_forces(sim, reference);
+}
+
 int step_implicit(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count, nf = n - first;
@@ -734,13 +874,15 @@ int step_implicit(surge_sim *sim)
     sim->dt_s = dt;
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
-    boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step */
+    boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step (the discs':
+                                          * at its start; their fluid forces come after the step) */
     #pragma omp parallel
     {
         interaction_prepare(sim, 0);
         boundary_update(sim, 0); /* the walls' normals and depths (the contact rule) */
     }
     geometry(sim);
+    mirror_velocities(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         sim->x_n[a] = sim->x[a], sim->y_n[a] = sim->y[a];
@@ -807,15 +949,10 @@ int step_implicit(surge_sim *sim)
     for (int kw = 0; kw < first; kw++) {
         /* the wall's own velocity: only its normal part matters, and the belt-wall corner's (mirrored through the
          * corner point, its normal slanted) is the fixed upstream wall's, not the belt's */
-        const double wall_vx = mirror_wall_vx(sim, kw), wall_vy = sim->vy[kw];
+        const double wall_vx = w->mirror_vx[kw], wall_vy = w->mirror_vy[kw];
         double gvx = wall_vx, gvy = wall_vy;
-        if (!w->dry[kw]) {
-            gvx = gvy = 0;
-            for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
-                const int j = nl->wall_fluid_index[e];
-                gvx += w->mirror_w[e] * sim->vx[j], gvy += w->mirror_w[e] * sim->vy[j];
-            }
-        }
+        if (!w->dry[kw])
+            ghost_velocity(sim, kw, &gvx, &gvy);
         /* continuity sees the fluid's tangential velocity and the wall's normal one: flow into the wall is a
          * convergence the correction removes (the wall's phi mirrors the fluid's, no offset) */
         const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
@@ -848,7 +985,8 @@ int step_implicit(surge_sim *sim)
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
          * where that cannot be read (a partly dry wall in reach), a deficit is not an expansion and only an excess
          * counts (clumped particles, which nothing else pushes apart where the pressure is near 0) */
-        const double compression = !sim->near_surface[a] ? w->kernel_ratio[i] - 1.0
+        const double compression = w->near_disc[i] ? fmax(0.0, w->kernel_ratio[i] - 1.0)
+                                   : !sim->near_surface[a] ? w->kernel_ratio[i] - 1.0
                                    : w->expected_ratio[i] > 0 ? w->kernel_ratio[i] / w->expected_ratio[i] - 1.0
                                    : fmax(0.0, w->kernel_ratio[i] - 1.0);
         w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
@@ -932,8 +1070,10 @@ int step_implicit(surge_sim *sim)
         w->pressure_n[i] = p_new;
         w->x[i] = sim->vx[a] - dt / rho0 * w->grad_x[i];
         w->x[nf + i] = sim->vy[a] - dt / rho0 * w->grad_y[i];
-        /* the density the spacing says in the bulk (an output; the scheme holds rho0) */
-        sim->rho[a] = (real)(sim->near_surface[a] ? rho0 : rho0 * w->kernel_ratio[i]);
+        /* the density the spacing says in the bulk (an output; the scheme holds rho0); next to a disc only an
+         * excess (above) */
+        sim->rho[a] = (real)(sim->near_surface[a] ? rho0
+                             : w->near_disc[i] ? rho0 * fmax(1.0, w->kernel_ratio[i]) : rho0 * w->kernel_ratio[i]);
     }
     /* the walls' pressure for the outputs: p_n+1 continued hydrostatically, as the next step takes it */
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -948,18 +1088,30 @@ int step_implicit(surge_sim *sim)
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         double vx1 = w->x[i], vy1 = w->x[nf + i];
-        /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md) */
+        /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md); a
+         * disc takes the reaction */
         const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < contact_m && approach_mps < 0)
+        const int contact = sim->face_gap_m[a] < contact_m && approach_mps < 0;
+        if (contact)
             vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
+        sim->face_push_x[a] = (real)(contact ? -approach_mps * sim->face_nx[a] / dt : 0.0);
+        sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }
+    if (prm->implicit.pair_distance_dp > 0)
+        part_close_pairs(sim);
+    else {
+        memset(w->pair_dx, 0, (size_t)nf * sizeof *w->pair_dx);
+        memset(w->pair_dy, 0, (size_t)nf * sizeof *w->pair_dy);
+    }
+    if (sim->boulders.count > 0)
+        disc_forces(sim);
     #pragma omp parallel
     shifting_compute(sim, dt);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
-        double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first];
-        double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first];
+        double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first] + w->pair_dx[a - first];
+        double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
         /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
          * at the reach (the explicit scheme's face repulsion acts over many small steps; one large step needs the
          * constraint itself; docs/method.md) */
@@ -970,10 +1122,21 @@ int step_implicit(surge_sim *sim)
         sim->x[a] = sim->x_n[a] + dx;
         sim->y[a] = sim->y_n[a] + dy;
     }
+    if (sim->boulders.count > 0 && boulders_advance_implicit(sim, dt, prm->implicit.added_mass) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n + dt};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
+        sim_restore_step_start(sim);
+        boulders_restore(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
     sim->time_s = t_n + dt;
     sim->step++;
     if (health_check(sim) != 0) {
         sim_restore_step_start(sim);
+        if (sim->boulders.count > 0)
+            boulders_restore_implicit(sim);
         sim->time_s = t_n;
         sim->step--;
         boundary_wall_speeds(sim, t_n);

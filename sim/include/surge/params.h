@@ -131,6 +131,8 @@ typedef struct surge_params {
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
         double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
         double contact_reach_dp;   /* no step or shift ends closer than this to a wall face (dp) */
+        double added_mass;         /* the discs' added-mass estimate, in rho0 pi r^2 of wetted disc */
+        double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */
