@@ -530,6 +530,19 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         }
 }
 
+/* disc i's state at the step's start: kept, and taken back */
+static inline void save_step_start(boulder_set *b, int i)
+{
+    b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
+    b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+}
+
+static inline void restore_step_start(boulder_set *b, int i)
+{
+    b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
+    b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+}
+
 void boulders_predict(surge_sim *sim, double half_dt_s)
 {
     boulder_set *b = &sim->boulders;
@@ -537,8 +550,7 @@ void boulders_predict(surge_sim *sim, double half_dt_s)
     const double gx = sim->gx - sim->params.body.force_x_mps2, gy = sim->gy;
     const double force_x = sim->params.body.force_x_mps2 / sim->params.boulders.density_ratio;
     for (int i = 0; i < b->count; i++) {
-        b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
-        b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+        save_step_start(b, i);
         b->x[i] += half_dt_s * b->vx[i];
         if (period > 0)
             b->x[i] -= period * floor(b->x[i] / period);
@@ -557,10 +569,8 @@ void boulders_predict(surge_sim *sim, double half_dt_s)
 void boulders_restore(surge_sim *sim)
 {
     boulder_set *b = &sim->boulders;
-    for (int i = 0; i < b->count; i++) {
-        b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
-        b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
-    }
+    for (int i = 0; i < b->count; i++)
+        restore_step_start(b, i);
     boulders_place_particles(sim);
 }
 
@@ -642,8 +652,7 @@ int boulders_correct(surge_sim *sim, double dt_s)
     double gx, gy;
     own_acceleration(sim, &gx, &gy);
     for (int i = 0; i < b->count; i++) {
-        b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
-        b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+        restore_step_start(b, i);
         b->ax[i] = b->fx[i] * b->inv_mass[i] + gx;
         b->ay[i] = b->fy[i] * b->inv_mass[i] + gy;
         b->alpha[i] = b->torque[i] * b->inv_inertia[i] + b->spin_damping[i] * b->omega_forces[i];
@@ -666,8 +675,7 @@ int boulders_advance_implicit(surge_sim *sim, double dt_s, double added_mass)
     double gx, gy;
     own_acceleration(sim, &gx, &gy);
     for (int i = 0; i < b->count; i++) {
-        b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
-        b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+        save_step_start(b, i);
         const double mass = b->mass[i];
         const double extra = added_mass * sim->rho0 * SURGE_PI * b->radius[i] * b->radius[i] * b->wetted[i];
         const double inertia = mass + extra + b->drag_stiffness[i] * dt_s;
