@@ -17,7 +17,7 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP implicit  the implicit scheme's discs (docs/method.md, "Boulders in the implicit scheme"), in the settling
                   tank under a free surface (the scheme takes discs only there; a closed tank is refused): the
                   terminal speed against Faxen's at a step of 6 ms (implicit.force_cfl 0.1; +14.5 % measured, the
-                  explicit scheme's bound 15 %) and at the default 25 ms (+17.7 %, bound 20 %), steady and straight
+                  explicit scheme's bound 15 %) and at the default 25 ms (+17.6 %, bound 20 %), steady and straight
                   down; a disc lighter than the fluid rises; a thrown disc's impact restarts bit for bit.
 
 Each check prints "name: ok" or "name: FAILED" with details; the script exits 1 if any failed.

@@ -495,7 +495,7 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         b->spin_coupling[k] = total[2];
     }
     for (int i = 0; i < b->count; i++) {
-        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = b->wetted[i] = b->drag_stiffness[i] = 0;
+        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = b->drag_stiffness[i] = 0;
         b->omega_forces[i] = b->omega[i];
     }
     const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
@@ -517,7 +517,6 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
             const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
             b->torque[i] -= mu * b->omega[i] * a * arc * wetted;
             b->spin_damping[i] += mu * a * arc * wetted;
-            b->wetted[i] += arc * wetted / (2 * SURGE_PI * a);
         }
     }
     for (int i = 0; i < b->count; i++)
@@ -541,6 +540,19 @@ static inline void restore_step_start(boulder_set *b, int i)
 {
     b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
     b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+}
+
+void boulders_wetted_fraction(surge_sim *sim, const real *wetness)
+{
+    boulder_set *b = &sim->boulders;
+    const double dp = sim->params.numerics.dp_m;
+    for (int i = 0; i < b->count; i++)
+        b->wetted[i] = 0;
+    for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i >= 0 && hypot(b->local_x[id], b->local_y[id]) > b->radius[i] - dp) /* the outer ring */
+            b->wetted[i] += wetness[k] / ring_particles(b->radius[i], dp, 0);
+    }
 }
 
 void boulders_predict(surge_sim *sim, double half_dt_s)

@@ -21,7 +21,7 @@ typedef struct boulder_set {
     double *drag_stiffness; /* -d(force)/d(velocity) (kg/(m s)) with the fluid held still: the viscous drag's */
     double *omega_forces;   /* the omega the last fluid forces were computed with */
     double *angle_build;    /* orientation at the last neighbour-list build (where the ghosts' lists were made) */
-    double *wetted;         /* the fraction of the disc's surface the fluid wets (boulders_fluid_forces) */
+    double *wetted;         /* the fraction of the disc's surface the fluid wets (boulders_wetted_fraction) */
     double *step_ax, *step_ay; /* implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt */
     double *step_ax_n, *step_ay_n; /* and over the one before (a rolled-back step restores them) */
     real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */

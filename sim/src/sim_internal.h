@@ -290,6 +290,8 @@ void boulders_restore(surge_sim *sim);                        /* back to the ste
 /* the implicit scheme's full step from the fluid forces, with added_mass (implicit.added_mass) */
 int boulders_advance_implicit(surge_sim *sim, double dt_s, double added_mass);
 void boulders_restore_implicit(surge_sim *sim);               /* roll-back of boulders_advance_implicit */
+/* each disc's wetted fraction: the mean over its outer ring of wetness (per wall particle, 0 dry to 1 wet) */
+void boulders_wetted_fraction(surge_sim *sim, const real *wetness);
 void boulders_free(boulder_set *b);
 
 /* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass; worksharing) */

@@ -856,6 +856,7 @@ static void disc_forces(surge_sim *sim)
     for (int i = 0; i < b->count; i++)
         reference[i] /= boulders_particles_of(sim, i);
     boulders_fluid_forces(sim, reference);
+    boulders_wetted_fraction(sim, w->wetness);
 }
 
 int step_implicit(surge_sim *sim)
