@@ -7,13 +7,17 @@
  * results do not depend on the thread count. */
 #include "amg.h"
 
+#include <math.h>
 #include <mpi.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "HYPRE.h"
 #include "HYPRE_parcsr_ls.h"
 #include "HYPRE_utilities.h"
+
+#define AMG_MAX_ROW_ENTRIES 1024 /* a checkpoint's matrix: more entries in a row than any kernel holds is corrupt */
 
 /* the column indices are passed as they are (this build of hypre has 32-bit indices) */
 _Static_assert(sizeof(HYPRE_BigInt) == sizeof(int32_t), "hypre built with 64-bit indices");
@@ -27,6 +31,14 @@ struct amg_system {
     HYPRE_Solver multigrid;
     HYPRE_BigInt *rows;        /* 0 .. n-1 */
     HYPRE_Int *row_sizes;      /* per row: its entries */
+    HYPRE_BigInt *order;       /* per vector entry: its particle's row (amg_follow) */
+    int32_t *row_id;           /* per row: its particle's id */
+    int32_t *row_of_id;        /* per id: its row, or -1 */
+    int id_count;
+    int64_t *kept_first;       /* the matrix the hierarchy was built on (amg_write) */
+    int32_t *kept_col;
+    double *kept_val;
+    size_t kept_cap;
 };
 
 static void finalize_mpi(void)
@@ -76,30 +88,62 @@ void amg_destroy(amg_system *amg)
     release(amg);
     free(amg->rows);
     free(amg->row_sizes);
+    free(amg->order);
+    free(amg->row_id);
+    free(amg->row_of_id);
+    free(amg->kept_first);
+    free(amg->kept_col);
+    free(amg->kept_val);
     free(amg);
 }
 
-int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *cols, const double *values)
+static int grow(void **array, size_t count, size_t size)
+{
+    void *grown = realloc(*array, (count + 1) * size);
+    if (!grown)
+        return -1;
+    *array = grown;
+    return 0;
+}
+
+/* Room for n rows of nnz entries and ids in [0, id_count) */
+static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
+{
+    const size_t rows = (size_t)n + 1;
+    if (grow((void **)&amg->rows, rows, sizeof *amg->rows) || grow((void **)&amg->row_sizes, rows, sizeof *amg->row_sizes) ||
+        grow((void **)&amg->order, rows, sizeof *amg->order) || grow((void **)&amg->row_id, rows, sizeof *amg->row_id) ||
+        grow((void **)&amg->kept_first, rows, sizeof *amg->kept_first) ||
+        grow((void **)&amg->row_of_id, (size_t)id_count, sizeof *amg->row_of_id))
+        return -1;
+    if (nnz > amg->kept_cap || !amg->kept_col) {
+        if (grow((void **)&amg->kept_col, nnz, sizeof *amg->kept_col) ||
+            grow((void **)&amg->kept_val, nnz, sizeof *amg->kept_val))
+            return -1;
+        amg->kept_cap = nnz;
+    }
+    amg->id_count = id_count;
+    return 0;
+}
+
+/* The hierarchy on the kept matrix of n rows and row ids; the entries in the rows' order */
+static int build(amg_system *amg, int n)
 {
     release(amg);
-    if (n > amg->n || !amg->rows) {
-        HYPRE_BigInt *rows = realloc(amg->rows, (size_t)(n + 1) * sizeof *rows);
-        HYPRE_Int *sizes = rows ? realloc(amg->row_sizes, (size_t)(n + 1) * sizeof *sizes) : NULL;
-        if (rows)
-            amg->rows = rows;
-        if (!sizes)
-            return -1;
-        amg->row_sizes = sizes;
-    }
     amg->n = n;
-    for (int i = 0; i < n; i++)
-        amg->rows[i] = i, amg->row_sizes[i] = (HYPRE_Int)(row_first[i + 1] - row_first[i]);
+    for (int i = 0; i < amg->id_count; i++)
+        amg->row_of_id[i] = -1;
+    for (int i = 0; i < n; i++) {
+        amg->rows[i] = amg->order[i] = i;
+        amg->row_sizes[i] = (HYPRE_Int)(amg->kept_first[i + 1] - amg->kept_first[i]);
+        amg->row_of_id[amg->row_id[i]] = i;
+    }
     HYPRE_ClearAllErrors();
     HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n - 1, 0, n - 1, &amg->matrix);
     HYPRE_IJMatrixSetObjectType(amg->matrix, HYPRE_PARCSR);
     HYPRE_IJMatrixSetRowSizes(amg->matrix, amg->row_sizes);
     HYPRE_IJMatrixInitialize(amg->matrix);
-    HYPRE_IJMatrixSetValues(amg->matrix, n, amg->row_sizes, amg->rows, (const HYPRE_BigInt *)cols, values);
+    HYPRE_IJMatrixSetValues(amg->matrix, n, amg->row_sizes, amg->rows, (const HYPRE_BigInt *)amg->kept_col,
+                            amg->kept_val);
     HYPRE_IJMatrixAssemble(amg->matrix);
     for (int k = 0; k < 2; k++) {
         HYPRE_IJVector *v = k ? &amg->x : &amg->rhs;
@@ -122,7 +166,43 @@ int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *c
     HYPRE_IJVectorGetObject(amg->rhs, (void **)&amg->b);
     HYPRE_IJVectorGetObject(amg->x, (void **)&amg->xv);
     HYPRE_BoomerAMGSetup(amg->multigrid, amg->a, amg->b, amg->xv);
-    return HYPRE_GetError() ? -1 : 0;
+    if (HYPRE_GetError()) {
+        release(amg);
+        amg->n = 0;
+        return -1;
+    }
+    return 0;
+}
+
+int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *cols, const double *values,
+              const int32_t *row_id, int id_count)
+{
+    const size_t nnz = (size_t)row_first[n];
+    if (reserve(amg, n, nnz, id_count) != 0) {
+        release(amg);
+        amg->n = 0;
+        return -1;
+    }
+    memcpy(amg->kept_first, row_first, (size_t)(n + 1) * sizeof *row_first);
+    memcpy(amg->kept_col, cols, nnz * sizeof *cols);
+    memcpy(amg->kept_val, values, nnz * sizeof *values);
+    memcpy(amg->row_id, row_id, (size_t)n * sizeof *row_id);
+    return build(amg, n);
+}
+
+int amg_rows(const amg_system *amg) { return amg && amg->multigrid ? amg->n : 0; }
+
+int amg_follow(amg_system *amg, const int32_t *id, int n)
+{
+    if (!amg->multigrid || n != amg->n)
+        return -1;
+    for (int i = 0; i < n; i++) {
+        const int row = id[i] >= 0 && id[i] < amg->id_count ? amg->row_of_id[id[i]] : -1;
+        if (row < 0)
+            return -1;
+        amg->order[i] = row;
+    }
+    return 0;
 }
 
 int amg_vcycle(amg_system *amg, const double *rhs, double *x)
@@ -130,11 +210,64 @@ int amg_vcycle(amg_system *amg, const double *rhs, double *x)
     if (!amg->multigrid)
         return -1;
     HYPRE_ClearAllErrors();
-    HYPRE_IJVectorSetValues(amg->rhs, amg->n, amg->rows, rhs);
+    HYPRE_IJVectorSetValues(amg->rhs, amg->n, amg->order, rhs);
     HYPRE_ParVectorSetConstantValues(amg->xv, 0.0);
     HYPRE_BoomerAMGSolve(amg->multigrid, amg->a, amg->b, amg->xv);
-    HYPRE_IJVectorGetValues(amg->x, amg->n, amg->rows, x);
+    HYPRE_IJVectorGetValues(amg->x, amg->n, amg->order, x);
     const int failed = HYPRE_GetError() != 0;
     HYPRE_ClearAllErrors();
     return failed ? -1 : 0;
+}
+
+static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
+static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len, f) == len ? 0 : -1; }
+
+/* i32 rows n | (n > 0) row_id[i32 n] | row_first[i64 n+1] | cols[i32 nnz] | values[f64 nnz] */
+int amg_write(const amg_system *amg, FILE *f)
+{
+    const int32_t n = amg_rows(amg);
+    if (write_all(f, &n, 4) || n == 0)
+        return n == 0 ? 0 : -1;
+    const size_t nnz = (size_t)amg->kept_first[n];
+    return write_all(f, amg->row_id, (size_t)n * sizeof *amg->row_id) ||
+           write_all(f, amg->kept_first, (size_t)(n + 1) * sizeof *amg->kept_first) ||
+           write_all(f, amg->kept_col, nnz * sizeof *amg->kept_col) ||
+           write_all(f, amg->kept_val, nnz * sizeof *amg->kept_val) ? -1 : 0;
+}
+
+int amg_read(amg_system *amg, FILE *f, int id_count)
+{
+    int32_t n = 0;
+    int64_t first = 0;
+    release(amg);
+    amg->n = 0;
+    if (read_all(f, &n, 4) || n < 0 || n > id_count)
+        return -1;
+    if (n == 0)
+        return 0;
+    /* the row sizes first, then room for them: a corrupt count cannot ask for more than the file holds */
+    if (reserve(amg, n, 0, id_count) || read_all(f, amg->row_id, (size_t)n * sizeof *amg->row_id) ||
+        read_all(f, amg->kept_first, (size_t)(n + 1) * sizeof *amg->kept_first) || amg->kept_first[0] != 0)
+        return -1;
+    for (int i = 0; i < n; i++) {
+        if (!(amg->kept_first[i + 1] > amg->kept_first[i] && amg->kept_first[i + 1] - amg->kept_first[i] <= AMG_MAX_ROW_ENTRIES))
+            return -1;
+        if (amg->row_id[i] < 0 || amg->row_id[i] >= id_count)
+            return -1;
+    }
+    first = amg->kept_first[n];
+    if (reserve(amg, n, (size_t)first, id_count) || read_all(f, amg->kept_col, (size_t)first * sizeof *amg->kept_col) ||
+        read_all(f, amg->kept_val, (size_t)first * sizeof *amg->kept_val))
+        return -1;
+    for (int64_t e = 0; e < first; e++)
+        if (amg->kept_col[e] < 0 || amg->kept_col[e] >= n || !isfinite(amg->kept_val[e]))
+            return -1;
+    for (int i = 0; i < id_count; i++)
+        amg->row_of_id[i] = -1;
+    for (int i = 0; i < n; i++) { /* the row ids must be distinct */
+        if (amg->row_of_id[amg->row_id[i]] >= 0)
+            return -1;
+        amg->row_of_id[amg->row_id[i]] = i;
+    }
+    return build(amg, n);
 }

@@ -12,11 +12,13 @@
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
  *             (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
+ *             (version 6) the held multigrid hierarchies (step_implicit_write) |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
  * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
  * boulder block), 2 and 3 are still read: 1 and 2 build the lists afresh at the first step, so the restarted run
- * agrees with the saved one to round-off, not bit for bit. */
+ * agrees with the saved one to round-off, not bit for bit; so does an implicit run from version 5, which builds its
+ * multigrid hierarchies afresh. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -27,7 +29,7 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 5u
+#define CHECKPOINT_VERSION 6u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 
@@ -106,7 +108,8 @@ static int write_implicit_pressure(FILE *f, const surge_sim *sim)
     return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)) |
            (b->count > 0 ? write_all(f, b->step_ax, n) | write_all(f, b->step_ay, n) | write_all(f, b->step_ax_n, n) |
                                write_all(f, b->step_ay_n, n)
-                         : 0);
+                         : 0) |
+           step_implicit_write(f, sim);
 }
 
 /* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit (and had
@@ -129,7 +132,7 @@ static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
         if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
               fabs(b->step_ay_n[i]) < 1e6))
             return -1;
-    return 0;
+    return version >= 6 ? step_implicit_read(f, sim) : 0;
 }
 
 static int write_boulders(FILE *f, const boulder_set *b)
@@ -331,7 +334,8 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         goto fail;
     }
     if (read_implicit_pressure(f, sim, version)) {
-        snprintf(err, err_len, "%s: truncated or corrupt implicit-scheme pressure", path);
+        snprintf(err, err_len, "%s: truncated or corrupt implicit-scheme state (pressure, disc accelerations or "
+                 "multigrid hierarchies)", path);
         goto fail;
     }
     if (read_all(f, &hash, 8)) {

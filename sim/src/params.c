@@ -158,6 +158,13 @@ static const surge_param_info registry[] = {
      "the pressure from 2,500 fluid particles and for the viscous solve from 10,000, where it starts to pay; "
      "docs/method.md, \"Linear solvers\").",
      OFF(implicit.preconditioner)},
+    {"implicit", "multigrid_rebuild_steps", SURGE_PARAM_INT, "-", 16, 1, 1000, true, NULL,
+     "Implicit scheme, amg: a multigrid hierarchy (one for the viscous solve, one for the pressure) serves at most "
+     "this many steps, following its particles as they move, and is rebuilt sooner when its solve takes half as many "
+     "iterations again as it did just after the build (at least 2 more); 1: rebuilt every step. It only "
+     "preconditions: the solves reach their tolerances on each step's own operator (docs/method.md, \"Linear "
+     "solvers\").",
+     OFF(implicit.multigrid_rebuild_steps)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "
      "solve (psi) that moves the particles back to the rest spacing against drift (0: off); within a kernel's reach "

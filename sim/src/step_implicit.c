@@ -15,6 +15,7 @@
  * the operator (implicit.preconditioner). Every particle gathers in list order and every dot
  * product sums in fixed blocks, so the results do not depend on the thread count. */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -30,6 +31,16 @@
                                * on a lattice the 20 neighbours within 2.3 dp at C_h 1.8, the 8 within 1.9 dp at
                                * C_h 1.3 (0.2 and 0.5 were slower on the Freydier front, docs/method.md) */
 
+/* A multigrid hierarchy kept over steps (implicit.multigrid_rebuild_steps; checkpointed) */
+typedef struct held_multigrid {
+    amg_system *amg;
+    int64_t built_step;       /* the step whose stand-in it was built on */
+    int32_t base_iterations;  /* its solve's iterations at that step (-1 until then) */
+    int32_t last_iterations;  /* and at the last step */
+} held_multigrid;
+
+enum { MULTIGRID_VISCOUS, MULTIGRID_PRESSURE };
+
 typedef struct implicit_work {
     size_t fluid_cap, wall_cap, mirror_cap, ghost_cap; /* entries the per-entry arrays hold */
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
@@ -41,10 +52,12 @@ typedef struct implicit_work {
     int disc_cap;
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
-    amg_system *amg;                     /* implicit.preconditioner = amg: the V-cycles of the stand-in's hierarchy */
+    held_multigrid multigrid[2];         /* implicit.preconditioner = amg: the viscous and the pressure hierarchy */
+    amg_system *amg;                     /* this solve's: one of multigrid[] */
     int pressure_by_multigrid;           /* this step's pressure solves use amg (there is a free surface) */
     int vcycle_blocks;                   /* solve()'s preconditioner: 0 the diagonal, else one V-cycle of amg's
                                           * hierarchy on each of this many blocks of nf unknowns */
+    int vcycle_honours_fixed;            /* and the free-surface rows the identity (the pressure's) */
     int64_t *matrix_first;               /* amg: the sparse stand-in, row i's entries from matrix_first[i] */
     int32_t *matrix_col;
     double *matrix_val;
@@ -156,12 +169,47 @@ void step_implicit_free(surge_sim *sim)
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
-    amg_destroy(w->amg);
+    amg_destroy(w->multigrid[MULTIGRID_VISCOUS].amg);
+    amg_destroy(w->multigrid[MULTIGRID_PRESSURE].amg);
     free(w->matrix_first);
     free(w->matrix_col);
     free(w->matrix_val);
     free(w);
     sim->implicit = NULL;
+}
+
+/* The held multigrid hierarchies (checkpoint version 6): per system i64 built_step | i32 base_iterations |
+ * i32 last_iterations | the hierarchy's matrix (amg_write), so that a restarted run preconditions with what the
+ * uninterrupted one held and repeats it bit for bit */
+int step_implicit_write(FILE *f, const surge_sim *sim)
+{
+    const implicit_work *w = sim->implicit;
+    for (int k = 0; k < 2; k++) {
+        const held_multigrid none = {.base_iterations = -1}, *m = w ? &w->multigrid[k] : &none;
+        if (fwrite(&m->built_step, 8, 1, f) != 1 || fwrite(&m->base_iterations, 4, 1, f) != 1 ||
+            fwrite(&m->last_iterations, 4, 1, f) != 1 || amg_write(m->amg, f) != 0)
+            return -1;
+    }
+    return 0;
+}
+
+int step_implicit_read(FILE *f, surge_sim *sim)
+{
+    if (!sim->implicit && !(sim->implicit = calloc(1, sizeof *sim->implicit)))
+        return -1;
+    for (int k = 0; k < 2; k++) {
+        held_multigrid *m = &sim->implicit->multigrid[k];
+        char reason[160];
+        if (fread(&m->built_step, 8, 1, f) != 1 || fread(&m->base_iterations, 4, 1, f) != 1 ||
+            fread(&m->last_iterations, 4, 1, f) != 1 || m->base_iterations < -1 || m->last_iterations < 0 ||
+            m->built_step < 0)
+            return -1;
+        if (!m->amg && !(m->amg = amg_create(reason, sizeof reason)))
+            return -1;
+        if (amg_read(m->amg, f, sim->count) != 0)
+            return -1;
+    }
+    return 0;
 }
 
 /* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
@@ -539,7 +587,16 @@ static int assemble_sparse(surge_sim *sim, const double *diag, const real *fluid
         int64_t at = start;
         double d = diag[i];
         col[at] = i;
-        if (!(honour_fixed && w->fixed[i])) {
+        if (honour_fixed && w->fixed[i]) {
+            /* a free-surface row is its diagonal alone, at the size it has off the surface, so that a hierarchy
+             * held over steps (multigrid_setup) serves the particle when it leaves the surface */
+            double coupled = 0;
+            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                coupled -= fluid_scale * fluid_coef[e];
+            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+                coupled -= w->dry[nl->wall_index[e]] ? 0.0 : wall_scale * wall_coef[e];
+            d = coupled > 0 ? coupled : d;
+        } else {
             double largest = 0;
             for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
                 largest = fabs((double)fluid_coef[e]) > largest ? fabs((double)fluid_coef[e]) : largest;
@@ -632,6 +689,10 @@ static int precondition(surge_sim *sim, const double *in, double *out, int n)
     for (int c = 0; c < w->vcycle_blocks; c++)
         if (amg_vcycle(w->amg, in + c * nf, out + c * nf) != 0)
             return -1;
+    if (w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
+        for (int i = 0; i < nf; i++)
+            if (w->fixed[i])
+                out[i] = in[i];
     return 0;
 }
 
@@ -754,22 +815,34 @@ static int multigrid(const surge_sim *sim, bool viscous)
     return surge_implicit_uses_amg(&sim->params, sim->count - sim->wall_count, viscous);
 }
 
-/* The multigrid hierarchy on the sparse stand-in of assemble_sparse (its arguments after the first; what names the
- * system); a health failure (with the reason) when it cannot be built */
-static int multigrid_setup(surge_sim *sim, const char *what, const double *diag, const real *fluid_coef,
+/* The multigrid hierarchy of a system (which: MULTIGRID_VISCOUS or _PRESSURE; what names it) for this step's solves:
+ * the held one while it is younger than implicit.multigrid_rebuild_steps and its solve has not slowed, else one
+ * built on the sparse stand-in of assemble_sparse (its arguments after which); a health failure (with the reason)
+ * when it cannot be built */
+static int multigrid_setup(surge_sim *sim, int which, const char *what, const double *diag, const real *fluid_coef,
                            double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed)
 {
     implicit_work *w = sim->implicit;
+    held_multigrid *m = &w->multigrid[which];
     char reason[160] = "";
-    if (!w->amg)
-        w->amg = amg_create(reason, sizeof reason);
-    const int nf = sim->count - sim->wall_count;
-    if (w->amg && assemble_sparse(sim, diag, fluid_coef, fluid_scale, wall_coef, wall_scale, honour_fixed) != 0)
-        snprintf(reason, sizeof reason, "out of memory for the %s matrix's sparse stand-in", what);
-    else if (w->amg && amg_setup(w->amg, nf, w->matrix_first, w->matrix_col, w->matrix_val) != 0)
-        snprintf(reason, sizeof reason, "hypre could not build the multigrid hierarchy of the %s matrix", what);
-    if (!reason[0])
+    if (!m->amg)
+        m->amg = amg_create(reason, sizeof reason);
+    const int first = sim->wall_count, nf = sim->count - first;
+    w->amg = m->amg;
+    const int slowed = m->base_iterations >= 0 &&
+                       m->last_iterations > m->base_iterations + (m->base_iterations / 2 > 2 ? m->base_iterations / 2 : 2);
+    if (m->amg && amg_rows(m->amg) == nf && sim->step - m->built_step < sim->params.implicit.multigrid_rebuild_steps &&
+        !slowed && amg_follow(m->amg, sim->id + first, nf) == 0)
         return 0;
+    if (m->amg && assemble_sparse(sim, diag, fluid_coef, fluid_scale, wall_coef, wall_scale, honour_fixed) != 0)
+        snprintf(reason, sizeof reason, "out of memory for the %s matrix's sparse stand-in", what);
+    else if (m->amg && amg_setup(m->amg, nf, w->matrix_first, w->matrix_col, w->matrix_val, sim->id + first,
+                                 sim->count) != 0)
+        snprintf(reason, sizeof reason, "hypre could not build the multigrid hierarchy of the %s matrix", what);
+    if (!reason[0]) {
+        m->built_step = sim->step, m->base_iterations = -1;
+        return 0;
+    }
     sim->health = (surge_health){.check = SURGE_CHECK_SOLVER, .particle_id = -1, .step = sim->step + 1,
                                  .time_s = sim->time_s};
     snprintf(sim->health.message, sizeof sim->health.message, "health check failed: %s at step %lld, t = %.9g s (%s)",
@@ -777,14 +850,23 @@ static int multigrid_setup(surge_sim *sim, const char *what, const double *diag,
     return -1;
 }
 
+/* Records a solve's iterations with the hierarchy of which (the first after its build is its base) */
+static void multigrid_record(surge_sim *sim, int which, int iterations)
+{
+    held_multigrid *m = &sim->implicit->multigrid[which];
+    if (m->base_iterations < 0)
+        m->base_iterations = iterations;
+    m->last_iterations = iterations;
+}
+
 /* A solve of the pressure operator (phi or psi; linear, the walls' Neumann offsets being 0 in step 2) from x = 0,
  * by the preconditioner the parameters choose */
 static int pressure_solve(surge_sim *sim, double tolerance, double *residual)
 {
     const int nf = sim->count - sim->wall_count, max_iterations = sim->params.implicit.max_iterations;
-    sim->implicit->vcycle_blocks = sim->implicit->pressure_by_multigrid;
+    sim->implicit->vcycle_blocks = sim->implicit->vcycle_honours_fixed = sim->implicit->pressure_by_multigrid;
     const int iterations = solve(sim, pressure_operator, nf, 1, tolerance, max_iterations, residual);
-    sim->implicit->vcycle_blocks = 0;
+    sim->implicit->vcycle_blocks = sim->implicit->vcycle_honours_fixed = 0;
     return iterations;
 }
 
@@ -921,13 +1003,16 @@ int step_implicit(surge_sim *sim)
     int iterations = 0;
     if (dt_nu > 0) {
         /* by multigrid: one hierarchy for both components (the walls mirror each component on its own) */
-        if (multigrid(sim, true) && multigrid_setup(sim, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0))
+        if (multigrid(sim, true) &&
+            multigrid_setup(sim, MULTIGRID_VISCOUS, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0))
             iterations = -2;
         else {
             w->vcycle_blocks = multigrid(sim, true) ? 2 : 0;
             iterations = solve(sim, viscous_operator, 2 * nf, 0, prm->implicit.viscous_tolerance,
                                prm->implicit.max_iterations, &residual);
             w->vcycle_blocks = 0;
+            if (multigrid(sim, true))
+                multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
         }
         sim->viscous_iterations = iterations, sim->viscous_residual = residual;
         if (iterations == -2) {
@@ -1003,12 +1088,14 @@ int step_implicit(surge_sim *sim)
         free_surface = w->fixed[i];
     w->pressure_by_multigrid = multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
-        multigrid_setup(sim, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1) != 0) {
+        multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1)) {
         sim_restore_step_start(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
     iterations = pressure_solve(sim, prm->implicit.pressure_tolerance, &residual);
+    if (w->pressure_by_multigrid)
+        multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
     sim->pressure_iterations = iterations, sim->pressure_residual = residual;
     if (iterations < 0) {
         fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
@@ -1031,7 +1118,7 @@ int step_implicit(surge_sim *sim)
             return -1;
         }
         sim->pressure_iterations += density_iterations;
-        wall_pressures(sim, w->x);
+            wall_pressures(sim, w->x);
         pressure_gradient(sim, w->x);
         #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < nf; i++) {

@@ -126,6 +126,7 @@ typedef struct surge_params {
         double density_tolerance;  /* relative residual of the rest-density solve (psi) */
         int max_iterations;        /* per solve; more is a health failure */
         int preconditioner;        /* surge_preconditioner, for the solves */
+        int multigrid_rebuild_steps; /* amg: a hierarchy serves at most this many steps */
         double density_correction; /* alpha: weight of the rest-density source (psi's solve) */
         double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
