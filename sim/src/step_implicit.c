@@ -79,12 +79,14 @@ typedef struct implicit_work {
     double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
     double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
+    double *phi_by_id;                   /* per particle id: the last step's correction phi, the next one's guess */
     double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
     double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (part_close_pairs) */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
 } implicit_work;
 
 typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
+enum { AFFINE, LINEAR_FROM_ZERO, LINEAR_FROM_GUESS }; /* solve()'s operator and first guess */
 
 /* Whether the scene is large enough for the solves' loops to run on several threads: a BiCGSTAB iteration is ten or
  * so short loops, and below this size waking the other threads at each costs more than it saves (the 800-particle
@@ -138,6 +140,8 @@ static int reserve_work(surge_sim *sim)
             return -1;
         w->ghost_cap = ge;
     }
+    if (!w->phi_by_id && !(w->phi_by_id = calloc((size_t)sim->count + 1, sizeof *w->phi_by_id)))
+        return -1;
     if (!w->minv_xx) {
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
@@ -165,7 +169,7 @@ void step_implicit_free(surge_sim *sim)
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
-                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -178,12 +182,17 @@ void step_implicit_free(surge_sim *sim)
     sim->implicit = NULL;
 }
 
-/* The held multigrid hierarchies (checkpoint version 6): per system i64 built_step | i32 base_iterations |
- * i32 last_iterations | the hierarchy's matrix (amg_write), so that a restarted run preconditions with what the
- * uninterrupted one held and repeats it bit for bit */
+/* The implicit scheme's state beside the particles (checkpoint version 6), so that a restarted run repeats the
+ * uninterrupted one bit for bit: u32 1 | phi[f64] by particle id (the next step's first guess), or u32 0 before the
+ * first step; then per held multigrid hierarchy i64 built_step | i32 base_iterations | i32 last_iterations | its
+ * matrix (amg_write) */
 int step_implicit_write(FILE *f, const surge_sim *sim)
 {
     const implicit_work *w = sim->implicit;
+    const uint32_t guesses = w && w->phi_by_id;
+    if (fwrite(&guesses, 4, 1, f) != 1 ||
+        (guesses && fwrite(w->phi_by_id, sizeof *w->phi_by_id, (size_t)sim->count, f) != (size_t)sim->count))
+        return -1;
     for (int k = 0; k < 2; k++) {
         const held_multigrid none = {.base_iterations = -1}, *m = w ? &w->multigrid[k] : &none;
         if (fwrite(&m->built_step, 8, 1, f) != 1 || fwrite(&m->base_iterations, 4, 1, f) != 1 ||
@@ -197,6 +206,19 @@ int step_implicit_read(FILE *f, surge_sim *sim)
 {
     if (!sim->implicit && !(sim->implicit = calloc(1, sizeof *sim->implicit)))
         return -1;
+    implicit_work *w = sim->implicit;
+    uint32_t guesses = 0;
+    if (fread(&guesses, 4, 1, f) != 1 || guesses > 1)
+        return -1;
+    if (guesses) {
+        if (!w->phi_by_id && !(w->phi_by_id = calloc((size_t)sim->count + 1, sizeof *w->phi_by_id)))
+            return -1;
+        if (fread(w->phi_by_id, sizeof *w->phi_by_id, (size_t)sim->count, f) != (size_t)sim->count)
+            return -1;
+        for (int i = 0; i < sim->count; i++) /* finite and not absurd (1e12 Pa), as the pressure */
+            if (!(fabs(w->phi_by_id[i]) < 1e12))
+                return -1;
+    }
     for (int k = 0; k < 2; k++) {
         held_multigrid *m = &sim->implicit->multigrid[k];
         char reason[160];
@@ -697,22 +719,26 @@ static int precondition(surge_sim *sim, const double *in, double *out, int n)
 }
 
 /* Solves F(x) = rhs for the affine operator op (n unknowns) by BiCGSTAB, preconditioned as precondition() says
- * (van der Vorst 1992), to |residual| <= tolerance |rhs - F(0)|: from the guess in x, or, where homogeneous, from
- * x = 0 with F linear (F(0) = 0; neither needs an operator call before the iterations). Returns the iterations, or
- * -1 when max_iterations pass first or the method breaks down; *residual: the relative residual reached. */
+ * (van der Vorst 1992), to |residual| <= tolerance |rhs - F(0)|, from the guess in x. homogeneous: F is linear
+ * (F(0) = 0), LINEAR_FROM_ZERO where x is 0 too (no operator call before the iterations), LINEAR_FROM_GUESS from the
+ * guess in x. Returns the iterations, or -1 when max_iterations pass first or the method breaks down; *residual: the
+ * relative residual reached. */
 static int solve(surge_sim *sim, affine_operator op, int n, int homogeneous, double tolerance, int max_iterations,
                  double *residual)
 {
     implicit_work *w = sim->implicit;
     double *x = w->x, *r = w->r, *rhat = w->rhat, *p = w->p, *v = w->v, *s = w->s, *t = w->t, *y = w->y, *z = w->z;
-    if (!homogeneous) {
+    const int from_guess = homogeneous == LINEAR_FROM_GUESS;
+    if (from_guess)
+        op(sim, x, r);
+    else if (!homogeneous) {
         op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
         apply_linear(sim, op, 0, x, r, n);
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++) {
         const double b = homogeneous ? w->rhs[i] : w->rhs[i] - w->offset[i];
-        r[i] = homogeneous ? b : b - r[i];
+        r[i] = homogeneous == LINEAR_FROM_ZERO ? b : b - r[i];
         rhat[i] = b; /* the shadow residual: the right-hand side (nonzero whenever there is work) */
         p[i] = v[i] = 0;
     }
@@ -859,13 +885,14 @@ static void multigrid_record(surge_sim *sim, int which, int iterations)
     m->last_iterations = iterations;
 }
 
-/* A solve of the pressure operator (phi or psi; linear, the walls' Neumann offsets being 0 in step 2) from x = 0,
- * by the preconditioner the parameters choose */
-static int pressure_solve(surge_sim *sim, double tolerance, double *residual)
+/* A solve of the pressure operator (phi or psi; linear, the walls' Neumann offsets being 0 in step 2) from x = 0
+ * or (from_guess) the guess in x, by the preconditioner the parameters choose */
+static int pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual)
 {
     const int nf = sim->count - sim->wall_count, max_iterations = sim->params.implicit.max_iterations;
     sim->implicit->vcycle_blocks = sim->implicit->vcycle_honours_fixed = sim->implicit->pressure_by_multigrid;
-    const int iterations = solve(sim, pressure_operator, nf, 1, tolerance, max_iterations, residual);
+    const int iterations = solve(sim, pressure_operator, nf, from_guess ? LINEAR_FROM_GUESS : LINEAR_FROM_ZERO,
+                                 tolerance, max_iterations, residual);
     sim->implicit->vcycle_blocks = sim->implicit->vcycle_honours_fixed = 0;
     return iterations;
 }
@@ -1008,7 +1035,7 @@ int step_implicit(surge_sim *sim)
             iterations = -2;
         else {
             w->vcycle_blocks = multigrid(sim, true) ? 2 : 0;
-            iterations = solve(sim, viscous_operator, 2 * nf, 0, prm->implicit.viscous_tolerance,
+            iterations = solve(sim, viscous_operator, 2 * nf, AFFINE, prm->implicit.viscous_tolerance,
                                prm->implicit.max_iterations, &residual);
             w->vcycle_blocks = 0;
             if (multigrid(sim, true))
@@ -1078,7 +1105,8 @@ int step_implicit(surge_sim *sim)
         w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
         w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v;
         w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
-        w->x[i] = 0; /* the correction starts from none */
+        /* the correction starts from the last step's: a steady flow's is much the same from step to step */
+        w->x[i] = w->fixed[i] ? 0.0 : w->phi_by_id[sim->id[a]];
     }
     assemble_pressure(sim);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
@@ -1093,7 +1121,7 @@ int step_implicit(surge_sim *sim)
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
-    iterations = pressure_solve(sim, prm->implicit.pressure_tolerance, &residual);
+    iterations = pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
     if (w->pressure_by_multigrid)
         multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
     sim->pressure_iterations = iterations, sim->pressure_residual = residual;
@@ -1103,6 +1131,9 @@ int step_implicit(surge_sim *sim)
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->phi_by_id[sim->id[first + i]] = w->x[i];
     /* 2b. the rest-density correction psi, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2 with the same operator, moves
      * the particles by -dt^2 grad psi / rho0 and leaves their velocities alone: a spacing error is not a flow, and
      * in one equation with the divergence its kicks were 0.34 u_max in Poiseuille's start-up (docs/method.md) */
@@ -1110,7 +1141,7 @@ int step_implicit(surge_sim *sim)
         memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
         memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
         memset(w->x, 0, (size_t)nf * sizeof *w->x);
-        const int density_iterations = pressure_solve(sim, prm->implicit.density_tolerance, &residual);
+        const int density_iterations = pressure_solve(sim, 0, prm->implicit.density_tolerance, &residual);
         if (density_iterations < 0) {
             fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
             sim_restore_step_start(sim);
