@@ -136,8 +136,9 @@ static const surge_param_info registry[] = {
     {"implicit", "force_cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, true, NULL,
      "Implicit scheme: the body-force limit, dt <= force_cfl sqrt(h / |g|), the period of the shortest surface wave "
      "the kernel resolves (docs/method.md).", OFF(implicit.force_cfl)},
-    {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-6, 1e-14, 0.1, true, NULL,
-     "Implicit scheme: relative residual at which the pressure Poisson solve stops.",
+    {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-4, 1e-14, 0.1, true, NULL,
+     "Implicit scheme: relative residual at which the pressure Poisson solve (phi, from the last step's phi) stops; "
+     "what it leaves is corrected at the next step (docs/method.md).",
      OFF(implicit.pressure_tolerance)},
     {"implicit", "viscous_tolerance", SURGE_PARAM_REAL, "-", 1e-5, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the implicit viscous solve stops (from v_n; backward Euler's own "
