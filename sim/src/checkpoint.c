@@ -12,13 +12,14 @@
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
  *             (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
- *             (version 6) the held multigrid hierarchies (step_implicit_write) |
+ *             (version 6) the last step's phi and the held multigrid hierarchies (step_implicit_write; version 7
+ *             adds the last step's psi) |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
  * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
  * boulder block), 2 and 3 are still read: 1 and 2 build the lists afresh at the first step, so the restarted run
  * agrees with the saved one to round-off, not bit for bit; so does an implicit run from version 5, which builds its
- * multigrid hierarchies afresh. */
+ * multigrid hierarchies afresh, and from version 6, whose rest-density solve starts from 0 at the first step. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -29,7 +30,7 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 6u
+#define CHECKPOINT_VERSION 7u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 
@@ -132,7 +133,7 @@ static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
         if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
               fabs(b->step_ay_n[i]) < 1e6))
             return -1;
-    return version >= 6 ? step_implicit_read(f, sim) : 0;
+    return version >= 6 ? step_implicit_read(f, sim, version) : 0;
 }
 
 static int write_boulders(FILE *f, const boulder_set *b)

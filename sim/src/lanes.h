@@ -89,4 +89,14 @@ static inline void lanes_totals(const real *const lanes[8], real total[8])
     memcpy(total, &sum, sizeof sum);
 }
 
+/* lane[0] + lane[1] + ... + lane[7], in that order: the total of a gather loop's PAIR_LANES partial sums of one
+ * quantity in double (the implicit scheme's operators, whose sums in one chain waited on each add) */
+static inline double lanes_total(const double lane[PAIR_LANES])
+{
+    double sum = lane[0];
+    for (int l = 1; l < PAIR_LANES; l++)
+        sum += lane[l];
+    return sum;
+}
+
 #endif

@@ -305,10 +305,10 @@ void sim_restore_step_start(surge_sim *sim);
 int step_explicit(surge_sim *sim);
 int step_implicit(surge_sim *sim);
 void step_implicit_free(surge_sim *sim);
-/* the implicit scheme's state outside the particles (the held multigrid hierarchies) in a checkpoint; -1 on a write
- * or read error or a corrupt block */
+/* the implicit scheme's state outside the particles (the last step's phi and psi, the held multigrid hierarchies) in a
+ * checkpoint (version: the checkpoint's); -1 on a write or read error or a corrupt block */
 int step_implicit_write(FILE *f, const surge_sim *sim);
-int step_implicit_read(FILE *f, surge_sim *sim);
+int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version);
 
 /* health.c */
 int health_check(surge_sim *sim);

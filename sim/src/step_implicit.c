@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "amg.h"
+#include "lanes.h"
 #include "pair_terms.h"
 #include "sim_internal.h"
 
@@ -79,7 +80,8 @@ typedef struct implicit_work {
     double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
     double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
-    double *phi_by_id;                   /* per particle id: the last step's correction phi, the next one's guess */
+    double *phi_by_id, *psi_by_id;       /* per particle id: the last step's phi and psi, the next one's guesses */
+    double *dvx_by_id, *dvy_by_id;       /* per particle id: the last step's v* - v_n, the next viscous solve's guess */
     double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
     double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (part_close_pairs) */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
@@ -140,8 +142,10 @@ static int reserve_work(surge_sim *sim)
             return -1;
         w->ghost_cap = ge;
     }
-    if (!w->phi_by_id && !(w->phi_by_id = calloc((size_t)sim->count + 1, sizeof *w->phi_by_id)))
-        return -1;
+    double **by_id[] = {&w->phi_by_id, &w->psi_by_id, &w->dvx_by_id, &w->dvy_by_id};
+    for (size_t k = 0; k < sizeof by_id / sizeof by_id[0]; k++)
+        if (!*by_id[k] && !(*by_id[k] = calloc((size_t)sim->count + 1, sizeof **by_id[k])))
+            return -1;
     if (!w->minv_xx) {
         const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
@@ -169,7 +173,7 @@ void step_implicit_free(surge_sim *sim)
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
-                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
@@ -182,16 +186,33 @@ void step_implicit_free(surge_sim *sim)
     sim->implicit = NULL;
 }
 
-/* The implicit scheme's state beside the particles (checkpoint version 6), so that a restarted run repeats the
- * uninterrupted one bit for bit: u32 1 | phi[f64] by particle id (the next step's first guess), or u32 0 before the
- * first step; then per held multigrid hierarchy i64 built_step | i32 base_iterations | i32 last_iterations | its
- * matrix (amg_write) */
+/* The implicit scheme's state beside the particles (checkpoint versions 6 and 7), so that a restarted run repeats the
+ * uninterrupted one bit for bit: u32 guesses | phi[f64] by particle id (guesses >= 1) | psi[f64], v*_x - v_x[f64],
+ * v*_y - v_y[f64] by particle id (guesses = 2, version 7): the next step's first guesses; guesses = 0 before the first
+ * step; then per held multigrid hierarchy i64 built_step | i32 base_iterations | i32 last_iterations | its matrix
+ * (amg_write). A version 6 checkpoint (guesses <= 1) restarts psi from 0 and v* from v_n. */
+#define ABSURD_GUESS_PA 1e12    /* a guess at phi or psi beyond this is corrupt, as the pressure */
+#define ABSURD_GUESS_MPS 1e6    /* and a change of velocity */
+static int read_guesses(FILE *f, double *by_id, int count, double absurd)
+{
+    if (fread(by_id, sizeof *by_id, (size_t)count, f) != (size_t)count)
+        return -1;
+    for (int i = 0; i < count; i++) /* finite and not absurd */
+        if (!(fabs(by_id[i]) < absurd))
+            return -1;
+    return 0;
+}
+
 int step_implicit_write(FILE *f, const surge_sim *sim)
 {
     const implicit_work *w = sim->implicit;
-    const uint32_t guesses = w && w->phi_by_id;
+    const uint32_t guesses = w && w->phi_by_id ? 2 : 0;
+    const size_t count = (size_t)sim->count;
     if (fwrite(&guesses, 4, 1, f) != 1 ||
-        (guesses && fwrite(w->phi_by_id, sizeof *w->phi_by_id, (size_t)sim->count, f) != (size_t)sim->count))
+        (guesses && (fwrite(w->phi_by_id, sizeof *w->phi_by_id, count, f) != count ||
+                     fwrite(w->psi_by_id, sizeof *w->psi_by_id, count, f) != count ||
+                     fwrite(w->dvx_by_id, sizeof *w->dvx_by_id, count, f) != count ||
+                     fwrite(w->dvy_by_id, sizeof *w->dvy_by_id, count, f) != count)))
         return -1;
     for (int k = 0; k < 2; k++) {
         const held_multigrid none = {.base_iterations = -1}, *m = w ? &w->multigrid[k] : &none;
@@ -202,23 +223,23 @@ int step_implicit_write(FILE *f, const surge_sim *sim)
     return 0;
 }
 
-int step_implicit_read(FILE *f, surge_sim *sim)
+int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version)
 {
     if (!sim->implicit && !(sim->implicit = calloc(1, sizeof *sim->implicit)))
         return -1;
     implicit_work *w = sim->implicit;
     uint32_t guesses = 0;
-    if (fread(&guesses, 4, 1, f) != 1 || guesses > 1)
+    if (fread(&guesses, 4, 1, f) != 1 || guesses > (version >= 7 ? 2u : 1u) || (version >= 7 && guesses == 1))
         return -1;
-    if (guesses) {
-        if (!w->phi_by_id && !(w->phi_by_id = calloc((size_t)sim->count + 1, sizeof *w->phi_by_id)))
+    double **by_id[] = {&w->phi_by_id, &w->psi_by_id, &w->dvx_by_id, &w->dvy_by_id};
+    for (size_t k = 0; k < sizeof by_id / sizeof by_id[0]; k++) /* all of them: a version 6 leaves the others 0 */
+        if (!*by_id[k] && !(*by_id[k] = calloc((size_t)sim->count + 1, sizeof **by_id[k])))
             return -1;
-        if (fread(w->phi_by_id, sizeof *w->phi_by_id, (size_t)sim->count, f) != (size_t)sim->count)
-            return -1;
-        for (int i = 0; i < sim->count; i++) /* finite and not absurd (1e12 Pa), as the pressure */
-            if (!(fabs(w->phi_by_id[i]) < 1e12))
-                return -1;
-    }
+    if ((guesses >= 1 && read_guesses(f, w->phi_by_id, sim->count, ABSURD_GUESS_PA) != 0) ||
+        (guesses == 2 && (read_guesses(f, w->psi_by_id, sim->count, ABSURD_GUESS_PA) != 0 ||
+                          read_guesses(f, w->dvx_by_id, sim->count, ABSURD_GUESS_MPS) != 0 ||
+                          read_guesses(f, w->dvy_by_id, sim->count, ABSURD_GUESS_MPS) != 0)))
+        return -1;
     for (int k = 0; k < 2; k++) {
         held_multigrid *m = &sim->implicit->multigrid[k];
         char reason[160];
@@ -462,10 +483,11 @@ static void geometry(surge_sim *sim)
 static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
 {
     const ghost_span g = ghost_span_of(sim, kw);
-    double sum = 0;
-    for (int64_t e = g.from; e < g.to; e++)
-        sum += g.weight[e] * x[g.index[e] - sim->wall_count];
-    return sum;
+    double sum[PAIR_LANES] = {0};
+    for (int64_t e = g.from; e < g.to; e += PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++)
+            sum[l] += g.weight[e + l] * x[g.index[e + l] - sim->wall_count];
+    return lanes_total(sum);
 }
 
 /* The fluid's velocity interpolated at wall kw's ghost node */
@@ -494,16 +516,18 @@ static void viscous_operator(surge_sim *sim, const double *x, double *out)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const double xa = x[i], ya = x[nf + i];
-        double lx = 0, ly = 0;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int j = nl->fluid_index[e] - sim->wall_count;
-            lx += w->fluid_w[e] * (xa - x[j]), ly += w->fluid_w[e] * (ya - x[nf + j]);
-        }
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const int kw = nl->wall_index[e];
-            lx += w->wall_w[e] * (xa - w->wall_x[kw]), ly += w->wall_w[e] * (ya - w->wall_y[kw]);
-        }
-        out[i] = xa + dt_nu * lx, out[nf + i] = ya + dt_nu * ly;
+        double lx[PAIR_LANES] = {0}, ly[PAIR_LANES] = {0};
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int j = nl->fluid_index[e + l] - sim->wall_count;
+                lx[l] += w->fluid_w[e + l] * (xa - x[j]), ly[l] += w->fluid_w[e + l] * (ya - x[nf + j]);
+            }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int kw = nl->wall_index[e + l];
+                lx[l] += w->wall_w[e + l] * (xa - w->wall_x[kw]), ly[l] += w->wall_w[e + l] * (ya - w->wall_y[kw]);
+            }
+        out[i] = xa + dt_nu * lanes_total(lx), out[nf + i] = ya + dt_nu * lanes_total(ly);
     }
 }
 
@@ -526,17 +550,20 @@ static void pressure_gradient(surge_sim *sim, const double *x)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const double pa = w->fixed[i] ? 0.0 : x[i];
-        double sx = 0, sy = 0;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int j = nl->fluid_index[e] - sim->wall_count;
-            const double dpb = (w->fixed[j] ? 0.0 : x[j]) - pa;
-            sx += dpb * w->fluid_gx[e], sy += dpb * w->fluid_gy[e];
-        }
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const int kw = nl->wall_index[e];
-            const double dpb = (w->wall_x[kw] - pa) * w->wetness[kw]; /* dry walls: air, as in geometry() */
-            sx += dpb * w->wall_gx[e], sy += dpb * w->wall_gy[e];
-        }
+        double lx[PAIR_LANES] = {0}, ly[PAIR_LANES] = {0};
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int j = nl->fluid_index[e + l] - sim->wall_count;
+                const double dpb = (w->fixed[j] ? 0.0 : x[j]) - pa;
+                lx[l] += dpb * w->fluid_gx[e + l], ly[l] += dpb * w->fluid_gy[e + l];
+            }
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int kw = nl->wall_index[e + l];
+                const double dpb = (w->wall_x[kw] - pa) * w->wetness[kw]; /* dry walls: air, as in geometry() */
+                lx[l] += dpb * w->wall_gx[e + l], ly[l] += dpb * w->wall_gy[e + l];
+            }
+        const double sx = lanes_total(lx), sy = lanes_total(ly);
         w->grad_x[i] = w->minv_xx[i] * sx + w->minv_xy[i] * sy;
         w->grad_y[i] = w->minv_xy[i] * sx + w->minv_yy[i] * sy;
     }
@@ -656,14 +683,16 @@ static void pressure_operator(surge_sim *sim, const double *x, double *out)
     wall_pressures(sim, x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
-        double sum = w->pressure_diag[i] * x[i];
+        double sum[PAIR_LANES] = {0};
         if (!w->fixed[i]) {
-            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-                sum += w->fluid_pc[e] * x[nl->fluid_index[e] - sim->wall_count];
-            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
-                sum += w->wall_pc[e] * w->wall_x[nl->wall_index[e]];
+            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
+                for (int l = 0; l < PAIR_LANES; l++)
+                    sum[l] += w->fluid_pc[e + l] * x[nl->fluid_index[e + l] - sim->wall_count];
+            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
+                for (int l = 0; l < PAIR_LANES; l++)
+                    sum[l] += w->wall_pc[e + l] * w->wall_x[nl->wall_index[e + l]];
         }
-        out[i] = sum;
+        out[i] = w->pressure_diag[i] * x[i] + lanes_total(sum);
     }
 }
 
@@ -1023,7 +1052,8 @@ int step_implicit(surge_sim *sim)
             sum_w += w->wall_w[e];
         w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
         w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
-        w->x[i] = sim->vx_n[a], w->x[nf + i] = sim->vy_n[a]; /* slow flows change little in a step */
+        /* from v_n plus the last step's change: a slow flow's is much the same from step to step */
+        w->x[i] = sim->vx_n[a] + w->dvx_by_id[sim->id[a]], w->x[nf + i] = sim->vy_n[a] + w->dvy_by_id[sim->id[a]];
         w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
     }
     double residual = 0;
@@ -1053,8 +1083,11 @@ int step_implicit(surge_sim *sim)
         }
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int i = 0; i < nf; i++)
-        sim->vx[first + i] = (real)w->x[i], sim->vy[first + i] = (real)w->x[nf + i];
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        sim->vx[a] = (real)w->x[i], sim->vy[a] = (real)w->x[nf + i];
+        w->dvx_by_id[sim->id[a]] = w->x[i] - sim->vx_n[a], w->dvy_by_id[sim->id[a]] = w->x[nf + i] - sim->vy_n[a];
+    }
 
     /* 2. the correction phi: the walls' Neumann offsets from v* at their ghosts, the source from div v* and the
      * density */
@@ -1140,8 +1173,11 @@ int step_implicit(surge_sim *sim)
     if (alpha > 0) {
         memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
         memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
-        memset(w->x, 0, (size_t)nf * sizeof *w->x);
-        const int density_iterations = pressure_solve(sim, 0, prm->implicit.density_tolerance, &residual);
+        /* from the last step's psi: a spacing error the last step left is corrected again */
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->x[i] = w->fixed[i] ? 0.0 : w->psi_by_id[sim->id[first + i]];
+        const int density_iterations = pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
         if (density_iterations < 0) {
             fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
             sim_restore_step_start(sim);
@@ -1149,7 +1185,10 @@ int step_implicit(surge_sim *sim)
             return -1;
         }
         sim->pressure_iterations += density_iterations;
-            wall_pressures(sim, w->x);
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->psi_by_id[sim->id[first + i]] = w->x[i];
+        wall_pressures(sim, w->x);
         pressure_gradient(sim, w->x);
         #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < nf; i++) {
