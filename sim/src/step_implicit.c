@@ -1081,7 +1081,8 @@ int step_implicit(surge_sim *sim)
             boundary_wall_speeds(sim, t_n);
             return -1;
         }
-    }
+    } else /* no viscosity: the operator is the identity */
+        memcpy(w->x, w->rhs, 2 * (size_t)nf * sizeof *w->x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
