@@ -133,10 +133,11 @@ static const surge_param_info registry[] = {
      "step; at 0.85 dp the Freydier front compressed against its upstream wall, where the flow turns; "
      "docs/validation/stability.md). Taken at each step: a run may continue from its checkpoint with another.",
      OFF(implicit.cfl)},
-    {"implicit", "force_cfl", SURGE_PARAM_REAL, "-", 0.35, 1e-4, 2, true, NULL,
+    {"implicit", "force_cfl", SURGE_PARAM_REAL, "-", 0.4, 1e-4, 2, true, NULL,
      "Implicit scheme: the body-force limit, dt <= force_cfl sqrt(h / |g|), the period of the shortest surface wave "
-     "the kernel resolves (docs/method.md).", OFF(implicit.force_cfl)},
-    {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-4, 1e-14, 0.1, true, NULL,
+     "the kernel resolves; at 0.4 the advective limit (implicit.cfl) binds on the Freydier front from dp = 0.5 mm "
+     "down (docs/method.md).", OFF(implicit.force_cfl)},
+    {"implicit", "pressure_tolerance", SURGE_PARAM_REAL, "-", 1e-3, 1e-14, 0.1, true, NULL,
      "Implicit scheme: relative residual at which the pressure Poisson solve (phi, from the last step's phi) stops; "
      "what it leaves is corrected at the next step (docs/method.md).",
      OFF(implicit.pressure_tolerance)},
