@@ -103,8 +103,14 @@ static int reserve(int32_t **index, real **dx0, real **dy0, size_t *capacity, si
     return 0;
 }
 
-/* Counts the neighbours of one kind within reach2 of the point (xa, ya), build positions, skipping particle self */
-static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int self, double reach2)
+/* Counts the neighbours of one kind within reach2 of the point (xa, ya), build positions, cell by cell in the grid's
+ * order, skipping particle self, and writes the first room of them to index, dx0, dy0 (room 0: counts only). Every
+ * candidate is written to the next free entry and kept by moving past it: about a third of a cell block's candidates
+ * are in reach, in no order a branch could predict (with a branch the writing pass took 9 % of an implicit step, the
+ * counting pass 1 %). A candidate is written only while there is room: once the list is full the rest are out of
+ * reach. */
+static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int self, double reach2,
+                int room, int32_t *restrict index, real *restrict dx0, real *restrict dy0)
 {
     const double *restrict xb = sim->neighbours.x_build, *restrict yb = sim->neighbours.y_build;
     int count = 0;
@@ -113,6 +119,8 @@ static int scan(const surge_sim *sim, const neighbour_ranges *r, double xa, doub
         const int skip = r->shift_x[k] == 0 ? self : -1;
         for (int b = r->begin[k]; b < r->end[k]; b++) {
             const double dx = xa_shifted - xb[b], dy = ya - yb[b];
+            if (count < room)
+                index[count] = b, dx0[count] = (real)dx, dy0[count] = (real)dy;
             count += (dx * dx + dy * dy < reach2) & (b != skip);
         }
     }
@@ -128,26 +136,11 @@ static int padded(int count)
     return (count + PAIR_LANES - 1) / PAIR_LANES * PAIR_LANES;
 }
 
-/* The writing pass, cell by cell in the grid's order as scan() counts, then the padding up to entries (the list's
- * length from the counting pass). Every candidate is written to the next free entry and kept by moving past it:
- * about a third of a cell block's candidates are in reach, in no order a branch could predict (with a branch the
- * writing pass took 9 % of an implicit step, the counting pass 1 %). A candidate is written only while there is
- * room: once the list is full the rest are out of reach. */
+/* scan()'s writing pass over the list's entries (its length from the counting pass), then the padding */
 static void scan_padded(const surge_sim *sim, const neighbour_ranges *r, double xa, double ya, int self, double reach2,
-                        int entries, int32_t *restrict index, real *restrict dx0, real *restrict dy0)
+                        int entries, int32_t *index, real *dx0, real *dy0)
 {
-    const double *restrict xb = sim->neighbours.x_build, *restrict yb = sim->neighbours.y_build;
-    int count = 0;
-    for (int k = 0; k < r->count; k++) {
-        const double xa_shifted = xa - r->shift_x[k];
-        const int skip = r->shift_x[k] == 0 ? self : -1;
-        for (int b = r->begin[k]; b < r->end[k]; b++) {
-            const double dx = xa_shifted - xb[b], dy = ya - yb[b];
-            if (count < entries)
-                index[count] = b, dx0[count] = (real)dx, dy0[count] = (real)dy;
-            count += (dx * dx + dy * dy < reach2) & (b != skip);
-        }
-    }
+    const int count = scan(sim, r, xa, ya, self, reach2, entries, index, dx0, dy0);
     const real beyond_m = (real)(2.0 * sqrt(reach2));
     for (int e = count; e < entries; e++)
         index[e] = index[0], dx0[e] = beyond_m, dy0[e] = 0;
@@ -175,7 +168,7 @@ static void list_fluid_around(surge_sim *sim, double xs, double ys, double reach
     neighbour_ranges fluid;
     grid_neighbour_ranges(&sim->grid, sim->grid.fluid_start, xs, ys, &fluid);
     if (!fill)
-        first[k + 1] = padded(scan(sim, &fluid, xs, ys, -1, reach2));
+        first[k + 1] = padded(scan(sim, &fluid, xs, ys, -1, reach2, 0, NULL, NULL, NULL));
     else
         scan_padded(sim, &fluid, xs, ys, -1, reach2, (int)(first[k + 1] - first[k]), index + first[k], dx0 + first[k],
                     dy0 + first[k]);
@@ -208,8 +201,8 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
     neighbour_ranges fluid, walls;
     grid_fluid_and_wall_ranges(&sim->grid, xs, ys, &fluid, &walls);
     if (!fill) {
-        nl->fluid_first[i + 1] = padded(scan(sim, &fluid, xs, ys, a, reach2));
-        nl->wall_first[i + 1] = padded(scan(sim, &walls, xs, ys, -1, reach2));
+        nl->fluid_first[i + 1] = padded(scan(sim, &fluid, xs, ys, a, reach2, 0, NULL, NULL, NULL));
+        nl->wall_first[i + 1] = padded(scan(sim, &walls, xs, ys, -1, reach2, 0, NULL, NULL, NULL));
         return;
     }
     const int64_t ef = nl->fluid_first[i], ew = nl->wall_first[i];
