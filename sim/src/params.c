@@ -203,6 +203,14 @@ static const surge_param_info registry[] = {
      "collision, momentum kept) and are moved apart to it. A pair that has closed on itself has no kernel gradient "
      "left to part it (grad W(0) = 0), and in the debris surge such pairs gathered by the hundred and set off jets "
      "(0: none; docs/method.md, \"Close pairs\").", OFF(implicit.pair_distance_dp)},
+    {"implicit", "wall_neumann_offset", SURGE_PARAM_REAL, "-", 0, 0, 1, true, NULL,
+     "Implicit scheme, experimental: the weight of the walls' inhomogeneous Neumann condition on the correction phi "
+     "where a wall's ghost node lies inside the fluid: 1 gives the wall phi_ghost - (rho0/dt) (v*_ghost - v_wall).(r_ghost "
+     "- r_wall) and the ghost's velocity in the divergence, so the projection itself stops flow into the wall; 0 (the "
+     "default) mirrors phi and puts the wall's normal velocity in the divergence, and the contact rule stops that flow. "
+     "At 1 the Freydier front's first column against the upstream wall keeps the rest spacing (at 0 it sits "
+     "compressed, below the bulk's pressure), but one close pair in the debris surge reached 0.299 dp against the "
+     "test's 0.3 (docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

@@ -65,6 +65,7 @@ typedef struct implicit_work {
     size_t matrix_cap;
     uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
     real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
+    real *immersion;                     /* per wall: 0 (its ghost node's kernel not full) to 1 (inside the fluid) */
     double *wall_sum;                    /* per fixed wall: sum of dp^2 W of the walls at its ghost node (fixed) */
     int wall_sum_ready;
     double *minv_xx, *minv_xy, *minv_yy; /* per fluid particle: inverse kernel moment matrix (identity if singular) */
@@ -77,7 +78,7 @@ typedef struct implicit_work {
     double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
                                           * free surface, where that can be read (else 0) */
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
-    double *neumann_pa;                  /* per wall: p_w - p_ghost from the wall's no penetration */
+    double *neumann_pa;                  /* per wall: p_w - p_ghost, the Neumann offset of the field being set */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
     double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
     double *phi_by_id, *psi_by_id;       /* per particle id: the last step's phi and psi, the next one's guesses */
@@ -156,7 +157,7 @@ static int reserve_work(surge_sim *sim)
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
             GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
-            GROW(dry, nw) || GROW(wetness, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
+            GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
             GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
             return -1;
     }
@@ -170,7 +171,7 @@ void step_implicit_free(surge_sim *sim)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->ghost_w, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
-                      w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->wall_sum,
+                      w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
@@ -365,8 +366,10 @@ static void geometry(surge_sim *sim)
         }
         w->dry[kw] = a[0][0] < MIN_SHEPARD_SUM;
         /* the node's kernel sum of fluid and walls: 1.00 in the fluid (corners included), 0.77 level with the top
-         * row next to the tank's side wall, 0.58 a dp above it (C_h 1.8); wetness ramps from 0 at 0.6 to 1 at 0.75 */
+         * row next to the tank's side wall, 0.58 a dp above it (C_h 1.8); wetness ramps from 0 at 0.6 to 1 at 0.75,
+         * immersion (the node's kernel is full: phi's Neumann offset applies) from 0 at 0.90 to 1 at 0.98 */
         w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.6) / 0.15));
+        w->immersion[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.9) / 0.08));
         for (int64_t e = g.from; e < g.to; e++) {
             const int j = g.index[e];
             const real dx = g.dx0[e] - moved_x[j] + g.shift_x, dy = g.dy0[e] - moved_y[j] + g.shift_y;
@@ -531,13 +534,34 @@ static void viscous_operator(surge_sim *sim, const double *x, double *out)
     }
 }
 
-/* The walls' pressure from the fluid pressure x: the value at the ghost plus the Neumann offset; dry walls 0. */
-static void wall_pressures(surge_sim *sim, const double *x)
+/* The walls' pressure from the fluid pressure x: the value at the ghost plus the Neumann offset (none where
+ * offset_pa is NULL: the solves' linear operator); dry walls 0. */
+static void wall_pressures(surge_sim *sim, const double *x, const double *offset_pa)
 {
     implicit_work *w = sim->implicit;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++)
-        w->wall_x[kw] = w->dry[kw] ? 0.0 : ghost_value(sim, kw, x) + w->neumann_pa[kw];
+        w->wall_x[kw] = w->dry[kw] ? 0.0 : ghost_value(sim, kw, x) + (offset_pa ? offset_pa[kw] : 0.0);
+}
+
+/* The walls' Neumann offsets are the affine part of phi's operator: they go to the right-hand side, rhs_a -=
+ * sum_w c_aw offset_w, and the solve takes the linear part alone */
+static void wall_offsets_to_rhs(surge_sim *sim, const double *offset_pa)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        if (w->fixed[i])
+            continue;
+        double sum = 0;
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+            const int kw = nl->wall_index[e];
+            sum += w->dry[kw] ? 0.0 : w->wall_pc[e] * offset_pa[kw];
+        }
+        w->rhs[i] -= sum;
+    }
 }
 
 /* The renormalised gradient of the pressure field x (free-surface particles at 0, walls at wall_x), exact for
@@ -674,13 +698,13 @@ static int assemble_sparse(surge_sim *sim, const double *diag, const real *fluid
     return 0;
 }
 
-/* The operator of assemble_pressure applied to x, the walls at the values wall_pressures() gives them */
+/* The operator of assemble_pressure applied to x, the walls at their ghosts' values (the linear part: no offsets) */
 static void pressure_operator(surge_sim *sim, const double *x, double *out)
 {
     implicit_work *w = sim->implicit;
     const neighbour_lists *nl = &sim->neighbours;
     const int nf = sim->count - sim->wall_count;
-    wall_pressures(sim, x);
+    wall_pressures(sim, x, NULL);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         double sum[PAIR_LANES] = {0};
@@ -1040,7 +1064,7 @@ int step_implicit(surge_sim *sim)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
         w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
-    wall_pressures(sim, w->pressure_n);
+    wall_pressures(sim, w->pressure_n, w->neumann_pa);
     pressure_gradient(sim, w->pressure_n);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
@@ -1100,12 +1124,19 @@ int step_implicit(surge_sim *sim)
         double gvx = wall_vx, gvy = wall_vy;
         if (!w->dry[kw])
             ghost_velocity(sim, kw, &gvx, &gvy);
-        /* continuity sees the fluid's tangential velocity and the wall's normal one: flow into the wall is a
-         * convergence the correction removes (the wall's phi mirrors the fluid's, no offset) */
+        /* a wall whose ghost node lies inside the fluid: continuity sees the fluid's velocity at the ghost, and
+         * the wall's phi is the ghost's plus the inhomogeneous Neumann offset, so that -(dt/rho0) dphi/dn takes the
+         * ghost's velocity into the wall, (v*_ghost - v_w).n, away there; where the free surface or a contact line
+         * cuts the ghost's kernel (its velocity extrapolated from a few particles), and by default everywhere
+         * (implicit.wall_neumann_offset 0): the wall's own normal velocity in the divergence, no offset; in between
+         * by the immersion (docs/method.md, "Walls": without the offset the first column against a wall sits
+         * compressed and below the bulk's pressure) */
+        const double immersed = prm->implicit.wall_neumann_offset * w->immersion[kw];
         const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
         const double into = ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]) / glen2;
-        w->neumann_pa[kw] = 0;
-        w->wall_x[kw] = gvx - into * sim->ghost_dx[kw], w->wall_y[kw] = gvy - into * sim->ghost_dy[kw];
+        w->wall_x[kw] = gvx - (1.0 - immersed) * into * sim->ghost_dx[kw];
+        w->wall_y[kw] = gvy - (1.0 - immersed) * into * sim->ghost_dy[kw];
+        w->neumann_pa[kw] = -immersed * rho0 / dt * into * glen2;
     }
     const double alpha = prm->implicit.density_correction, h = sim->derived.h_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -1155,6 +1186,8 @@ int step_implicit(surge_sim *sim)
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
+    if (prm->implicit.wall_neumann_offset > 0)
+        wall_offsets_to_rhs(sim, w->neumann_pa);
     iterations = pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
     if (w->pressure_by_multigrid)
         multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
@@ -1189,7 +1222,7 @@ int step_implicit(surge_sim *sim)
         #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < nf; i++)
             w->psi_by_id[sim->id[first + i]] = w->x[i];
-        wall_pressures(sim, w->x);
+        wall_pressures(sim, w->x, NULL);
         pressure_gradient(sim, w->x);
         #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < nf; i++) {
@@ -1216,7 +1249,7 @@ int step_implicit(surge_sim *sim)
         memset(w->density_dx, 0, (size_t)nf * sizeof *w->density_dx);
         memset(w->density_dy, 0, (size_t)nf * sizeof *w->density_dy);
     }
-    wall_pressures(sim, w->x);
+    wall_pressures(sim, w->x, w->neumann_pa);
 
     /* 3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi */
     pressure_gradient(sim, w->x);

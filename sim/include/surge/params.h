@@ -134,6 +134,7 @@ typedef struct surge_params {
         double contact_reach_dp;   /* no step or shift ends closer than this to a wall face (dp) */
         double added_mass;         /* the discs' added-mass estimate, in rho0 pi r^2 of wetted disc */
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
+        double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */
