@@ -252,10 +252,15 @@ def group_offline():
                                                                   stderr7[-300:]))
 
     info = probe(cont_movie)
-    check("offline: the restarted run's movie starts with the first run's frames: one movie frame per PNG",
-          code7 == 0 and info is not None and info[0] == len(after) and
-          "(%d of them drawn before the restart)" % len(first) in stderr7,
-          "%d PNGs, ffprobe %s\n%s" % (len(after), info, stderr7[-400:]))
+    # one movie frame per frame number: a number skipped while the renderer was busy repeats the previous image in
+    # the movie, so that it keeps simulated time (without skips, one movie frame per PNG)
+    def span(names):
+        numbers = [int(name[len("frame_"):-len(".png")]) for name in names]
+        return max(numbers) - min(numbers) + 1 if numbers else 0
+    check("offline: the restarted run's movie starts with the first run's frames: one movie frame per frame number",
+          code7 == 0 and info is not None and info[0] == span(after) and
+          "(%d of them drawn before the restart)" % span(first) in stderr7,
+          "%d PNGs spanning %d frame numbers, ffprobe %s\n%s" % (len(after), span(after), info, stderr7[-400:]))
     with open(os.path.join(cont_frames, first[2]), "wb") as f:
         f.write(b"not a PNG")
     code8, stderr8 = run(["run", "--restart", os.path.join(cont_run, "checkpoint.bin"), "--frames", cont_frames,
