@@ -208,9 +208,9 @@ static const surge_param_info registry[] = {
      "where a wall's ghost node lies inside the fluid: 1 gives the wall phi_ghost - (rho0/dt) (v*_ghost - v_wall).(r_ghost "
      "- r_wall) and the ghost's velocity in the divergence, so the projection itself stops flow into the wall; 0 (the "
      "default) mirrors phi and puts the wall's normal velocity in the divergence, and the contact rule stops that flow. "
-     "At 1 the Freydier front's first column against the upstream wall keeps the rest spacing (at 0 it sits "
-     "compressed, below the bulk's pressure), but one close pair in the debris surge reached 0.299 dp against the "
-     "test's 0.3 (docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
+     "For creeping flow: the Freydier cases set 1, where the front's first column against the upstream wall then "
+     "keeps the rest spacing (at 0 it sits compressed, below the bulk's pressure); in the faster debris surge (Re 16) "
+     "1 lets pairs at the upstream wall come to 0.19 dp (docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "
