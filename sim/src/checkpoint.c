@@ -12,6 +12,7 @@
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
  *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
  *             (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
+ *                 (version 8) their drag stiffness and wetted fraction [f64 each] (the coupling's step limit) |
  *             (version 6) the last step's phi and the held multigrid hierarchies (step_implicit_write; version 7
  *             adds the last step's psi) |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
@@ -19,7 +20,8 @@
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
  * boulder block), 2 and 3 are still read: 1 and 2 build the lists afresh at the first step, so the restarted run
  * agrees with the saved one to round-off, not bit for bit; so does an implicit run from version 5, which builds its
- * multigrid hierarchies afresh, and from version 6, whose rest-density solve starts from 0 at the first step. */
+ * multigrid hierarchies afresh, from version 6, whose rest-density solve starts from 0 at the first step, and from
+ * version 7 with boulders, whose first step has no disc-coupling limit (implicit.disc_coupling). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -30,7 +32,7 @@
 #include "sim_internal.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 7u
+#define CHECKPOINT_VERSION 8u
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 
@@ -108,7 +110,8 @@ static int write_implicit_pressure(FILE *f, const surge_sim *sim)
     const size_t n = (size_t)b->count * sizeof(double);
     return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)) |
            (b->count > 0 ? write_all(f, b->step_ax, n) | write_all(f, b->step_ay, n) | write_all(f, b->step_ax_n, n) |
-                               write_all(f, b->step_ay_n, n)
+                               write_all(f, b->step_ay_n, n) | write_all(f, b->drag_stiffness, n) |
+                               write_all(f, b->wetted, n)
                          : 0) |
            step_implicit_write(f, sim);
 }
@@ -133,6 +136,13 @@ static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
         if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
               fabs(b->step_ay_n[i]) < 1e6))
             return -1;
+    if (b->count > 0 && version >= 8) {
+        if (read_all(f, b->drag_stiffness, n) || read_all(f, b->wetted, n))
+            return -1;
+        for (int i = 0; i < b->count; i++) /* outside the state hash: finite, not negative, not absurd */
+            if (!(b->drag_stiffness[i] >= 0 && b->drag_stiffness[i] < 1e12 && b->wetted[i] >= 0 && b->wetted[i] <= 2))
+                return -1;
+    }
     return version >= 6 ? step_implicit_read(f, sim, version) : 0;
 }
 

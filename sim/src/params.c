@@ -198,6 +198,12 @@ static const surge_param_info registry[] = {
      "unbounded fluid). The fluid answers a disc's acceleration a step late; stepping the disc with this mass on both "
      "sides keeps a disc lighter than the fluid stable (0: no estimate; docs/method.md, \"Boulders in the implicit "
      "scheme\").", OFF(implicit.added_mass)},
+    {"implicit", "disc_coupling", SURGE_PARAM_REAL, "-", 1, 0, 100, true, NULL,
+     "Implicit scheme: the discs' coupling limit, dt <= disc_coupling (m + m~) / k for each disc, m its mass, m~ its "
+     "added mass and k its drag stiffness (the fluid's drag on it with the fluid held still). The fluid answers a "
+     "disc's velocity a step late; beyond this step a disc among others in a very viscous fluid follows the flow by "
+     "a small fraction a step and a loaded channel's viscosity came out 8 times too high (0: no limit; docs/method.md, "
+     "\"Boulders in the implicit scheme\").", OFF(implicit.disc_coupling)},
     {"implicit", "pair_distance_dp", SURGE_PARAM_REAL, "dp", 0.5, 0, 0.9, true, NULL,
      "Implicit scheme: two fluid particles closer than this lose their speed toward each other (a perfectly inelastic "
      "collision, momentum kept) and are moved apart to it. A pair that has closed on itself has no kernel gradient "
@@ -856,14 +862,6 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
     if (!p->walls.bottom && !p->walls.top && !p->walls.left && !p->walls.right && !p->walls.upstream &&
         p->body.gravity_mps2 > 0) {
         fail(err, err_len, "the scene has gravity but no walls: enable walls.bottom");
-        return -1;
-    }
-    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->boulders.placement != SURGE_BOULDERS_NONE && p->walls.top &&
-        p->fluid.depth_m > p->domain.height_m - dp) {
-        fail(err, err_len, "numerics.scheme = implicit takes boulders only under a free surface: here the fluid "
-             "(fluid.depth_m = %g m) fills the domain up to its lid (walls.top, domain.height_m = %g m). Lower "
-             "fluid.depth_m, or use numerics.scheme = explicit (docs/method.md, \"Boulders in the implicit scheme\")",
-             p->fluid.depth_m, p->domain.height_m);
         return -1;
     }
     double n_estimate = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m / (dp * dp);

@@ -720,7 +720,7 @@ static void pressure_operator(surge_sim *sim, const double *x, double *out)
     }
 }
 
-/* sum_i a_i b_i over n, in fixed blocks added in order: the same for any thread count */
+/* sum_i a_i b_i (b NULL: sum_i a_i) over n, in fixed blocks added in order: the same for any thread count */
 static double dot(const implicit_work *w, const double *a, const double *b, int n)
 {
     const int blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
@@ -729,7 +729,7 @@ static double dot(const implicit_work *w, const double *a, const double *b, int 
         const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
         double sum = 0;
         for (int i = from; i < to; i++)
-            sum += a[i] * b[i];
+            sum += b ? a[i] * b[i] : a[i];
         w->partial[k] = sum;
     }
     double sum = 0;
@@ -868,7 +868,14 @@ static double implicit_dt(const surge_sim *sim)
         max_v2 = fmax(max_v2, v * v);
     }
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
-    const double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
+    double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
+    /* the discs' coupling: a disc's drag stiffness k (its last step's) against its mass and added mass
+     * (boulders_advance_implicit; docs/method.md) */
+    for (int i = 0; i < b->count && p->implicit.disc_coupling > 0; i++)
+        if (b->drag_stiffness[i] > 0) {
+            const double added = p->implicit.added_mass * sim->rho0 * SURGE_PI * b->radius[i] * b->radius[i] * b->wetted[i];
+            dt = fmin(dt, p->implicit.disc_coupling * (b->mass[i] + added) / b->drag_stiffness[i]);
+        }
     if (isfinite(dt))
         return dt;
     /* no gravity and at rest: the walls' speeds set the scale */
@@ -1179,6 +1186,14 @@ int step_implicit(surge_sim *sim)
     int free_surface = 0;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
+    /* ... and, with a disc, need not be consistent either: the ghosts' normal velocities over a disc need not sum to
+     * zero. There the fluid takes the explicit scheme's compressibility, -lap phi + phi/(c0 dt)^2 (the Tait equation
+     * of state linearised, p = c0^2 (rho - rho0)): a source the incompressible equation cannot meet becomes a
+     * uniform pressure instead of a solve that does not converge (docs/method.md, "Closed domains") */
+    const double closed_kappa = free_surface ? 0.0 : 1.0 / (sim->derived.c0_mps * sim->derived.c0_mps * dt * dt);
+    if (!free_surface)
+        for (int i = 0; i < nf; i++)
+            w->pressure_diag[i] += closed_kappa, w->diag[i] += closed_kappa;
     w->pressure_by_multigrid = multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
         multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1)) {
@@ -1197,6 +1212,11 @@ int step_implicit(surge_sim *sim)
         sim_restore_step_start(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
+    }
+    if (!free_surface) { /* the uniform part is no flow: the fluid's mean pressure keeps its start value */
+        const double mean = dot(w, w->x, NULL, nf) / nf;
+        for (int i = 0; i < nf; i++)
+            w->x[i] -= mean;
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
