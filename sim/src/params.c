@@ -210,13 +210,14 @@ static const surge_param_info registry[] = {
      "left to part it (grad W(0) = 0), and in the debris surge such pairs gathered by the hundred and set off jets "
      "(0: none; docs/method.md, \"Close pairs\").", OFF(implicit.pair_distance_dp)},
     {"implicit", "wall_neumann_offset", SURGE_PARAM_REAL, "-", 0, 0, 1, true, NULL,
-     "Implicit scheme, experimental: the weight of the walls' inhomogeneous Neumann condition on the correction phi "
-     "where a wall's ghost node lies inside the fluid: 1 gives the wall phi_ghost - (rho0/dt) (v*_ghost - v_wall).(r_ghost "
-     "- r_wall) and the ghost's velocity in the divergence, so the projection itself stops flow into the wall; 0 (the "
-     "default) mirrors phi and puts the wall's normal velocity in the divergence, and the contact rule stops that flow. "
-     "For creeping flow: the Freydier cases set 1, where the front's first column against the upstream wall then "
-     "keeps the rest spacing (at 0 it sits compressed, below the bulk's pressure); in the faster debris surge (Re 16) "
-     "1 lets pairs at the upstream wall come to 0.19 dp (docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
+     "Implicit scheme: the weight of the walls' inhomogeneous Neumann condition on the correction phi where a "
+     "wall's ghost node lies inside the fluid: 1 gives the wall phi_ghost - (rho0/dt) (v*_face - v_wall).(r_ghost - "
+     "r_wall), v*_face the normal velocity at the wall's face (the ghost's, less half its distance times its normal "
+     "strain), and the normal velocity continued linearly through the face in the divergence, so the projection "
+     "itself stops flow into the wall and leaves a flow that turns at it alone; 0 (the default) mirrors phi and puts "
+     "the wall's normal velocity in the divergence, and the contact rule stops that flow. The Freydier cases set 1, "
+     "where the front's first column against the upstream wall then keeps the rest spacing (at 0 it sits compressed, "
+     "below the bulk's pressure; docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

@@ -47,7 +47,8 @@ typedef struct implicit_work {
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
     real *wall_w, *wall_gx, *wall_gy;    /* per wall-list entry */
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
-    real *ghost_w;                       /* the same for a disc particle's ghost list (ghost_span) */
+    real *mirror_nw;                     /* and in the derivative along the ghost's normal there */
+    real *ghost_w, *ghost_nw;            /* the same for a disc particle's ghost list (ghost_span) */
     double *mirror_vx, *mirror_vy;       /* per wall: the wall velocity no-slip mirrors about (mirror_velocities) */
     double *disc_reference_pa;           /* per disc: the mean pressure of its particles (disc_forces) */
     int disc_cap;
@@ -129,7 +130,7 @@ static int reserve_work(surge_sim *sim)
         w->wall_cap = we;
     }
     if (me > w->mirror_cap || !w->mirror_w) {
-        if (GROW(mirror_w, me))
+        if (GROW(mirror_w, me) || GROW(mirror_nw, me))
             return -1;
         w->mirror_cap = me;
     }
@@ -139,7 +140,7 @@ static int reserve_work(surge_sim *sim)
         w->disc_cap = sim->boulders.count;
     }
     if (ge > w->ghost_cap || !w->ghost_w) {
-        if (GROW(ghost_w, ge))
+        if (GROW(ghost_w, ge) || GROW(ghost_nw, ge))
             return -1;
         w->ghost_cap = ge;
     }
@@ -170,7 +171,7 @@ void step_implicit_free(surge_sim *sim)
     if (!w)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
-                      w->ghost_w, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
+                      w->mirror_nw, w->ghost_w, w->ghost_nw, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
@@ -256,13 +257,17 @@ int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version)
     return 0;
 }
 
+/* The derivative of the velocity's component along the ghost's normal n (from the wall into the fluid), along n,
+ * at the wall's ghost node: n . grad (v . n), from the first-order interpolation's gradient rows */
+static inline double ghost_normal_strain(const surge_sim *sim, int kw);
+
 /* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
  * ghost turns with the disc); r_ghost - r_j = dx0[e] - moved_j + shift, and weight[e] the entry's mirror weight */
 typedef struct ghost_span {
     int64_t from, to;
     const int32_t *index;
     const real *dx0, *dy0;
-    real *weight;
+    real *weight, *normal_weight;
     real shift_x, shift_y;
 } ghost_span;
 
@@ -272,9 +277,9 @@ static inline ghost_span ghost_span_of(const surge_sim *sim, int kw)
     implicit_work *w = sim->implicit;
     if (sim->wall_of[kw] != WALL_BOULDER)
         return (ghost_span){nl->wall_fluid_first[kw], nl->wall_fluid_first[kw + 1], nl->wall_fluid_index,
-                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, 0, 0};
+                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, w->mirror_nw, 0, 0};
     return (ghost_span){nl->ghost_fluid_first[kw], nl->ghost_fluid_first[kw + 1], nl->ghost_fluid_index,
-                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w,
+                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w, w->ghost_nw,
                         nl->moved_x[kw] + (sim->ghost_dx[kw] - nl->ghost_dx_build[kw]),
                         nl->moved_y[kw] + (sim->ghost_dy[kw] - nl->ghost_dy_build[kw])};
 }
@@ -332,6 +337,7 @@ static void geometry(surge_sim *sim)
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
     const int first = sim->wall_count, n = sim->count;
+    const int offsets = sim->params.implicit.wall_neumann_offset > 0;
     if (!w->wall_sum_ready || sim->boulders.count > 0)
         wall_sums(sim);
     /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
@@ -357,10 +363,19 @@ static void geometry(surge_sim *sim)
                            a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                            a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
         double row[3] = {0, 0, 0}; /* the first row of a^-1: the value at the node from the sums */
+        double normal_row[3] = {0, 0, 0}; /* n . (its second and third rows): the derivative along the normal */
         if (fabs(det) >= MIN_DETERMINANT && a[0][0] >= MIN_SHEPARD_SUM) {
             row[0] = (a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det;
             row[1] = -(a[0][1] * a[2][2] - a[0][2] * a[2][1]) / det;
             row[2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det;
+            if (offsets) {
+                const double glen = sqrt((double)sim->ghost_dx[kw] * sim->ghost_dx[kw] +
+                                         (double)sim->ghost_dy[kw] * sim->ghost_dy[kw]);
+                const double nx = sim->ghost_dx[kw] / glen, ny = sim->ghost_dy[kw] / glen;
+                normal_row[0] = (-nx * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) + ny * (a[1][0] * a[2][1] - a[1][1] * a[2][0])) / det;
+                normal_row[1] = (nx * (a[0][0] * a[2][2] - a[0][2] * a[2][0]) - ny * (a[0][0] * a[2][1] - a[0][1] * a[2][0])) / det;
+                normal_row[2] = (-nx * (a[0][0] * a[1][2] - a[0][2] * a[1][0]) + ny * (a[0][0] * a[1][1] - a[0][1] * a[1][0])) / det;
+            }
         } else if (a[0][0] >= MIN_SHEPARD_SUM) {
             row[0] = 1.0 / a[0][0];
         }
@@ -374,12 +389,16 @@ static void geometry(surge_sim *sim)
             const int j = g.index[e];
             const real dx = g.dx0[e] - moved_x[j] + g.shift_x, dy = g.dy0[e] - moved_y[j] + g.shift_y;
             const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
-            double c = 0;
+            double c = 0, cn = 0;
             if (r2 < support2 && !w->dry[kw]) {
                 const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
                 c = row[0] * kernel2d_w_inside(alpha, inv_h, r) * vol + row[1] * f_vol * dx + row[2] * f_vol * dy;
+                cn = normal_row[0] * kernel2d_w_inside(alpha, inv_h, r) * vol + normal_row[1] * f_vol * dx +
+                     normal_row[2] * f_vol * dy;
             }
             g.weight[e] = (real)c;
+            if (offsets)
+                g.normal_weight[e] = (real)cn;
         }
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -501,6 +520,17 @@ static inline void ghost_velocity(const surge_sim *sim, int kw, double *vx, doub
     for (int64_t e = g.from; e < g.to; e++)
         sx += g.weight[e] * sim->vx[g.index[e]], sy += g.weight[e] * sim->vy[g.index[e]];
     *vx = sx, *vy = sy;
+}
+
+static inline double ghost_normal_strain(const surge_sim *sim, int kw)
+{
+    const ghost_span g = ghost_span_of(sim, kw);
+    const double glen = sqrt((double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw]);
+    const double nx = sim->ghost_dx[kw] / glen, ny = sim->ghost_dy[kw] / glen;
+    double s = 0;
+    for (int64_t e = g.from; e < g.to; e++)
+        s += g.normal_weight[e] * (sim->vx[g.index[e]] * nx + sim->vy[g.index[e]] * ny);
+    return s;
 }
 
 /* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost; x = (vx | vy). */
@@ -1131,19 +1161,22 @@ int step_implicit(surge_sim *sim)
         double gvx = wall_vx, gvy = wall_vy;
         if (!w->dry[kw])
             ghost_velocity(sim, kw, &gvx, &gvy);
-        /* a wall whose ghost node lies inside the fluid: continuity sees the fluid's velocity at the ghost, and
-         * the wall's phi is the ghost's plus the inhomogeneous Neumann offset, so that -(dt/rho0) dphi/dn takes the
-         * ghost's velocity into the wall, (v*_ghost - v_w).n, away there; where the free surface or a contact line
-         * cuts the ghost's kernel (its velocity extrapolated from a few particles), and by default everywhere
-         * (implicit.wall_neumann_offset 0): the wall's own normal velocity in the divergence, no offset; in between
-         * by the immersion (docs/method.md, "Walls": without the offset the first column against a wall sits
-         * compressed and below the bulk's pressure) */
+        /* a wall whose ghost node lies inside the fluid: the wall's phi is the ghost's plus the inhomogeneous
+         * Neumann offset, so that -(dt/rho0) dphi/dn takes the normal velocity at the wall's face away, that at the
+         * ghost less half the ghost's distance times its normal strain (the first-order interpolation's gradient:
+         * a flow that turns at the wall has none to take away, a column moving into it all of its own), and
+         * continuity sees the normal velocity continued linearly through the face, (v_g - v_w).n - |g| strain;
+         * where the free surface or a contact line cuts the ghost's kernel (its velocity extrapolated from a few
+         * particles), and by default everywhere (implicit.wall_neumann_offset 0): the wall's own normal velocity in
+         * the divergence, no offset; in between by the immersion (docs/method.md, "Walls": without the offset the
+         * first column against a wall sits compressed and below the bulk's pressure) */
         const double immersed = prm->implicit.wall_neumann_offset * w->immersion[kw];
         const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
         const double into = ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]) / glen2;
-        w->wall_x[kw] = gvx - (1.0 - immersed) * into * sim->ghost_dx[kw];
-        w->wall_y[kw] = gvy - (1.0 - immersed) * into * sim->ghost_dy[kw];
-        w->neumann_pa[kw] = -immersed * rho0 / dt * into * glen2;
+        const double strain = immersed > 0 ? ghost_normal_strain(sim, kw) : 0.0;
+        w->wall_x[kw] = gvx - ((1.0 - immersed) * into + immersed * strain) * sim->ghost_dx[kw];
+        w->wall_y[kw] = gvy - ((1.0 - immersed) * into + immersed * strain) * sim->ghost_dy[kw];
+        w->neumann_pa[kw] = -immersed * rho0 / dt * (into - 0.5 * strain) * glen2;
     }
     const double alpha = prm->implicit.density_correction, h = sim->derived.h_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
