@@ -257,10 +257,6 @@ int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version)
     return 0;
 }
 
-/* The derivative of the velocity's component along the ghost's normal n (from the wall into the fluid), along n,
- * at the wall's ghost node: n . grad (v . n), from the first-order interpolation's gradient rows */
-static inline double ghost_normal_strain(const surge_sim *sim, int kw);
-
 /* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
  * ghost turns with the disc); r_ghost - r_j = dx0[e] - moved_j + shift, and weight[e] the entry's mirror weight */
 typedef struct ghost_span {
@@ -522,6 +518,8 @@ static inline void ghost_velocity(const surge_sim *sim, int kw, double *vx, doub
     *vx = sx, *vy = sy;
 }
 
+/* The derivative of the velocity's component along the ghost's normal n (from the wall into the fluid), along n,
+ * at the wall's ghost node: n . grad (v . n), from the first-order interpolation's gradient rows (geometry) */
 static inline double ghost_normal_strain(const surge_sim *sim, int kw)
 {
     const ghost_span g = ghost_span_of(sim, kw);
