@@ -4,11 +4,15 @@
  * 4 entries a row, strength threshold 0.5, one level of aggressive coarsening, hybrid forward Gauss-Seidel
  * smoothing (the hypre reference manual, "BoomerAMG"; on the Freydier front threshold 0.25, no aggressive level,
  * symmetric or l1 Gauss-Seidel were all slower, docs/method.md). hypre is built without threads here, so its
- * results do not depend on the thread count. */
+ * results do not depend on the thread count. A system that takes blocks of vectors (the viscous solve's two velocity
+ * components) holds one copy of the hierarchy per block, built one after another on the same matrix (hypre's
+ * coarsening reseeds its random numbers at each build, so the copies are the same), and V-cycles the blocks on
+ * their own threads, one copy each: the same arithmetic as one copy block after block. */
 #include "amg.h"
 
 #include <math.h>
 #include <mpi.h>
+#include <omp.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,13 +26,21 @@
 /* the column indices are passed as they are (this build of hypre has 32-bit indices) */
 _Static_assert(sizeof(HYPRE_BigInt) == sizeof(int32_t), "hypre built with 64-bit indices");
 
-struct amg_system {
-    int n;
+#define AMG_MAX_COPIES 2
+
+/* One multigrid hierarchy on the kept matrix, with its vectors */
+typedef struct amg_copy {
     HYPRE_IJMatrix matrix;
     HYPRE_IJVector rhs, x;
     HYPRE_ParCSRMatrix a;      /* the objects behind matrix, rhs and x, as the solver takes them */
     HYPRE_ParVector b, xv;
     HYPRE_Solver multigrid;
+} amg_copy;
+
+struct amg_system {
+    int n;
+    int copies;                /* hierarchies held: one per block V-cycled at once (amg_create) */
+    amg_copy copy[AMG_MAX_COPIES];
     HYPRE_BigInt *rows;        /* 0 .. n-1 */
     HYPRE_Int *row_sizes;      /* per row: its entries */
     HYPRE_BigInt *order;       /* per vector entry: its particle's row (amg_follow) */
@@ -51,33 +63,41 @@ static void finalize_mpi(void)
 
 static void release(amg_system *amg)
 {
-    if (amg->multigrid)
-        HYPRE_BoomerAMGDestroy(amg->multigrid);
-    if (amg->matrix)
-        HYPRE_IJMatrixDestroy(amg->matrix);
-    if (amg->rhs)
-        HYPRE_IJVectorDestroy(amg->rhs);
-    if (amg->x)
-        HYPRE_IJVectorDestroy(amg->x);
-    amg->multigrid = NULL, amg->matrix = NULL, amg->rhs = amg->x = NULL;
+    for (int c = 0; c < AMG_MAX_COPIES; c++) {
+        amg_copy *h = &amg->copy[c];
+        if (h->multigrid)
+            HYPRE_BoomerAMGDestroy(h->multigrid);
+        if (h->matrix)
+            HYPRE_IJMatrixDestroy(h->matrix);
+        if (h->rhs)
+            HYPRE_IJVectorDestroy(h->rhs);
+        if (h->x)
+            HYPRE_IJVectorDestroy(h->x);
+        *h = (amg_copy){0};
+    }
 }
 
-amg_system *amg_create(char *err, size_t err_len)
+amg_system *amg_create(char *err, size_t err_len, int blocks)
 {
-    int initialized = 0;
+    int initialized = 0, provided = MPI_THREAD_SINGLE;
     MPI_Initialized(&initialized);
     if (!initialized) {
-        int provided = 0;
-        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
+        /* MPI_THREAD_MULTIPLE: the copies' V-cycles call MPI (on one rank, no messages) from their threads */
+        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
             snprintf(err, err_len, "implicit.preconditioner = amg: MPI (which hypre needs) did not start");
             return NULL;
         }
         atexit(finalize_mpi);
         HYPRE_Init();
     }
+    MPI_Query_thread(&provided);
     amg_system *amg = calloc(1, sizeof *amg);
-    if (!amg)
+    if (!amg) {
         snprintf(err, err_len, "out of memory for the multigrid solver");
+        return NULL;
+    }
+    const int concurrent = provided >= MPI_THREAD_MULTIPLE && omp_get_max_threads() > 1;
+    amg->copies = concurrent && blocks > 1 ? (blocks < AMG_MAX_COPIES ? blocks : AMG_MAX_COPIES) : 1;
     return amg;
 }
 
@@ -138,34 +158,37 @@ static int build(amg_system *amg, int n)
         amg->row_of_id[amg->row_id[i]] = i;
     }
     HYPRE_ClearAllErrors();
-    HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n - 1, 0, n - 1, &amg->matrix);
-    HYPRE_IJMatrixSetObjectType(amg->matrix, HYPRE_PARCSR);
-    HYPRE_IJMatrixSetRowSizes(amg->matrix, amg->row_sizes);
-    HYPRE_IJMatrixInitialize(amg->matrix);
-    HYPRE_IJMatrixSetValues(amg->matrix, n, amg->row_sizes, amg->rows, (const HYPRE_BigInt *)amg->kept_col,
-                            amg->kept_val);
-    HYPRE_IJMatrixAssemble(amg->matrix);
-    for (int k = 0; k < 2; k++) {
-        HYPRE_IJVector *v = k ? &amg->x : &amg->rhs;
-        HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, n - 1, v);
-        HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
-        HYPRE_IJVectorInitialize(*v);
-        HYPRE_IJVectorAssemble(*v);
+    for (int c = 0; c < amg->copies; c++) { /* one after another: the coarsening's random numbers are global */
+        amg_copy *h = &amg->copy[c];
+        HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n - 1, 0, n - 1, &h->matrix);
+        HYPRE_IJMatrixSetObjectType(h->matrix, HYPRE_PARCSR);
+        HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes);
+        HYPRE_IJMatrixInitialize(h->matrix);
+        HYPRE_IJMatrixSetValues(h->matrix, n, amg->row_sizes, amg->rows, (const HYPRE_BigInt *)amg->kept_col,
+                                amg->kept_val);
+        HYPRE_IJMatrixAssemble(h->matrix);
+        for (int k = 0; k < 2; k++) {
+            HYPRE_IJVector *v = k ? &h->x : &h->rhs;
+            HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, n - 1, v);
+            HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
+            HYPRE_IJVectorInitialize(*v);
+            HYPRE_IJVectorAssemble(*v);
+        }
+        HYPRE_BoomerAMGCreate(&h->multigrid);
+        HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
+        HYPRE_BoomerAMGSetCoarsenType(h->multigrid, 10);   /* HMIS */
+        HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);     /* extended+i */
+        HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
+        HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
+        HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
+        HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
+        HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
+        HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
+        HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);
+        HYPRE_IJVectorGetObject(h->rhs, (void **)&h->b);
+        HYPRE_IJVectorGetObject(h->x, (void **)&h->xv);
+        HYPRE_BoomerAMGSetup(h->multigrid, h->a, h->b, h->xv);
     }
-    HYPRE_BoomerAMGCreate(&amg->multigrid);
-    HYPRE_BoomerAMGSetPrintLevel(amg->multigrid, 0);
-    HYPRE_BoomerAMGSetCoarsenType(amg->multigrid, 10);   /* HMIS */
-    HYPRE_BoomerAMGSetInterpType(amg->multigrid, 6);     /* extended+i */
-    HYPRE_BoomerAMGSetPMaxElmts(amg->multigrid, 4);
-    HYPRE_BoomerAMGSetStrongThreshold(amg->multigrid, 0.5);
-    HYPRE_BoomerAMGSetAggNumLevels(amg->multigrid, 1);
-    HYPRE_BoomerAMGSetRelaxType(amg->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
-    HYPRE_BoomerAMGSetMaxIter(amg->multigrid, 1);
-    HYPRE_BoomerAMGSetTol(amg->multigrid, 0.0);
-    HYPRE_IJMatrixGetObject(amg->matrix, (void **)&amg->a);
-    HYPRE_IJVectorGetObject(amg->rhs, (void **)&amg->b);
-    HYPRE_IJVectorGetObject(amg->x, (void **)&amg->xv);
-    HYPRE_BoomerAMGSetup(amg->multigrid, amg->a, amg->b, amg->xv);
     if (HYPRE_GetError()) {
         release(amg);
         amg->n = 0;
@@ -190,11 +213,11 @@ int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *c
     return build(amg, n);
 }
 
-int amg_rows(const amg_system *amg) { return amg && amg->multigrid ? amg->n : 0; }
+int amg_rows(const amg_system *amg) { return amg && amg->copy[0].multigrid ? amg->n : 0; }
 
 int amg_follow(amg_system *amg, const int32_t *id, int n)
 {
-    if (!amg->multigrid || n != amg->n)
+    if (!amg->copy[0].multigrid || n != amg->n)
         return -1;
     for (int i = 0; i < n; i++) {
         const int row = id[i] >= 0 && id[i] < amg->id_count ? amg->row_of_id[id[i]] : -1;
@@ -205,15 +228,20 @@ int amg_follow(amg_system *amg, const int32_t *id, int n)
     return 0;
 }
 
-int amg_vcycle(amg_system *amg, const double *rhs, double *x)
+int amg_vcycle(amg_system *amg, int blocks, const double *rhs, double *x)
 {
-    if (!amg->multigrid)
+    if (!amg->copy[0].multigrid)
         return -1;
+    const int n = amg->n;
     HYPRE_ClearAllErrors();
-    HYPRE_IJVectorSetValues(amg->rhs, amg->n, amg->order, rhs);
-    HYPRE_ParVectorSetConstantValues(amg->xv, 0.0);
-    HYPRE_BoomerAMGSolve(amg->multigrid, amg->a, amg->b, amg->xv);
-    HYPRE_IJVectorGetValues(amg->x, amg->n, amg->order, x);
+    #pragma omp parallel for num_threads(amg->copies) schedule(static, 1) if (amg->copies > 1 && blocks > 1)
+    for (int k = 0; k < blocks; k++) {
+        amg_copy *h = &amg->copy[k % amg->copies];
+        HYPRE_IJVectorSetValues(h->rhs, n, amg->order, rhs + (size_t)k * n);
+        HYPRE_ParVectorSetConstantValues(h->xv, 0.0);
+        HYPRE_BoomerAMGSolve(h->multigrid, h->a, h->b, h->xv);
+        HYPRE_IJVectorGetValues(h->x, n, amg->order, x + (size_t)k * n);
+    }
     const int failed = HYPRE_GetError() != 0;
     HYPRE_ClearAllErrors();
     return failed ? -1 : 0;

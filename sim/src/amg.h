@@ -9,8 +9,9 @@
 
 typedef struct amg_system amg_system;
 
-/* NULL when MPI or hypre cannot start (the message in err) */
-amg_system *amg_create(char *err, size_t err_len);
+/* NULL when MPI or hypre cannot start (the message in err). blocks: the vectors each amg_vcycle takes (1, or 2 for
+ * two components); where threads allow, a hierarchy is held for each, so that their V-cycles run at once. */
+amg_system *amg_create(char *err, size_t err_len, int blocks);
 void amg_destroy(amg_system *amg);
 
 /* The matrix of n rows, row i's entries cols[row_first[i] .. row_first[i+1]) (no repeated column in a row), and
@@ -26,9 +27,10 @@ int amg_rows(const amg_system *amg);
 /* Takes the vectors' entry i to be particle id[i] (n entries): -1 when n or an id does not match the rows. */
 int amg_follow(amg_system *amg, const int32_t *id, int n);
 
-/* One V-cycle of the hierarchy on rhs from zero, x ~ A^-1 rhs, both in the order amg_follow last took; -1 when
- * hypre reports an error (or no setup). */
-int amg_vcycle(amg_system *amg, const double *rhs, double *x);
+/* One V-cycle of the hierarchy from zero on each of blocks consecutive vectors of amg_rows entries, x ~ A^-1 rhs,
+ * in the order amg_follow last took; the same result whatever the thread count. -1 when hypre reports an error
+ * (or no setup). */
+int amg_vcycle(amg_system *amg, int blocks, const double *rhs, double *x);
 
 /* The kept matrix and row ids, in binary (a checkpoint's block); amg_read sets the hierarchy up again from them,
  * the same as it was. -1 on a write or read error, or (amg_read) a matrix that is not one amg_setup takes. */

@@ -42,6 +42,9 @@ typedef struct held_multigrid {
 
 enum { MULTIGRID_VISCOUS, MULTIGRID_PRESSURE };
 
+/* The vectors a hierarchy's V-cycle takes at once: the viscous solve's two velocity components, the pressure */
+static inline int multigrid_blocks(int which) { return which == MULTIGRID_VISCOUS ? 2 : 1; }
+
 typedef struct implicit_work {
     size_t fluid_cap, wall_cap, mirror_cap, ghost_cap; /* entries the per-entry arrays hold */
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
@@ -249,7 +252,7 @@ int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version)
             fread(&m->last_iterations, 4, 1, f) != 1 || m->base_iterations < -1 || m->last_iterations < 0 ||
             m->built_step < 0)
             return -1;
-        if (!m->amg && !(m->amg = amg_create(reason, sizeof reason)))
+        if (!m->amg && !(m->amg = amg_create(reason, sizeof reason, multigrid_blocks(k))))
             return -1;
         if (amg_read(m->amg, f, sim->count) != 0)
             return -1;
@@ -789,9 +792,8 @@ static int precondition(surge_sim *sim, const double *in, double *out, int n)
         return 0;
     }
     const int nf = n / w->vcycle_blocks;
-    for (int c = 0; c < w->vcycle_blocks; c++)
-        if (amg_vcycle(w->amg, in + c * nf, out + c * nf) != 0)
-            return -1;
+    if (amg_vcycle(w->amg, w->vcycle_blocks, in, out) != 0)
+        return -1;
     if (w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
         for (int i = 0; i < nf; i++)
             if (w->fixed[i])
@@ -940,7 +942,7 @@ static int multigrid_setup(surge_sim *sim, int which, const char *what, const do
     held_multigrid *m = &w->multigrid[which];
     char reason[160] = "";
     if (!m->amg)
-        m->amg = amg_create(reason, sizeof reason);
+        m->amg = amg_create(reason, sizeof reason, multigrid_blocks(which));
     const int first = sim->wall_count, nf = sim->count - first;
     w->amg = m->amg;
     const int slowed = m->base_iterations >= 0 &&
