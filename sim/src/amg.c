@@ -233,6 +233,8 @@ int amg_vcycle(amg_system *amg, int blocks, const double *rhs, double *x)
     if (!amg->copy[0].multigrid)
         return -1;
     const int n = amg->n;
+    /* hypre's error flag is one global: cleared before the copies run and read after, so that no two threads touch
+     * it but a failing V-cycle (whose flag either thread's failure sets) */
     HYPRE_ClearAllErrors();
     #pragma omp parallel for num_threads(amg->copies) schedule(static, 1) if (amg->copies > 1 && blocks > 1)
     for (int k = 0; k < blocks; k++) {
