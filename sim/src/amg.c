@@ -182,6 +182,7 @@ static int build(amg_system *amg, int n)
         HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
         HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
         HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
+        HYPRE_BoomerAMGSetKeepTranspose(h->multigrid, 1);
         HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
         HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
         HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);

@@ -325,7 +325,18 @@ static void wall_sums(surge_sim *sim)
 
 /* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
  * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
-static void geometry(surge_sim *sim)
+/* Fluid particle i's per-lane partial sums over its neighbour lists (lanes.h), added in lane order at the end */
+typedef struct geometry_lanes {
+    real kernel_w[PAIR_LANES], div_r[PAIR_LANES], grad_c_x[PAIR_LANES], grad_c_y[PAIR_LANES];
+    real m_xx[PAIR_LANES], m_xy[PAIR_LANES], m_yy[PAIR_LANES]; /* the kernel moments, walls by their wetness */
+    real zero[PAIR_LANES];
+    double wrx[PAIR_LANES], wry[PAIR_LANES];                    /* sum_b w_ab r_ab */
+} geometry_lanes;
+
+/* geometry()'s pair loop over the list entries from..to of a fluid particle at (mxa, mya), its fluid list or (walls)
+ * its wall list: each entry's Laplacian weight and V_b f r_ab, and the particle's sums */
+static inline __attribute__((always_inline)) void geometry_pairs(surge_sim *sim, real mxa, real mya, int64_t from,
+                                                                 int64_t to, int walls, geometry_lanes *s)
 {
     implicit_work *w = sim->implicit;
     const neighbour_lists *nl = &sim->neighbours;
@@ -333,6 +344,47 @@ static void geometry(surge_sim *sim)
     const real grad_coef = k->grad_coef, inv_h = k->inv_h, alpha = k->alpha, support2 = k->support2;
     const real mass = (real)sim->mass, vol = (real)(sim->mass / sim->rho0), rho0 = (real)sim->rho0;
     const real eta2 = (real)sim->eta2, four = 4;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const int32_t *restrict index = walls ? nl->wall_index : nl->fluid_index;
+    const real *restrict dx0 = walls ? nl->wall_dx0 : nl->fluid_dx0, *restrict dy0 = walls ? nl->wall_dy0 : nl->fluid_dy0;
+    real *restrict lap_w = walls ? w->wall_w : w->fluid_w;
+    real *restrict gx = walls ? w->wall_gx : w->fluid_gx, *restrict gy = walls ? w->wall_gy : w->fluid_gy;
+    const real *restrict wetness = w->wetness;
+    for (int64_t e0 = from; e0 < to; e0 += PAIR_LANES) {
+        #pragma omp simd simdlen(PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int b = index[e];
+            const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
+            const real r2 = dx * dx + dy * dy;
+            const int inside = (r2 < support2) & (r2 > 0);
+            const real r = REAL_SQRT(r2);
+            const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
+            const real vf = vol * f;
+            /* the Laplacian's weight: the viscous pair coefficient (eq. 7) per unit viscosity, negated */
+            const real weight = -pair_viscous_coef(mass, four, f, r2, pair_viscous_denominator(rho0, rho0, r2, eta2));
+            lap_w[e] = weight;
+            gx[e] = vf * dx, gy[e] = vf * dy;
+            s->wrx[l] += weight * dx, s->wry[l] += weight * dy;
+            s->kernel_w[l] += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
+            /* a wall counts in div r and in the moments as far as fluid wets it: a wall above the free surface does
+             * not hide a surface particle, nor hold up the one next to it */
+            const real wet = walls ? wetness[b] : 1;
+            s->div_r[l] -= wet * vf * r2;
+            s->m_xx[l] += wet * pair_moment(vf, dx, dx), s->m_xy[l] += wet * pair_moment(vf, dx, dy);
+            s->m_yy[l] += wet * pair_moment(vf, dy, dy);
+            s->grad_c_x[l] += vf * dx, s->grad_c_y[l] += vf * dy;
+        }
+    }
+}
+
+static void geometry(surge_sim *sim)
+{
+    implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const kernel2d *k = &sim->kernel;
+    const real grad_coef = k->grad_coef, inv_h = k->inv_h, alpha = k->alpha, support2 = k->support2;
+    const real mass = (real)sim->mass, vol = (real)(sim->mass / sim->rho0);
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
     const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
     const int first = sim->wall_count, n = sim->count;
@@ -344,20 +396,25 @@ static void geometry(surge_sim *sim)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         const ghost_span g = ghost_span_of(sim, kw);
-        double a[3][3] = {{0}};
-        for (int64_t e = g.from; e < g.to; e++) {
-            const int j = g.index[e];
-            const real dx = g.dx0[e] - moved_x[j] + g.shift_x, dy = g.dy0[e] - moved_y[j] + g.shift_y; /* r_g - r_j */
-            const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
-            if (r2 >= support2)
-                continue;
-            const double w_vol = kernel2d_w_inside(alpha, inv_h, r) * vol;
-            const double f_vol = kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol;
-            const double u[3] = {w_vol, f_vol * dx, f_vol * dy}, rel[3] = {1, -(double)dx, -(double)dy};
-            for (int q = 0; q < 3; q++)
-                for (int c = 0; c < 3; c++)
-                    a[q][c] += u[q] * rel[c];
-        }
+        double lane[3][3][PAIR_LANES] = {{{0}}}; /* per-lane partial sums (lanes.h) */
+        for (int64_t e0 = g.from; e0 < g.to; e0 += PAIR_LANES)
+            #pragma omp simd simdlen(PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int j = g.index[e0 + l];
+                const real dx = g.dx0[e0 + l] - moved_x[j] + g.shift_x, dy = g.dy0[e0 + l] - moved_y[j] + g.shift_y; /* r_g - r_j */
+                const real r2 = dx * dx + dy * dy, r = REAL_SQRT(r2);
+                const int inside = r2 < support2;
+                const double w_vol = inside ? kernel2d_w_inside(alpha, inv_h, r) * vol : 0;
+                const double f_vol = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) * vol : 0;
+                const double u[3] = {w_vol, f_vol * dx, f_vol * dy}, rel[3] = {1, -(double)dx, -(double)dy};
+                for (int q = 0; q < 3; q++)
+                    for (int c = 0; c < 3; c++)
+                        lane[q][c][l] += u[q] * rel[c];
+            }
+        double a[3][3];
+        for (int q = 0; q < 3; q++)
+            for (int c = 0; c < 3; c++)
+                a[q][c] = lanes_total(lane[q][c]);
         const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
                            a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
                            a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
@@ -404,39 +461,17 @@ static void geometry(surge_sim *sim)
     for (int a = first; a < n; a++) {
         const int i = a - first;
         const real mxa = moved_x[a], mya = moved_y[a];
-        real m_xx = 0, m_xy = 0, m_yy = 0, kernel_w = 0, div_r = 0, grad_c_x = 0, grad_c_y = 0;
-        double wrx = 0, wry = 0;
-        real wm_xx = 0, wm_xy = 0, wm_yy = 0; /* the moments with walls weighted by their wetness */
-        for (int pass = 0; pass < 2; pass++) {
-            const int64_t from = pass ? nl->wall_first[i] : nl->fluid_first[i];
-            const int64_t to = pass ? nl->wall_first[i + 1] : nl->fluid_first[i + 1];
-            const int32_t *restrict index = pass ? nl->wall_index : nl->fluid_index;
-            const real *restrict dx0 = pass ? nl->wall_dx0 : nl->fluid_dx0, *restrict dy0 = pass ? nl->wall_dy0 : nl->fluid_dy0;
-            real *restrict lap_w = pass ? w->wall_w : w->fluid_w;
-            real *restrict gx = pass ? w->wall_gx : w->fluid_gx, *restrict gy = pass ? w->wall_gy : w->fluid_gy;
-            for (int64_t e = from; e < to; e++) {
-                const int b = index[e];
-                const real dx = dx0[e] + (mxa - moved_x[b]), dy = dy0[e] + (mya - moved_y[b]);
-                const real r2 = dx * dx + dy * dy;
-                const int inside = r2 < support2 && r2 > 0;
-                const real r = REAL_SQRT(r2);
-                const real f = inside ? kernel2d_grad_factor_inside(grad_coef, inv_h, r) : 0;
-                const real vf = vol * f;
-                /* the Laplacian's weight: the viscous pair coefficient (eq. 7) per unit viscosity, negated */
-                lap_w[e] = -pair_viscous_coef(mass, four, f, r2, pair_viscous_denominator(rho0, rho0, r2, eta2));
-                gx[e] = vf * dx, gy[e] = vf * dy;
-                wrx += lap_w[e] * dx, wry += lap_w[e] * dy;
-                m_xx += pair_moment(vf, dx, dx), m_xy += pair_moment(vf, dx, dy), m_yy += pair_moment(vf, dy, dy);
-                kernel_w += inside ? kernel2d_w_inside(alpha, inv_h, r) : 0;
-                /* a wall counts in div r (and in a surface particle's moments) as far as fluid wets it: a wall
-                 * above the free surface does not hide it, nor hold up the surface particle next to it */
-                const real wet = pass ? w->wetness[b] : 1;
-                div_r -= wet * vf * r2;
-                wm_xx += wet * pair_moment(vf, dx, dx), wm_xy += wet * pair_moment(vf, dx, dy);
-                wm_yy += wet * pair_moment(vf, dy, dy);
-                grad_c_x += vf * dx, grad_c_y += vf * dy;
-            }
-        }
+        geometry_lanes sums;
+        memset(&sums, 0, sizeof sums);
+        geometry_pairs(sim, mxa, mya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &sums);
+        geometry_pairs(sim, mxa, mya, nl->wall_first[i], nl->wall_first[i + 1], 1, &sums);
+        const real *const first_eight[8] = {sums.kernel_w, sums.div_r, sums.grad_c_x, sums.grad_c_y,
+                                            sums.m_xx, sums.m_xy, sums.m_yy, sums.zero};
+        real total[8];
+        lanes_totals(first_eight, total);
+        const real kernel_w = total[0], div_r = total[1], grad_c_x = total[2], grad_c_y = total[3];
+        const real m_xx = total[4], m_xy = total[5], m_yy = total[6];
+        const double wrx = lanes_total(sums.wrx), wry = lanes_total(sums.wry);
         w->kernel_ratio[i] = mass * (alpha + kernel_w) * inv_lattice / sim->rho0;
         /* the nearest wall face within dp, for the contact rule and shifting (as the explicit scheme's) */
         int near_disc = 0;
@@ -451,7 +486,6 @@ static void geometry(surge_sim *sim)
         sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold ||
                           (!near_disc && w->kernel_ratio[i] < sim->second_row_kernel_ratio -
                                                                   sim->params.implicit.surface_kernel_margin);
-        m_xx = wm_xx, m_xy = wm_xy, m_yy = wm_yy;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
             w->minv_xx[i] = m_yy / det, w->minv_xy[i] = -m_xy / det, w->minv_yy[i] = m_xx / det;
@@ -1106,11 +1140,14 @@ int step_implicit(surge_sim *sim)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
-        double sum_w = 0;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-            sum_w += w->fluid_w[e];
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
-            sum_w += w->wall_w[e];
+        double lane_w[PAIR_LANES] = {0}; /* per-lane partial sums (lanes.h) */
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++)
+                lane_w[l] += w->fluid_w[e + l];
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++)
+                lane_w[l] += w->wall_w[e + l];
+        const double sum_w = lanes_total(lane_w);
         w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
         w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
         /* from v_n plus the last step's change: a slow flow's is much the same from step to step */
@@ -1183,21 +1220,28 @@ int step_implicit(surge_sim *sim)
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         const double vxa = sim->vx[a], vya = sim->vy[a];
-        double g_xx = 0, g_xy = 0, g_yx = 0, g_yy = 0, sum_w = 0;
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int b = nl->fluid_index[e];
-            const double dvx = vxa - sim->vx[b], dvy = vya - sim->vy[b];
-            g_xx -= dvx * w->fluid_gx[e], g_xy -= dvx * w->fluid_gy[e];
-            g_yx -= dvy * w->fluid_gx[e], g_yy -= dvy * w->fluid_gy[e];
-            sum_w += w->fluid_w[e];
-        }
-        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const int kw = nl->wall_index[e];
-            const double dvx = vxa - w->wall_x[kw], dvy = vya - w->wall_y[kw];
-            g_xx -= dvx * w->wall_gx[e], g_xy -= dvx * w->wall_gy[e];
-            g_yx -= dvy * w->wall_gx[e], g_yy -= dvy * w->wall_gy[e];
-            sum_w += w->wall_w[e];
-        }
+        double l_xx[PAIR_LANES] = {0}, l_xy[PAIR_LANES] = {0}, l_yx[PAIR_LANES] = {0}, l_yy[PAIR_LANES] = {0};
+        double l_w[PAIR_LANES] = {0}; /* per-lane partial sums (lanes.h) */
+        for (int64_t e0 = nl->fluid_first[i]; e0 < nl->fluid_first[i + 1]; e0 += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int64_t e = e0 + l;
+                const int b = nl->fluid_index[e];
+                const double dvx = vxa - sim->vx[b], dvy = vya - sim->vy[b];
+                l_xx[l] -= dvx * w->fluid_gx[e], l_xy[l] -= dvx * w->fluid_gy[e];
+                l_yx[l] -= dvy * w->fluid_gx[e], l_yy[l] -= dvy * w->fluid_gy[e];
+                l_w[l] += w->fluid_w[e];
+            }
+        for (int64_t e0 = nl->wall_first[i]; e0 < nl->wall_first[i + 1]; e0 += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int64_t e = e0 + l;
+                const int kw = nl->wall_index[e];
+                const double dvx = vxa - w->wall_x[kw], dvy = vya - w->wall_y[kw];
+                l_xx[l] -= dvx * w->wall_gx[e], l_xy[l] -= dvx * w->wall_gy[e];
+                l_yx[l] -= dvy * w->wall_gx[e], l_yy[l] -= dvy * w->wall_gy[e];
+                l_w[l] += w->wall_w[e];
+            }
+        const double g_xx = lanes_total(l_xx), g_xy = lanes_total(l_xy), g_yx = lanes_total(l_yx);
+        const double g_yy = lanes_total(l_yy), sum_w = lanes_total(l_w);
         /* div v = tr(G M^-1) */
         const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
