@@ -1092,6 +1092,33 @@ static void disc_forces(surge_sim *sim)
     boulders_wetted_fraction(sim, w->wetness);
 }
 
+/* Fluid particle i's per-lane partial sums of the velocity gradient G = -sum_b V_b f v_ab (x) r_ab and of its
+ * Laplacian weights (lanes.h), added in lane order at the end */
+typedef struct gradient_lanes {
+    double xx[PAIR_LANES], xy[PAIR_LANES], yx[PAIR_LANES], yy[PAIR_LANES], w[PAIR_LANES];
+} gradient_lanes;
+
+/* The pairs of list entries from..to of a fluid particle with velocity (vxa, vya): its fluid list (neighbours at
+ * sim->vx, vy) or (walls) its wall list (walls at wall_x, wall_y) */
+static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim *sim, double vxa, double vya,
+                                                                 int64_t from, int64_t to, int walls, gradient_lanes *s)
+{
+    const implicit_work *w = sim->implicit;
+    const neighbour_lists *nl = &sim->neighbours;
+    const int32_t *restrict index = walls ? nl->wall_index : nl->fluid_index;
+    const real *restrict gx = walls ? w->wall_gx : w->fluid_gx, *restrict gy = walls ? w->wall_gy : w->fluid_gy;
+    const real *restrict weight = walls ? w->wall_w : w->fluid_w;
+    for (int64_t e0 = from; e0 < to; e0 += PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int b = index[e];
+            const double dvx = vxa - (walls ? w->wall_x[b] : sim->vx[b]), dvy = vya - (walls ? w->wall_y[b] : sim->vy[b]);
+            s->xx[l] -= dvx * gx[e], s->xy[l] -= dvx * gy[e];
+            s->yx[l] -= dvy * gx[e], s->yy[l] -= dvy * gy[e];
+            s->w[l] += weight[e];
+        }
+}
+
 int step_implicit(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count, nf = n - first;
@@ -1220,28 +1247,12 @@ int step_implicit(surge_sim *sim)
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         const double vxa = sim->vx[a], vya = sim->vy[a];
-        double l_xx[PAIR_LANES] = {0}, l_xy[PAIR_LANES] = {0}, l_yx[PAIR_LANES] = {0}, l_yy[PAIR_LANES] = {0};
-        double l_w[PAIR_LANES] = {0}; /* per-lane partial sums (lanes.h) */
-        for (int64_t e0 = nl->fluid_first[i]; e0 < nl->fluid_first[i + 1]; e0 += PAIR_LANES)
-            for (int l = 0; l < PAIR_LANES; l++) {
-                const int64_t e = e0 + l;
-                const int b = nl->fluid_index[e];
-                const double dvx = vxa - sim->vx[b], dvy = vya - sim->vy[b];
-                l_xx[l] -= dvx * w->fluid_gx[e], l_xy[l] -= dvx * w->fluid_gy[e];
-                l_yx[l] -= dvy * w->fluid_gx[e], l_yy[l] -= dvy * w->fluid_gy[e];
-                l_w[l] += w->fluid_w[e];
-            }
-        for (int64_t e0 = nl->wall_first[i]; e0 < nl->wall_first[i + 1]; e0 += PAIR_LANES)
-            for (int l = 0; l < PAIR_LANES; l++) {
-                const int64_t e = e0 + l;
-                const int kw = nl->wall_index[e];
-                const double dvx = vxa - w->wall_x[kw], dvy = vya - w->wall_y[kw];
-                l_xx[l] -= dvx * w->wall_gx[e], l_xy[l] -= dvx * w->wall_gy[e];
-                l_yx[l] -= dvy * w->wall_gx[e], l_yy[l] -= dvy * w->wall_gy[e];
-                l_w[l] += w->wall_w[e];
-            }
-        const double g_xx = lanes_total(l_xx), g_xy = lanes_total(l_xy), g_yx = lanes_total(l_yx);
-        const double g_yy = lanes_total(l_yy), sum_w = lanes_total(l_w);
+        gradient_lanes lanes;
+        memset(&lanes, 0, sizeof lanes);
+        gradient_pairs(sim, vxa, vya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &lanes);
+        gradient_pairs(sim, vxa, vya, nl->wall_first[i], nl->wall_first[i + 1], 1, &lanes);
+        const double g_xx = lanes_total(lanes.xx), g_xy = lanes_total(lanes.xy), g_yx = lanes_total(lanes.yx);
+        const double g_yy = lanes_total(lanes.yy), sum_w = lanes_total(lanes.w);
         /* div v = tr(G M^-1) */
         const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
