@@ -897,6 +897,153 @@ static int test_implicit_clump(void)
     return failures;
 }
 
+#define PROJECTION_WHOLE_BOUND 0.07
+#define PROJECTION_INNER_BOUND 0.10
+#define PROJECTION_WHOLE_BOUND_FINE 0.03
+#define PROJECTION_INNER_BOUND_FINE 0.045
+#define REST_DENSITY_STEPS 10
+#define REST_DENSITY_BOUND 0.005
+
+/* The still tank (0.4 m x 0.2 m of fluid, dp 1 cm, C_h 1.8) for the implicit scheme's projection alone: no gravity,
+ * no viscosity, no shift, no rest-density solve, a fixed step short enough that the particles stay put */
+static void projection_tank(surge_params *p)
+{
+    p->numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    p->body.gravity_mps2 = 0;
+    p->numerics.c0_mps = 10; /* no gravity to derive it from; the implicit scheme does not step by it */
+    p->fluid.viscosity_m2ps = 0;
+    p->shifting.form = SURGE_SHIFT_NONE;
+    p->implicit.density_correction = 0;
+    p->numerics.dt_fixed_s = 1e-3;
+}
+
+/* The tank's wall faces: the fluid's left edge and bottom (dp/2 outside its first particles) */
+static void tank_faces(const surge_sim *sim, double *x0, double *y0)
+{
+    const double dp = sim->params.numerics.dp_m;
+    *x0 = *y0 = 1e9;
+    for (int k = sim->wall_count; k < sim->count; k++)
+        *x0 = fmin(*x0, sim->x[k] - 0.5 * dp), *y0 = fmin(*y0, sim->y[k] - 0.5 * dp);
+}
+
+/* The projection (issue #26): a velocity field with a known divergence, v = curl(s) + (0, A y), in the open tank
+ * (walls at x = 0, L and y = 0, the free surface at y = H), with s = S sin(pi x / L) sin(pi y / (2H)), whose curl is
+ * divergence-free and has no velocity through the walls, and (0, A y), whose divergence is A and which the walls
+ * also let be. The projection with phi = 0 on the free surface and no flux through the walls takes away the
+ * gradient part exactly: (0, A y) = grad(A (y^2 - H^2) / 2). One step must leave the curl alone. */
+static int projection_errors(double dp_m, double *whole, double *inner_part)
+{
+    surge_sim *sim = case_sim("still_tank.ini", dp_m, projection_tank);
+    if (!sim)
+        return -1;
+    const double length = sim->params.fluid.x1_m - sim->params.fluid.x0_m, depth = sim->params.fluid.depth_m;
+    const double stretch = 1.0, swirl = 0.1 * length / SURGE_PI; /* A (1/s); S (m^2/s): the curl's peak 0.1 m/s */
+    double x0, y0;
+    tank_faces(sim, &x0, &y0);
+    for (int k = sim->wall_count; k < sim->count; k++) {
+        const double x = sim->x[k] - x0, y = sim->y[k] - y0;
+        sim->vx[k] = (real)(swirl * sin(SURGE_PI * x / length) * SURGE_PI / (2 * depth) * cos(SURGE_PI * y / (2 * depth)));
+        sim->vy[k] = (real)(-swirl * SURGE_PI / length * cos(SURGE_PI * x / length) * sin(SURGE_PI * y / (2 * depth)) +
+                            stretch * y);
+    }
+    if (surge_sim_step(sim) != 0) {
+        printf("implicit_projection: %s\n", surge_sim_health(sim)->message);
+        surge_sim_destroy(sim);
+        return -1;
+    }
+    /* the error against the curl alone, over the whole fluid and 3 dp in from the walls and the surface */
+    double error2 = 0, inner_error2 = 0, curl2 = 0, inner_curl2 = 0, gradient2 = 0;
+    int count = 0, inner = 0;
+    for (int k = sim->wall_count; k < sim->count; k++) {
+        const double x = sim->x[k] - x0, y = sim->y[k] - y0;
+        const double cx = swirl * sin(SURGE_PI * x / length) * SURGE_PI / (2 * depth) * cos(SURGE_PI * y / (2 * depth));
+        const double cy = -swirl * SURGE_PI / length * cos(SURGE_PI * x / length) * sin(SURGE_PI * y / (2 * depth));
+        const double e2 = (sim->vx[k] - cx) * (sim->vx[k] - cx) + (sim->vy[k] - cy) * (sim->vy[k] - cy);
+        error2 += e2, curl2 += cx * cx + cy * cy, gradient2 += stretch * y * stretch * y, count++;
+        if (x > 3 * dp_m && x < length - 3 * dp_m && y > 3 * dp_m && y < depth - 3 * dp_m)
+            inner_error2 += e2, inner_curl2 += cx * cx + cy * cy, inner++;
+    }
+    *whole = sqrt(error2 / gradient2), *inner_part = sqrt(inner_error2 / inner_curl2);
+    printf("implicit_projection: dp %g m, %d fluid particles: rms of the curl %.4g m/s, of the gradient part %.4g "
+           "m/s; after one step the rms error %.4g m/s over the fluid, %.4g m/s 3 dp inside\n", dp_m, count,
+           sqrt(curl2 / count), sqrt(gradient2 / count), sqrt(error2 / count), sqrt(inner_error2 / inner));
+    surge_sim_destroy(sim);
+    return 0;
+}
+
+/* At dp = 1 cm (20 rows) and 5 mm (40 rows); the errors must fall with dp */
+static int test_implicit_projection(void)
+{
+    double whole[2], inner[2];
+    for (int k = 0; k < 2; k++)
+        if (projection_errors(k ? 0.005 : 0.01, &whole[k], &inner[k]) != 0)
+            return 1;
+    expect_below("implicit_projection: dp 1 cm, rms error / rms gradient part", whole[0], PROJECTION_WHOLE_BOUND);
+    expect_below("implicit_projection: dp 1 cm, rms error / rms curl, 3 dp inside", inner[0], PROJECTION_INNER_BOUND);
+    expect_below("implicit_projection: dp 5 mm, rms error / rms gradient part", whole[1], PROJECTION_WHOLE_BOUND_FINE);
+    expect_below("implicit_projection: dp 5 mm, rms error / rms curl, 3 dp inside", inner[1], PROJECTION_INNER_BOUND_FINE);
+    return failures;
+}
+
+/* The rest-density solve (issue #26): the tank's fluid squeezed to 0.95 of its spacing in depth (its kernel sum 5 %
+ * above the lattice's; squeezed sideways too it would leave a void along the side walls), at rest and without
+ * gravity, must come back to the rest density and to its depth; the solve moves the particles and leaves the
+ * velocity alone. */
+static void squeezed_tank(surge_params *p)
+{
+    p->numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    p->body.gravity_mps2 = 0;
+    p->numerics.c0_mps = 10; /* no gravity to derive it from; the implicit scheme does not step by it */
+    p->numerics.dt_fixed_s = 1e-3;
+}
+
+static int rest_density_run(double dp_m)
+{
+    surge_sim *sim = case_sim("still_tank.ini", dp_m, squeezed_tank);
+    if (!sim)
+        return 1;
+    const double dp = sim->params.numerics.dp_m, depth = sim->params.fluid.depth_m, squeeze = 0.95;
+    double x0, y0;
+    tank_faces(sim, &x0, &y0);
+    for (int k = sim->wall_count; k < sim->count; k++)
+        sim->y[k] = y0 + squeeze * (sim->y[k] - y0);
+    double first_excess = 0, excess = 0, top = 0, largest_speed = 0;
+    for (int n = 0; n < REST_DENSITY_STEPS; n++) {
+        if (surge_sim_step(sim) != 0) {
+            printf("implicit_rest_density: %s\n", surge_sim_health(sim)->message);
+            surge_sim_destroy(sim);
+            return 1;
+        }
+        /* the density the spacing says (rho0 times the kernel sum over the lattice's) off the free surface */
+        excess = 0;
+        for (int k = sim->wall_count; k < sim->count; k++)
+            if (!sim->near_surface[k])
+                excess = fmax(excess, fabs(sim->rho[k] / sim->rho0 - 1));
+        first_excess = n == 0 ? excess : first_excess;
+    }
+    for (int k = sim->wall_count; k < sim->count; k++) {
+        top = fmax(top, sim->y[k] - y0);
+        largest_speed = fmax(largest_speed, hypot(sim->vx[k], sim->vy[k]));
+    }
+    printf("implicit_rest_density: dp %g m: largest |rho / rho0 - 1| off the surface %.4f at the first step, %.4f "
+           "after %d; top row %.4f dp under the depth (0.5 at rest), largest speed %.3g m/s\n", dp, first_excess,
+           excess, REST_DENSITY_STEPS, (depth - top) / dp, largest_speed);
+    expect_below("implicit_rest_density: first step's |rho / rho0 - 1|, 0.03 - it (squeezed)", 0.03 - first_excess, 0);
+    expect_below("implicit_rest_density: |rho / rho0 - 1| at the end", excess, REST_DENSITY_BOUND);
+    expect_below("implicit_rest_density: |top row's depth - (depth - dp/2)| / dp", fabs((depth - top) / dp - 0.5), 0.2);
+    expect_below("implicit_rest_density: largest speed (m/s; the solve moves, it does not push)", largest_speed, 1e-9);
+    surge_sim_destroy(sim);
+    return 0;
+}
+
+/* At dp = 1 cm (20 rows) and 5 mm (40 rows) */
+static int test_implicit_rest_density(void)
+{
+    if (rest_density_run(0.01) != 0 || rest_density_run(0.005) != 0)
+        return 1;
+    return failures;
+}
+
 /* implicit.preconditioner = auto: the pressure by the multigrid from 2,500 fluid particles, the viscous solve
  * (which starts from v_n) from 10,000 (docs/method.md, "Linear solvers"); amg and jacobi take both */
 static int test_implicit_auto(void)
@@ -974,6 +1121,10 @@ int main(int argc, char **argv)
         return test_face_search() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_auto"))
         return test_implicit_auto() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_projection"))
+        return test_implicit_projection() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_rest_density"))
+        return test_implicit_rest_density() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_clump"))
         return test_implicit_clump() ? 1 : 0;
     if (!strcmp(argv[1], "fluid_share"))
