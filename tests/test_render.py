@@ -1,7 +1,9 @@
 #!/usr/bin/python3
 """Rendering through the surge program: frames and movies while it runs and from a finished run.
 
-Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
+Usage: test_render.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
+  SCHEME         explicit (the default) or implicit: the runs that share the common settings take
+                 -s numerics.scheme=SCHEME.
   GROUP live     --frames and --movie during a run: one PNG per frame drawn, a movie with one frame per frame
                  due (ffprobe: count, size, duration), a rendered frame on the stream's "frame" topic, and the
                  solver's final state hash equal to the same run without rendering.
@@ -37,7 +39,7 @@ from surgepy import client as surge_client  # noqa: E402
 TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
 COMMON = ["-s", "time.end_s=0.2", "-s", "render.width_px=640", "-s", "render.height_px=360",
           "-s", "render.frame_interval_s=0.02", "-s", "render.movie_fps=10", "-s", "output.snapshot_interval_s=0.05",
-          "--threads", "1"]
+          "--threads", "1"] + (["-s", "numerics.scheme=" + sys.argv[5]] if len(sys.argv) > 5 else [])
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
 
 

@@ -1,7 +1,11 @@
 #!/usr/bin/python3
 """Live state and control of a running surge, through real pyzmq clients (docs/protocol.md).
 
-Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
+Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
+  SCHEME          explicit (the default) or implicit: every run takes -s numerics.scheme=SCHEME; the implicit
+                  scheme with a fixed 1 ms step, so that the still tank's 0.15 s hold the steps the groups count,
+                  and nu = 0.1 m^2/s (nu dt / dp^2 = 1: at the tank's own 0.001 the 1 ms step would be far below
+                  the scheme's stable range, docs/validation/stability.md, "Twenty-second session").
   GROUP state     a subscriber's states (full and a field subset) match the same run's snapshots bit for bit;
                   headers follow the minimum contract; the bodies topic is well formed; stats end with "final".
   GROUP control   pause holds the step, step N runs N steps, a parameter set mid-run shows in the published
@@ -39,6 +43,8 @@ from surgepy import client as surge_client  # noqa: E402
 from surgepy import vtp  # noqa: E402
 
 TANK = os.path.join(SOURCE, "cases", "still_tank.ini")
+SCHEME = (["-s", "numerics.scheme=" + sys.argv[5]] if len(sys.argv) > 5 else []) + \
+    (["-s", "numerics.dt_fixed_s=0.001", "-s", "fluid.viscosity_m2ps=0.1"] if sys.argv[5:6] == ["implicit"] else [])
 
 
 
@@ -54,7 +60,7 @@ class Surge:
         self.ctl = "ipc://" + os.path.join(self.dir, "ctl.sock")
         self.args = [SURGE, "run", case, "-o", self.out, "--threads", "1", "-s", "output.progress_interval_s=0"]
         self.args += (["--publish", self.pub] if publish else []) + (["--control", self.ctl] if control else [])
-        self.args += (["--paused"] if paused else []) + extra
+        self.args += (["--paused"] if paused else []) + SCHEME + extra
         self.stderr_path = os.path.join(self.dir, "stderr.txt")
         env = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
         self.proc = subprocess.Popen(self.args, stderr=open(self.stderr_path, "w"), stdout=subprocess.DEVNULL, env=env)
