@@ -323,8 +323,6 @@ static void wall_sums(surge_sim *sim)
     w->wall_sum_ready = 1;
 }
 
-/* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
- * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
 /* Fluid particle i's per-lane partial sums over its neighbour lists (lanes.h), added in lane order at the end */
 typedef struct geometry_lanes {
     real kernel_w[PAIR_LANES], div_r[PAIR_LANES], grad_c_x[PAIR_LANES], grad_c_y[PAIR_LANES];
@@ -378,6 +376,8 @@ static inline __attribute__((always_inline)) void geometry_pairs(surge_sim *sim,
     }
 }
 
+/* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
+ * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
 static void geometry(surge_sim *sim)
 {
     implicit_work *w = sim->implicit;
