@@ -508,6 +508,17 @@ def group_inputs():
            "wall time per simulated second" in r.stdout, r)
     r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005")
     report("check_warns_coarse_discs", exited(r, 0) and "2.5 dp, fewer than 4" in r.stdout, r)
+    # the implicit scheme at a fixed step shorter than its own at rest: the still tank's surface does not hold
+    r = surge("check", os.path.join(cases_dir, "still_tank.ini"), "-s", "numerics.scheme=implicit", "-s",
+              "numerics.dt_fixed_s=0.005")
+    report("check_warns_implicit_short_fixed_step", exited(r, 0) and "dt_fixed_s = 0.005 s is shorter" in r.stdout and
+           "(0.0204 s" in r.stdout and "nu dt / dp^2 = 0.05 here" in r.stdout, r)
+    r = surge("check", os.path.join(cases_dir, "still_tank.ini"), "-s", "numerics.scheme=implicit", "-s",
+              "numerics.dt_fixed_s=0.03")
+    report("check_quiet_implicit_long_fixed_step", exited(r, 0) and "warning" not in r.stdout + r.stderr, r)
+    r = surge("check", os.path.join(cases_dir, "still_tank.ini"), "-s", "numerics.scheme=implicit", "-s",
+              "implicit.cfl=0.05")
+    report("check_warns_implicit_low_cfl", exited(r, 0) and "implicit.cfl = 0.05 is below 0.1" in r.stdout, r)
     r = surge("check", os.path.join(cases_dir, "still_tank.ini"))
     report("check_quiet_when_resolved", exited(r, 0) and "warning" not in r.stdout + r.stderr and
            "note" not in r.stdout + r.stderr, r)

@@ -680,6 +680,21 @@ static void report_resolution(const surge_sim *sim, int verbose)
         double dt_implicit = p->numerics.dt_fixed_s;
         if (!(dt_implicit > 0))
             dt_implicit = surge_implicit_dt_s(p, h, g, u);
+        /* a fixed step shorter than the scheme's own at rest: the still tank's free surface does not stay at rest
+         * there (docs/validation/stability.md, "Short steps in a thin fluid") */
+        const double dt_rest = surge_implicit_dt_s(p, h, g, 0.0);
+        if (p->numerics.dt_fixed_s > 0 && p->numerics.dt_fixed_s < dt_rest)
+            fprintf(out, "surge: warning: numerics.dt_fixed_s = %g s is shorter than the implicit scheme's own step at "
+                    "rest (%.3g s, implicit.force_cfl): in the still tank, at fixed steps under about half of it (nu dt / "
+                    "dp^2 = %.3g here) a mode of the incremental projection under the free surface grows and the "
+                    "fluid does not stay at rest (docs/validation/stability.md, \"Short steps in a thin fluid\"); "
+                    "leave the step to the scheme (0) or use the explicit scheme\n",
+                    p->numerics.dt_fixed_s, dt_rest,
+                    p->fluid.viscosity_m2ps * p->numerics.dt_fixed_s / (dp * dp));
+        if (p->implicit.cfl < 0.1)
+            fprintf(out, "surge: warning: implicit.cfl = %g is below 0.1: the same mode grows where the flow's speed "
+                    "sets the step (the fluid-only debris surge at dp = 0.04 m stopped at 0.52 s with 0.05 and ran "
+                    "with 0.1; docs/validation/stability.md, \"Short steps in a thin fluid\")\n", p->implicit.cfl);
         const bool amg = surge_implicit_uses_amg(p, d->fluid_count, false);
         const bool viscous_amg = surge_implicit_uses_amg(p, d->fluid_count, true);
         if (verbose || bytes > 4e9)

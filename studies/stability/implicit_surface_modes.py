@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""The implicit step's growth factor on a frozen lattice under a free surface (docs/validation/stability.md,
+"Short steps in a thin fluid").
+
+With the particles held still, one step of the implicit scheme (sim/src/step_implicit.c) is a linear map of the
+velocities and the pressure. This script builds that map as matrices, the same pair terms as the C code, on a
+lattice slab periodic in x with a free surface at its top and bottom (one row of surface particles each, held at
+p = 0), and prints its spectral radius, the factor by which its fastest mode grows a step:
+
+    v* = (I + nu dt Lv)^-1 (v_n - dt G p_n / rho0)     (the predictor; Lv the viscous Laplacian)
+    L phi = -(rho0 / dt) D v*                           (L the corrected Laplacian, D the renormalised divergence)
+    v_n+1 = v* - dt G phi / rho0,  p_n+1 = p_n + phi    (G the renormalised gradient)
+
+With q = dt p / rho0 only kappa = nu dt / dp^2 is left. A radius above 1 means the step is unstable on a frozen
+lattice; the moving particles of a real run then decide whether it shows. The variants change one operator:
+`g_vacuum` drops the gradient's own term (p_b instead of p_b - p_a: air at p = 0 beyond the surface), `d_adjoint`
+takes -G^T as the divergence, `g_adjoint` -D^T as the gradient.
+
+    /usr/bin/python3 studies/stability/implicit_surface_modes.py [--columns 8] [--rows 16] [--ch 1.8]
+"""
+import argparse
+import sys
+
+import numpy as np
+
+KAPPAS = (0.0, 0.01, 0.05, 0.2, 1.0)
+
+
+def wendland_factor(r, h):
+    """F with grad_a W_ab = F r_ab (sim/src/kernel.h)"""
+    alpha = 7.0 / (4.0 * np.pi * h * h)
+    q = r / h
+    return np.where(q < 2, -5.0 * alpha / h ** 2 * (1 - q / 2) ** 3, 0.0)
+
+
+def operators(columns, rows, ch, dp=0.01, rho0=1000.0):
+    """G (2n x n), D (n x 2n), L and Lv (n x n) on the slab, and which particles are surface particles"""
+    h = ch * np.sqrt(2.0) * dp
+    xs, ys = np.meshgrid((np.arange(columns) + 0.5) * dp, (np.arange(rows) + 0.5) * dp)
+    pos = np.c_[xs.ravel(), ys.ravel()]
+    n = len(pos)
+    row = np.round(pos[:, 1] / dp - 0.5).astype(int)
+    surface = (row == 0) | (row == rows - 1)
+    d = pos[:, None, :] - pos[None, :, :]  # r_ab
+    d[..., 0] -= columns * dp * np.round(d[..., 0] / (columns * dp))
+    r2 = (d ** 2).sum(-1)
+    f = wendland_factor(np.sqrt(r2), h)
+    np.fill_diagonal(f, 0.0)
+    vol = dp * dp
+    g = vol * f[..., None] * d  # V_b grad_a W_ab
+    eta2 = 0.01 * h * h
+    w = -4 * rho0 * vol * f * r2 / (2 * rho0 * (r2 + eta2))  # the Laplacian's pair weight (eq. 7 per unit viscosity)
+    moment = -np.einsum('ab,abi,abj->aij', vol * f, d, d)
+    minv = np.linalg.inv(moment)
+    G = np.zeros((2 * n, n))
+    D = np.zeros((n, 2 * n))
+    L = np.zeros((n, n))
+    Lv = np.zeros((n, n))
+    for a in range(n):
+        mg = g[a] @ minv[a]  # row b: M_a^-1 V_b grad_a W_ab (M symmetric)
+        G[a] += mg[:, 0]
+        G[n + a] += mg[:, 1]
+        G[a, a] -= mg[:, 0].sum()  # grad p_a = M^-1 sum_b V_b (p_b - p_a) grad_a W_ab
+        G[n + a, a] -= mg[:, 1].sum()
+        D[a, :n] += mg[:, 0]  # div v_a = tr(M^-1 sum_b V_b (v_b - v_a) x grad_a W_ab)
+        D[a, a] -= mg[:, 0].sum()
+        D[a, n:] += mg[:, 1]
+        D[a, n + a] -= mg[:, 1].sum()
+        u = minv[a] @ (w[a][:, None] * d[a]).sum(0)
+        c = w[a] + g[a] @ u  # -lap p_a = sum_b (w_ab + u_a . V_b grad_a W_ab)(p_a - p_b)
+        L[a] -= c
+        L[a, a] += c.sum()
+        Lv[a] -= w[a]
+        Lv[a, a] += w[a].sum()
+    return dict(G=G, D=D, L=L, Lv=Lv * dp * dp, surface=surface, n=n)
+
+
+def step_matrix(ops, kappa):
+    """The step's linear map on (v, q) with q = dt p / rho0 on the particles under the surface"""
+    n, free = ops["n"], ~ops["surface"]
+    Gq = ops["G"][:, free]
+    viscous = np.linalg.inv(np.eye(2 * n) + kappa * np.kron(np.eye(2), ops["Lv"]))
+    v_star = np.hstack([viscous, -viscous @ Gq])
+    phi = -np.linalg.solve(ops["L"][np.ix_(free, free)], ops["D"][free] @ v_star)
+    v_next = v_star - Gq @ phi
+    q_next = np.hstack([np.zeros((free.sum(), 2 * n)), np.eye(free.sum())]) + phi
+    return np.vstack([v_next, q_next])
+
+
+def variants(ops):
+    n = ops["n"]
+    G_vacuum = ops["G"].copy()
+    G_vacuum[np.arange(n), np.arange(n)] = 0.0  # its own term, p_a, out of each component
+    G_vacuum[n + np.arange(n), np.arange(n)] = 0.0
+    return [("the scheme's operators", ops),
+            ("g_vacuum: gradient without its own term", dict(ops, G=G_vacuum)),
+            ("d_adjoint: divergence -G^T", dict(ops, D=-ops["G"].T)),
+            ("g_adjoint: gradient -D^T", dict(ops, G=-ops["D"].T))]
+
+
+def main(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--columns", type=int, default=8, help="lattice columns (periodic; default 8)")
+    parser.add_argument("--rows", type=int, default=16, help="lattice rows, the surface rows included (default 16)")
+    parser.add_argument("--ch", type=float, default=1.8, help="C_h, h = C_h sqrt(2) dp (default 1.8)")
+    args = parser.parse_args(argv)
+    if args.columns < 6 or args.rows < 8 or not 1.0 <= args.ch <= 2.5:
+        parser.error("--columns >= 6, --rows >= 8 and 1 <= --ch <= 2.5 (the kernel must fit the period)")
+    ops = operators(args.columns, args.rows, args.ch)
+    free = ~ops["surface"]
+    mu = np.linalg.eigvals(np.linalg.solve(ops["L"][np.ix_(free, free)], -ops["D"][free] @ ops["G"][:, free]))
+    print("C_h %g, %d x %d lattice: eigenvalues of L^-1 (-D G) from %.4f to %.4f (%d below 0; the incremental step "
+          "is stable on a frozen lattice where all lie in [0, 4/3))" % (args.ch, args.columns, args.rows,
+                                                                        mu.real.min(), mu.real.max(),
+                                                                        (mu.real < -1e-9).sum()))
+    print("spectral radius of one step at nu dt / dp^2 = " + ", ".join("%g" % k for k in KAPPAS))
+    for name, variant in variants(ops):
+        radii = [np.abs(np.linalg.eigvals(step_matrix(variant, k))).max() for k in KAPPAS]
+        print("  %-42s %s" % (name, "  ".join("%.4f" % r for r in radii)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
