@@ -183,4 +183,18 @@ progress = study.read_progress(os.path.join(parked_running, "interrupted_run"))
 check("a running run is parked as interrupted with its piece's time up to the checkpoint",
       progress["status"] == "interrupted" and abs(progress["wall_s"] - 42.5) < 1e-6
       and "piece_started_unix" not in progress, str(progress))
+
+# the frozen-lattice analysis of the implicit step (docs/validation/stability.md, "Twenty-third session"): the
+# scheme's operators grow 1.39 a step without viscosity, the adjoint pairings and the air images do not (or barely)
+IM = os.path.join(source, "studies", "stability", "implicit_surface_modes.py")
+r = subprocess.run([sys.executable, IM], capture_output=True, text=True, timeout=300)
+radii = {line[:44].strip(): [float(v) for v in line[44:].split()] for line in r.stdout.splitlines()
+         if line.startswith("  ")}
+check("implicit_surface_modes: the scheme's 1.3934 and 1.2710 at nu dt/dp^2 0 and 0.2; adjoints 1; air <= 1.0072",
+      r.returncode == 0 and abs(radii["the scheme's operators"][0] - 1.3934) < 1e-3
+      and abs(radii["the scheme's operators"][3] - 1.2710) < 1e-3
+      and max(radii["d_adjoint: divergence -G^T"] + radii["g_adjoint: gradient -D^T"]) < 1.0001
+      and max(radii["air: mirror images beyond the surface"]) < 1.0073, r.stdout + r.stderr)
+r = subprocess.run([sys.executable, IM, "--ch", "9"], capture_output=True, text=True, timeout=60)
+check("implicit_surface_modes --ch 9 refused", r.returncode == 2 and "--ch" in r.stderr, r.stderr.strip())
 sys.exit(finish())

@@ -14,7 +14,8 @@ p = 0), and prints its spectral radius, the factor by which its fastest mode gro
 With q = dt p / rho0 only kappa = nu dt / dp^2 is left. A radius above 1 means the step is unstable on a frozen
 lattice; the moving particles of a real run then decide whether it shows. The variants change one operator:
 `g_vacuum` drops the gradient's own term (p_b instead of p_b - p_a: air at p = 0 beyond the surface), `d_adjoint`
-takes -G^T as the divergence, `g_adjoint` -D^T as the gradient.
+takes -G^T as the divergence, `g_adjoint` -D^T as the gradient; `air` holds no surface particle at p = 0 but
+mirrors the particles across the surface, the images' pressure negated, so that no kernel is cut off.
 
     /usr/bin/python3 studies/stability/implicit_surface_modes.py [--columns 8] [--rows 16] [--ch 1.8]
 """
@@ -33,19 +34,35 @@ def wendland_factor(r, h):
     return np.where(q < 2, -5.0 * alpha / h ** 2 * (1 - q / 2) ** 3, 0.0)
 
 
-def operators(columns, rows, ch, dp=0.01, rho0=1000.0):
-    """G (2n x n), D (n x 2n), L and Lv (n x n) on the slab, and which particles are surface particles"""
+def operators(columns, rows, ch, air=False, dp=0.01, rho0=1000.0):
+    """G (2n x n), D (n x 2n), L and Lv (n x n) on the slab, and which particles are surface particles (held at
+    p = 0). With air, no particle is held: each one within 2h of a surface has a mirror image across it (the
+    surfaces half a spacing beyond the outer rows), whose pressure is its own negated (p = 0 on the surface) and
+    whose velocity is its own, so that every kernel is full."""
     h = ch * np.sqrt(2.0) * dp
     xs, ys = np.meshgrid((np.arange(columns) + 0.5) * dp, (np.arange(rows) + 0.5) * dp)
     pos = np.c_[xs.ravel(), ys.ravel()]
     n = len(pos)
     row = np.round(pos[:, 1] / dp - 0.5).astype(int)
-    surface = (row == 0) | (row == rows - 1)
-    d = pos[:, None, :] - pos[None, :, :]  # r_ab
+    surface = np.zeros(n, bool) if air else (row == 0) | (row == rows - 1)
+    # the neighbours (the particles and, with air, their images) and their values as rows of the particles'
+    images = []
+    if air:
+        top = rows * dp
+        for i, (x, y) in enumerate(pos):
+            if top - y < 2 * h:
+                images.append((i, (x, 2 * top - y)))
+            if y < 2 * h:
+                images.append((i, (x, -y)))
+    source = np.array([i for i, _ in images], int)
+    others = np.vstack([pos] + ([np.array([q for _, q in images])] if images else []))
+    pressure_of = np.vstack([np.eye(n), -np.eye(n)[source]])
+    velocity_of = np.vstack([np.eye(n), np.eye(n)[source]])
+    d = pos[:, None, :] - others[None, :, :]  # r_ab
     d[..., 0] -= columns * dp * np.round(d[..., 0] / (columns * dp))
     r2 = (d ** 2).sum(-1)
     f = wendland_factor(np.sqrt(r2), h)
-    np.fill_diagonal(f, 0.0)
+    f[np.arange(n), np.arange(n)] = 0.0
     vol = dp * dp
     g = vol * f[..., None] * d  # V_b grad_a W_ab
     eta2 = 0.01 * h * h
@@ -58,19 +75,19 @@ def operators(columns, rows, ch, dp=0.01, rho0=1000.0):
     Lv = np.zeros((n, n))
     for a in range(n):
         mg = g[a] @ minv[a]  # row b: M_a^-1 V_b grad_a W_ab (M symmetric)
-        G[a] += mg[:, 0]
-        G[n + a] += mg[:, 1]
+        G[a] += mg[:, 0] @ pressure_of
+        G[n + a] += mg[:, 1] @ pressure_of
         G[a, a] -= mg[:, 0].sum()  # grad p_a = M^-1 sum_b V_b (p_b - p_a) grad_a W_ab
         G[n + a, a] -= mg[:, 1].sum()
-        D[a, :n] += mg[:, 0]  # div v_a = tr(M^-1 sum_b V_b (v_b - v_a) x grad_a W_ab)
+        D[a, :n] += mg[:, 0] @ velocity_of  # div v_a = tr(M^-1 sum_b V_b (v_b - v_a) x grad_a W_ab)
         D[a, a] -= mg[:, 0].sum()
-        D[a, n:] += mg[:, 1]
+        D[a, n:] += mg[:, 1] @ velocity_of
         D[a, n + a] -= mg[:, 1].sum()
         u = minv[a] @ (w[a][:, None] * d[a]).sum(0)
         c = w[a] + g[a] @ u  # -lap p_a = sum_b (w_ab + u_a . V_b grad_a W_ab)(p_a - p_b)
-        L[a] -= c
+        L[a] -= c @ pressure_of
         L[a, a] += c.sum()
-        Lv[a] -= w[a]
+        Lv[a] -= w[a] @ velocity_of
         Lv[a, a] += w[a].sum()
     return dict(G=G, D=D, L=L, Lv=Lv * dp * dp, surface=surface, n=n)
 
@@ -87,7 +104,7 @@ def step_matrix(ops, kappa):
     return np.vstack([v_next, q_next])
 
 
-def variants(ops):
+def variants(ops, air_ops):
     n = ops["n"]
     G_vacuum = ops["G"].copy()
     G_vacuum[np.arange(n), np.arange(n)] = 0.0  # its own term, p_a, out of each component
@@ -95,7 +112,8 @@ def variants(ops):
     return [("the scheme's operators", ops),
             ("g_vacuum: gradient without its own term", dict(ops, G=G_vacuum)),
             ("d_adjoint: divergence -G^T", dict(ops, D=-ops["G"].T)),
-            ("g_adjoint: gradient -D^T", dict(ops, G=-ops["D"].T))]
+            ("g_adjoint: gradient -D^T", dict(ops, G=-ops["D"].T)),
+            ("air: mirror images beyond the surface", air_ops)]
 
 
 def main(argv):
@@ -114,7 +132,7 @@ def main(argv):
                                                                         mu.real.min(), mu.real.max(),
                                                                         (mu.real < -1e-9).sum()))
     print("spectral radius of one step at nu dt / dp^2 = " + ", ".join("%g" % k for k in KAPPAS))
-    for name, variant in variants(ops):
+    for name, variant in variants(ops, operators(args.columns, args.rows, args.ch, air=True)):
         radii = [np.abs(np.linalg.eigvals(step_matrix(variant, k))).max() for k in KAPPAS]
         print("  %-42s %s" % (name, "  ".join("%.4f" % r for r in radii)))
     return 0
