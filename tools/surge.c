@@ -685,10 +685,10 @@ static void report_resolution(const surge_sim *sim, int verbose)
         const double dt_rest = surge_implicit_dt_s(p, h, g, 0.0);
         if (p->numerics.dt_fixed_s > 0 && p->numerics.dt_fixed_s < dt_rest)
             fprintf(out, "surge: warning: numerics.dt_fixed_s = %g s is shorter than the implicit scheme's own step at "
-                    "rest (%.3g s, implicit.force_cfl): in the still tank, at fixed steps under about half of it (nu dt / "
-                    "dp^2 = %.3g here) a mode of the incremental projection under the free surface grows and the "
-                    "fluid does not stay at rest (docs/validation/stability.md, \"Short steps in a thin fluid\"); "
-                    "leave the step to the scheme (0) or use the explicit scheme\n",
+                    "rest (%.3g s, implicit.force_cfl): in the still tank, at fixed steps under about half of it "
+                    "(nu dt / dp^2 = %.3g here) a mode of the incremental projection under the free surface grows "
+                    "and the fluid does not stay at rest (docs/validation/stability.md, \"Short steps in a thin "
+                    "fluid\"); leave the step to the scheme (0) or use the explicit scheme\n",
                     p->numerics.dt_fixed_s, dt_rest,
                     p->fluid.viscosity_m2ps * p->numerics.dt_fixed_s / (dp * dp));
         if (p->implicit.cfl < 0.1)

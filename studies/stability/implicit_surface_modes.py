@@ -20,9 +20,13 @@ mirrors the particles across the surface, the images' pressure negated, so that 
     /usr/bin/python3 studies/stability/implicit_surface_modes.py [--columns 8] [--rows 16] [--ch 1.8]
 """
 import argparse
+import os
 import sys
 
 import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "tools"))
+from surgepy import cli_checks  # noqa: E402
 
 KAPPAS = (0.0, 0.01, 0.05, 0.2, 1.0)
 
@@ -116,14 +120,17 @@ def variants(ops, air_ops):
             ("air: mirror images beyond the surface", air_ops)]
 
 
-def main(argv):
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--columns", type=int, default=8, help="lattice columns (periodic; default 8)")
-    parser.add_argument("--rows", type=int, default=16, help="lattice rows, the surface rows included (default 16)")
-    parser.add_argument("--ch", type=float, default=1.8, help="C_h, h = C_h sqrt(2) dp (default 1.8)")
+    parser.add_argument("--columns", type=cli_checks.positive_int, default=8,
+                        help="lattice columns (periodic; default 8)")
+    parser.add_argument("--rows", type=cli_checks.positive_int, default=16,
+                        help="lattice rows, the surface rows included (default 16)")
+    parser.add_argument("--ch", type=cli_checks.positive, default=1.8, help="C_h, h = C_h sqrt(2) dp (default 1.8)")
     args = parser.parse_args(argv)
     if args.columns < 6 or args.rows < 8 or not 1.0 <= args.ch <= 2.5:
-        parser.error("--columns >= 6, --rows >= 8 and 1 <= --ch <= 2.5 (the kernel must fit the period)")
+        cli_checks.fail("implicit_surface_modes", "--columns >= 6, --rows >= 8 and 1 <= --ch <= 2.5 (the kernel must "
+                        "fit the period), got %d, %d, %g" % (args.columns, args.rows, args.ch))
     ops = operators(args.columns, args.rows, args.ch)
     free = ~ops["surface"]
     mu = np.linalg.eigvals(np.linalg.solve(ops["L"][np.ix_(free, free)], -ops["D"][free] @ ops["G"][:, free]))
@@ -139,4 +146,4 @@ def main(argv):
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    sys.exit(cli_checks.run(main))
