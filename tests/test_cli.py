@@ -517,8 +517,9 @@ def group_inputs():
               "numerics.dt_fixed_s=0.03")
     report("check_quiet_implicit_long_fixed_step", exited(r, 0) and "warning" not in r.stdout + r.stderr, r)
     r = surge("check", os.path.join(cases_dir, "still_tank.ini"), "-s", "numerics.scheme=implicit", "-s",
-              "implicit.cfl=0.05")
-    report("check_warns_implicit_low_cfl", exited(r, 0) and "implicit.cfl = 0.05 is below 0.1" in r.stdout, r)
+              "implicit.cfl=0.1")
+    report("check_warns_implicit_low_cfl", exited(r, 0) and "implicit.cfl = 0.1 is below its default 0.25" in r.stdout,
+           r)
     r = surge("check", os.path.join(cases_dir, "still_tank.ini"))
     report("check_quiet_when_resolved", exited(r, 0) and "warning" not in r.stdout + r.stderr and
            "note" not in r.stdout + r.stderr, r)
