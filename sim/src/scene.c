@@ -35,12 +35,13 @@ double scene_expected_speed(const surge_params *p)
          * a surge held on an upstream belt moves at the difference (the debris surge: |-3.5 + 6.0| m/s) */
         if (nu > 0)
             u = fmax(u, fabs(p->walls.bottom_speed_mps + drive * depth * depth / (2.0 * nu)));
-        /* discs ride near the surface and fall off the front: one lands on the bed at the film's surface speed
-         * relative to the bed along it and its fall from the surface across it, and crushes the fluid under it
-         * (docs/method.md, "c0"; the debris surge: hypot(6.03, 5.20) = 7.96 m/s) */
+        /* discs ride near the surface and fall off the front: one lands on the bed with the film's surface speed
+         * relative to the bed along it and its fall from the surface across it, and crushes the fluid under it; the
+         * two are added, not combined as a vector (7.96 m/s for the debris surge), under which 1 of 10 runs
+         * stopped on that crush (docs/method.md, "c0"; the debris surge: 6.03 + 5.20 = 11.23 m/s) */
         if (p->boulders.placement != SURGE_BOULDERS_NONE) {
             const double along = nu > 0 ? fabs(drive) * depth * depth / (2.0 * nu) : 0.0;
-            u = fmax(u, hypot(along, sqrt(2.0 * fabs(g_normal) * depth)));
+            u = fmax(u, along + sqrt(2.0 * fabs(g_normal) * depth));
         }
     }
     return u;
