@@ -20,9 +20,9 @@ must then be live ones such as health.max_density_deviation, and records them in
 only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
 density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every member's first run; `surge check`
-vets them before any member starts, and each member's params.ini records them. Disc members need --set
-numerics.c0_mps=110: with the case's automatic c0 (52 m/s) every run of 28 discs at dp = 0.066 m tried stopped
-within 15 s (docs/validation/debris_surge.md).
+vets them before any member starts, and each member's params.ini records them. The case's automatic c0 carries
+discs since 2026-11-28 (112 m/s; docs/method.md, "c0"); the members in docs/validation/debris_surge.md before then
+ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for their remaining members.
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
