@@ -747,12 +747,11 @@ static int test_c0_discs(void)
     const double want_fluid = 10.0 * fall, want_discs = 10.0 * (along + fall);
     printf("c0_discs: fluid alone %.4f m/s (want %.4f), 28 discs %.4f m/s (want %.4f), the case's own %.4f m/s\n",
            fluid->derived.c0_mps, want_fluid, discs->derived.c0_mps, want_discs, fixed->derived.c0_mps);
-    expect_below("c0_discs: fluid alone, |c0 / (10 sqrt(2 g_n H)) - 1|",
-                         fabs(fluid->derived.c0_mps / want_fluid - 1), 1e-9);
+    expect_below("c0_discs: fluid alone, |c0 / (10 sqrt(2 g_n H)) - 1|", fabs(fluid->derived.c0_mps / want_fluid - 1),
+                 1e-9);
     expect_below("c0_discs: with discs, |c0 / (10 (film surface speed + fall speed)) - 1|",
-                         fabs(discs->derived.c0_mps / want_discs - 1), 1e-9);
-    expect_below("c0_discs: numerics.c0_mps = 110 is kept, |c0 - 110| m/s", fabs(fixed->derived.c0_mps - 110),
-                         1e-12);
+                 fabs(discs->derived.c0_mps / want_discs - 1), 1e-9);
+    expect_below("c0_discs: numerics.c0_mps = 110 is kept, |c0 - 110| m/s", fabs(fixed->derived.c0_mps - 110), 1e-12);
     surge_sim_destroy(fluid);
     surge_sim_destroy(discs);
     surge_sim_destroy(fixed);

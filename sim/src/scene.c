@@ -29,20 +29,21 @@ double scene_expected_speed(const surge_params *p)
         if (nu > 0)
             u = fmax(u, fabs(drive) * p->domain.height_m * p->domain.height_m / (8.0 * nu));
     } else {
-        /* free surface: collapse of the block (sqrt(2 g h)) and the surface speed of a film of this depth */
-        u = fmax(u, sqrt(2.0 * fabs(g_normal) * depth));
-        /* the surface speed of a film of this depth relative to the bed, which a belt carries: in the walls' frame
-         * a surge held on an upstream belt moves at the difference (the debris surge: |-3.5 + 6.0| m/s) */
+        /* free surface: collapse of the block (sqrt(2 g h)) and the surface speed of a film of this depth relative
+         * to the bed (g_x h^2 / (2 nu); none without viscosity) */
+        const double fall_mps = sqrt(2.0 * fabs(g_normal) * depth);
+        const double film_mps = nu > 0 ? drive * depth * depth / (2.0 * nu) : 0.0;
+        u = fmax(u, fall_mps);
+        /* the film's surface speed in the walls' frame, the bed's speed added: a surge held on an upstream belt
+         * moves at the difference (the debris surge: |-3.5 + 6.0| m/s) */
         if (nu > 0)
-            u = fmax(u, fabs(p->walls.bottom_speed_mps + drive * depth * depth / (2.0 * nu)));
+            u = fmax(u, fabs(p->walls.bottom_speed_mps + film_mps));
         /* discs ride near the surface and fall off the front: one lands on the bed with the film's surface speed
-         * relative to the bed along it and its fall from the surface across it, and crushes the fluid under it; the
-         * two are added, not combined as a vector (7.96 m/s for the debris surge), under which 1 of 10 runs
-         * stopped on that crush (docs/method.md, "c0"; the debris surge: 6.03 + 5.20 = 11.23 m/s) */
-        if (p->boulders.placement != SURGE_BOULDERS_NONE) {
-            const double along = nu > 0 ? fabs(drive) * depth * depth / (2.0 * nu) : 0.0;
-            u = fmax(u, along + sqrt(2.0 * fabs(g_normal) * depth));
-        }
+         * along it and its fall across it, and crushes the fluid under it; the two are added, not combined as a
+         * vector, under which 1 of 10 runs stopped on that crush (docs/method.md, "c0"; the debris surge:
+         * 6.03 + 5.20 = 11.23 m/s) */
+        if (p->boulders.placement != SURGE_BOULDERS_NONE)
+            u = fmax(u, fabs(film_mps) + fall_mps);
     }
     return u;
 }
