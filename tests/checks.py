@@ -3,8 +3,25 @@
     from checks import check, finish
     check("toe advances", speed > 0, "speed %g m/s" % speed)   # one line: "NAME: ok", or "NAME: FAILED" and why
     sys.exit(finish())                                          # prints the count; exit status 1 if any failed
+
+ctest runs every test with PYTHONPATH=tools (tests/CMakeLists.txt), so `surgepy` and tools/*.py import as they are;
+by hand: `PYTHONPATH=tools /usr/bin/python3 tests/test_x.py ...` from the repository root.
 """
+import importlib.util
+import os
+import sys
+
 failures = []
+
+
+def load_module(path):
+    """The Python file at path as a module: a study's driver, which lives in its own folder, outside any package."""
+    name = os.path.splitext(os.path.basename(path))[0]
+    spec = importlib.util.spec_from_file_location(name, path)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    return module
 
 
 def check(name, ok, detail="", show_detail=False):

@@ -32,7 +32,6 @@ OPTIONS = dict(zip(sys.argv[5::2], sys.argv[6::2]))
 SEED = int(OPTIONS.get("--seed", 1))
 DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120}
 COUNT = int(OPTIONS.get("--count", DEFAULT_COUNT[GROUP]))
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 from surgepy import client as surge_client  # noqa: E402
 
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE", OMP_NUM_THREADS="1",

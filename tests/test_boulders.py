@@ -35,7 +35,6 @@ import sys
 import numpy as np
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 from checks import check, finish  # noqa: E402
 from surgepy import vtp  # noqa: E402
 

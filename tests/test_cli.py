@@ -909,7 +909,6 @@ def main():
     SURGE = os.path.abspath(sys.argv[1])
     SOURCE = os.path.abspath(sys.argv[2])
     WORK = os.path.abspath(sys.argv[3])
-    sys.path.insert(0, os.path.join(SOURCE, "tools"))  # surgepy
     if os.path.isdir(WORK):
         shutil.rmtree(WORK)
     os.makedirs(WORK)

@@ -21,7 +21,6 @@ from checks import check, finish
 
 SURGE, SOURCE, OUT, GROUP = sys.argv[1:5]
 UNIFORM_FROUDE = 0.977  # u_b / sqrt(g h_n), h_n = sqrt(3 nu0 u_b / (g sin theta)) = 1.307 m (cases/debris_surge.ini)
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 from surgepy import vtp  # noqa: E402
 
 GRAVITY_CURRENT = """# planar viscous gravity current released against the left wall (docs/validation/drift.md)

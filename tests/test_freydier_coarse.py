@@ -17,9 +17,7 @@ import os
 import subprocess
 import sys
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE), "tools"))
-import freydier_metrics  # noqa: E402
+import freydier_metrics
 
 BOUNDS = {"zeta_h": 0.25, "zeta_f": 0.20}
 

@@ -37,7 +37,6 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOOLS = os.path.join(HERE, "..", "tools")
-sys.path.insert(0, TOOLS)
 import checks  # noqa: E402
 import freydier_metrics as fm  # noqa: E402
 from surgepy import vtp  # noqa: E402

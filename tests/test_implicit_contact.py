@@ -9,7 +9,6 @@ import subprocess
 import sys
 
 surge, root, out = sys.argv[1:4]
-sys.path.insert(0, os.path.join(root, "tools"))
 from surgepy.vtp import read_vtp  # noqa: E402
 
 DP_M, FACE_X_M = 0.002, 0.012  # cases/freydier_id1.ini: the upstream wall's face; the belt's face is y = 0

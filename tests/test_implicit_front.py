@@ -24,7 +24,6 @@ import sys
 
 SURGE, SOURCE, WORK = sys.argv[1:4]
 from checks import check, finish  # noqa: E402
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 import freydier_metrics  # noqa: E402
 
 shutil.rmtree(WORK, ignore_errors=True)

@@ -11,7 +11,6 @@ import sys
 import numpy as np
 
 surge, root, out = sys.argv[1:4]
-sys.path.insert(0, os.path.join(root, "tools"))
 from surgepy import vtp  # noqa: E402
 
 DP_M = 0.1

@@ -25,7 +25,6 @@ import sys
 import numpy as np
 
 surge, root, out = sys.argv[1:4]
-sys.path.insert(0, os.path.join(root, "tools"))
 from surgepy.vtp import read_pvd, read_vtp  # noqa: E402
 
 DP_M, FACE_X_M, RHO0 = 0.001, 0.012, 1383.0  # cases/freydier_id1.ini: the upstream wall's face; the belt's is y = 0

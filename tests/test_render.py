@@ -32,7 +32,6 @@ import time
 import numpy as np
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 from checks import check, finish  # noqa: E402
 from surgepy import client as surge_client  # noqa: E402
 

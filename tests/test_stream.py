@@ -37,7 +37,6 @@ import numpy as np
 import zmq
 
 SURGE, SOURCE, WORK = sys.argv[1], sys.argv[2], sys.argv[3]
-sys.path.insert(0, os.path.join(SOURCE, "tools"))
 from checks import check, finish  # noqa: E402
 from surgepy import client as surge_client  # noqa: E402
 from surgepy import vtp  # noqa: E402

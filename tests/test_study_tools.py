@@ -11,11 +11,10 @@ import subprocess
 import sys
 
 source, work = sys.argv[1], sys.argv[2]
-sys.path.insert(0, os.path.join(source, "tools"))
 FC = os.path.join(source, "studies", "freydier", "freydier_convergence.py")
 SM = os.path.join(source, "studies", "stability", "stability_map.py")
 PL = os.path.join(source, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
-from checks import check, finish  # noqa: E402
+from checks import check, finish, load_module  # noqa: E402
 from surgepy import study  # noqa: E402
 
 os.makedirs(work, exist_ok=True)
@@ -54,8 +53,7 @@ for driver, option in ((FC, "--ch"), (SM, "--cfl")):
 
 # the loaded-Poiseuille fit recovers the parameters of exact Krieger-Dougherty data, and says when rows are missing
 import numpy as np  # noqa: E402
-sys.path.insert(0, os.path.dirname(PL))
-import poiseuille_loaded  # noqa: E402
+poiseuille_loaded = load_module(PL)
 phi = np.array([0.05, 0.1, 0.2, 0.3, 0.4, 0.5])
 phi_m, p, rmse = poiseuille_loaded.fit(phi, poiseuille_loaded.krieger_dougherty(phi, 0.62, 2.5))
 check("poiseuille_loaded fit recovers phi_m = 0.62, p = 2.5", abs(phi_m - 0.62) < 2e-3 and abs(p - 2.5) < 2e-2

@@ -28,13 +28,10 @@ TOOLS = os.path.join(SOURCE, "tools")
 FC = os.path.join(SOURCE, "studies", "freydier", "freydier_convergence.py")
 SM = os.path.join(SOURCE, "studies", "stability", "stability_map.py")
 PL = os.path.join(SOURCE, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
-sys.path.insert(0, TOOLS)
-sys.path.insert(0, os.path.dirname(FC))
-sys.path.insert(0, os.path.dirname(PL))
-from checks import check, finish  # noqa: E402
-import freydier_convergence  # noqa: E402
-import poiseuille_loaded  # noqa: E402
+from checks import check, finish, load_module  # noqa: E402
 from surgepy import vtp  # noqa: E402
+freydier_convergence = load_module(FC)
+poiseuille_loaded = load_module(PL)
 
 
 

@@ -21,7 +21,6 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tools"))
 from surgepy import vtp  # noqa: E402
 
 X = [-1.25, 0.1, 1e-300, -123456.789, 3.0]
