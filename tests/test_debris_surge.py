@@ -4,8 +4,9 @@ alone and 6 graded discs on the belt at dp = 0.066 m for 1.5 s of flow.
 
 Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `list` numbers the members; a --member out of range is refused;
-  - a run stopped by its budget is interrupted with a checkpoint, and the next `run` finishes it: its flow.csv
-    then has one row every 0.5 s from 0 to the end, none twice;
+  - a run stopped by its budget is interrupted with a checkpoint; `park` carries it (checkpoint, flow.csv,
+    boulders.csv) through a fresh runs folder and `unpark` restores it; the next `run` finishes it from its
+    checkpoint and deletes the parked copy: its flow.csv then has one row every 0.5 s from 0 to the end, none twice;
   - the discs ride in the flow: each run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
     disc ahead of the front;
@@ -54,10 +55,26 @@ run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE, "--set", "contacts.marg
 rc, out, err = tool("run", *run_args, "--member", "1", "--budget-s", "4")
 progress = open(os.path.join(RUNS, "n6_s1_dp0.066", "progress.json")).read()
 check("run: a member past its budget stops with a checkpoint", rc == 0 and '"interrupted"' in progress, err[-1500:])
-rc, out, err = tool("run", *run_args)
-check("run: the next run finishes every member", rc == 0 and all(
-    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066")),
-    err[-2000:])
+# park carries the interrupted member through a fresh checkout: its checkpoint, flow.csv and boulders.csv are
+# parked, its folder goes, unpark restores it, the next run continues it from its checkpoint and deletes the copy
+PARKED = os.path.join(WORK, "parked")
+member_dir, parked_member = os.path.join(RUNS, "n6_s1_dp0.066"), os.path.join(PARKED, "n6_s1_dp0.066")
+rc, out, err = tool("park", "--runs-dir", RUNS, "--parked-dir", PARKED)
+parked_files = set(os.listdir(parked_member)) if os.path.isdir(parked_member) else set()
+check("park: the interrupted member's checkpoint, flow.csv, boulders.csv, params.ini and progress are parked",
+      rc == 0 and {"checkpoint.bin.gz", "flow.csv", "boulders.csv", "params.ini", "progress.json"} <= parked_files,
+      out + err[-1000:] + str(sorted(parked_files)))
+shutil.rmtree(member_dir)
+rc, out, err = tool("unpark", "--runs-dir", RUNS, "--parked-dir", PARKED)
+check("unpark: the member is back in a fresh runs folder, interrupted, with its checkpoint",
+      rc == 0 and os.path.isfile(os.path.join(member_dir, "checkpoint.bin")) and
+      '"interrupted"' in open(os.path.join(member_dir, "progress.json")).read(), out + err[-1000:])
+rc, out, err = tool("run", *run_args, "--parked-dir", PARKED)
+check("run: the next run finishes every member, the unparked one from its checkpoint", rc == 0 and all(
+    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066"))
+    and "--restart %s" % os.path.join(member_dir, "checkpoint.bin") in out, out + err[-2000:])
+check("run: a member that finishes deletes its parked copy", not os.path.exists(parked_member),
+      str(os.listdir(PARKED)))
 
 # a member the health monitor stops (a density bound no run meets) is not run over again: its last good state stays
 sick_args = ["--counts", "0", "--seeds", "1", "--dp", "0.066", "--runs-dir", os.path.join(WORK, "sick"), "--end-s",

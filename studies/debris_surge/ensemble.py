@@ -5,7 +5,9 @@ number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validat
 
   studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--seeds 5] [--dp 0.05] [--end-s 75]
         [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge] [--set NAME=VALUE ...]
-        [--continue-stopped]
+        [--continue-stopped] [--parked-dir docs/validation/parked/debris_surge]
+  studies/debris_surge/ensemble.py park|unpark [--runs-dir runs/debris_surge]
+        [--parked-dir docs/validation/parked/debris_surge]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
   studies/debris_surge/ensemble.py list [--counts ...] [--seeds ...] [--dp ...]
@@ -23,6 +25,12 @@ density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every mem
 vets them before any member starts, and each member's params.ini records them. The case's automatic c0 carries
 discs since 2026-11-28 (112 m/s; docs/method.md, "c0"); the members in docs/validation/debris_surge.md before then
 ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for their remaining members.
+park / unpark: a member longer than a session is carried in the committed tree, since nothing else survives from
+one session to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
+boulders.csv and small files (the checkpoint and first snapshot gzip-compressed: 0.79 MB for 60 discs at
+dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh checkout puts
+them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes deletes its parked copy. Resume with the surge that
+started the member (its params.ini and the commit named where it is reported).
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
@@ -34,6 +42,7 @@ import csv
 import math
 import os
 import re
+import shutil
 import subprocess
 import sys
 import threading
@@ -47,6 +56,8 @@ from surgepy.run_params import ParamsError, RunParams  # noqa: E402
 
 TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
+PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked", "debris_surge")
+PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
            "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s", "wall_s", "status"]
 
@@ -125,6 +136,8 @@ def run_member(args, count, seed, deadline):
     if rc != 4:
         progress["status"] = "done" if rc == 0 else "unhealthy"
         study.write_progress(folder, progress)
+    if rc == 0:
+        shutil.rmtree(os.path.join(args.parked_dir, os.path.basename(folder)), ignore_errors=True)
 
 
 def live_parameters(surge):
@@ -344,6 +357,16 @@ def main():
             p.add_argument("--continue-stopped", action="store_true",
                            help="continue members the health monitor stopped from their last good state, with the "
                                 "--set parameters (live ones only, e.g. health.max_density_deviation=0.2)")
+            p.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR,
+                           help="where a member that finishes deletes its parked copy (default "
+                                "docs/validation/parked/debris_surge)")
+    for name in ("park", "unpark"):
+        p = sub.add_parser(name, help="carry unfinished members to the next checkout" if name == "park" else
+                           "restore parked members into --runs-dir")
+        p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"),
+                       help="the members' folders (default runs/debris_surge)")
+        p.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR,
+                       help="the parked members (default docs/validation/parked/debris_surge, committed)")
     c = sub.add_parser("collect", help="the members' statistics: table and box plots")
     c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"),
                    help="the members' folders (default runs/debris_surge)")
@@ -357,6 +380,10 @@ def main():
         for k, (count, seed) in enumerate(members(args)):
             print("%d %d %d %s" % (k, count, seed, folder_of(args, count, seed)))
         return 0
+    if args.command == "park":
+        return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA)
+    if args.command == "unpark":
+        return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
     if args.command == "collect" and not args.window[1] > args.window[0]:
         fail("--window: the end must come after the start")
     return command_run(args) if args.command == "run" else command_collect(args)

@@ -233,14 +233,9 @@ def main():
         args.ch = study.positive_numbers("freydier_convergence", args.ch, "ch")
         return command_run(args)
     if args.command == "park":
-        if not study.park("freydier_convergence", args.runs_dir, args.parked_dir):
-            print("freydier_convergence: no unfinished run with a checkpoint in %s; nothing parked" % args.runs_dir)
-        return 0
+        return study.park_command("freydier_convergence", args.runs_dir, args.parked_dir)
     if args.command == "unpark":
-        if not study.unpark("freydier_convergence", args.parked_dir, args.runs_dir):
-            print("freydier_convergence: nothing restored from %s (no parked run there, or each one's folder "
-                  "in %s already holds a run)" % (args.parked_dir, args.runs_dir))
-        return 0
+        return study.unpark_command("freydier_convergence", args.parked_dir, args.runs_dir)
     return command_chart(args)
 
 

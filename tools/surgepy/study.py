@@ -238,9 +238,10 @@ def _names(folder):
     return sorted(n for n in os.listdir(folder) if not n.startswith(".")) if os.path.isdir(folder) else []
 
 
-def park(tool, runs_dir, parked_dir):
-    """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files and its first
-    snapshot, the large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
+def park(tool, runs_dir, parked_dir, extra_files=()):
+    """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files (PARKED_FILES
+    and a study's extra_files, such as the debris surge's flow.csv and boulders.csv) and its first snapshot, the
+    large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
     run is carried in it and resumed by unpark in a fresh checkout. A run still going is parked at its last periodic
     checkpoint (written atomically), with the wall time of its current piece counted up to that checkpoint. Returns
     the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
@@ -268,7 +269,7 @@ def park(tool, runs_dir, parked_dir):
             step, time_s = checkpoint_time(checkpoint)
             os.makedirs(staging)
             first = _first_snapshot(folder)
-            for f in PARKED_FILES + ((first,) if first else ()):
+            for f in PARKED_FILES + tuple(extra_files) + ((first,) if first else ()):
                 source = os.path.join(folder, f)
                 if not os.path.isfile(source):
                     continue
@@ -339,6 +340,21 @@ def unpark(tool, parked_dir, runs_dir):
         print("%s: restored %s at its checkpoint of t = %.3f s (step %d)" % (tool, folder, time_s, step), flush=True)
     return restored
 
+
+
+def park_command(tool, runs_dir, parked_dir, extra_files=()):
+    """A study's `park` command: park, saying so when there was nothing to park; exit status 0."""
+    if not park(tool, runs_dir, parked_dir, extra_files):
+        print("%s: no unfinished run with a checkpoint in %s; nothing parked" % (tool, runs_dir))
+    return 0
+
+
+def unpark_command(tool, parked_dir, runs_dir):
+    """A study's `unpark` command: unpark, saying so when nothing was restored; exit status 0."""
+    if not unpark(tool, parked_dir, runs_dir):
+        print("%s: nothing restored from %s (no parked run there, or each one's folder in %s already holds a run)"
+              % (tool, parked_dir, runs_dir))
+    return 0
 
 def particle_steps(tool, folder):
     """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
