@@ -83,7 +83,7 @@ static const surge_param_info registry[] = {
      "Constant body force per unit mass along x (a pressure gradient |dP/dx|/rho for channels).",
      OFF(body.force_x_mps2)},
 
-    {"numerics", "dp_m", SURGE_PARAM_REAL, "m", 0.002, 1e-7, 1e2, false, NULL, "Initial particle spacing dp.",
+    {"numerics", "dp_m", SURGE_PARAM_REAL, "m", 0.002, 1e-7, 1e2, false, NULL, "Initial particle spacing dp. On a periodic domain it must divide domain.length_m; surge run and check move a dp that does not to the nearest that does when that moves it by 1 % or less, and say so.",
      OFF(numerics.dp_m)},
     {"numerics", "ch", SURGE_PARAM_REAL, "-", 1.8, 0.5, 4, false, NULL,
      "Smoothing coefficient C_h: h = C_h sqrt(2) dp; kernel support 2h.", OFF(numerics.ch)},
@@ -830,8 +830,9 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
         return -1;
     }
     if (p->domain.periodic_x && fabs(remainder(L / dp, 1.0)) > 1e-6) {
-        fail(err, err_len, "domain.length_m (%g) must be a whole number of particle spacings dp (%g) when periodic",
-             L, dp);
+        const double whole = fmax(1.0, round(L / dp));
+        fail(err, err_len, "domain.length_m (%g) must be a whole number of particle spacings dp (%g) when periodic: "
+             "it is %.6g of them; dp = %.6g m gives %.0f", L, dp, L / dp, L / whole, whole);
         return -1;
     }
     if (p->domain.periodic_x && (p->walls.left || p->walls.right)) {
