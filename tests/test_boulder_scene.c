@@ -178,7 +178,8 @@ static void group_placement(void)
     p = surge_scene(10, 1);
     p.numerics.dp_m = 0.1;
     const int coarse = surge_boulders_generate(&p, &none, err, sizeof err);
-    check("placement: discs under 3 dp across are refused", coarse < 0 && strstr(err, "at least 3 dp"), err);
+    check("placement: discs under 3 dp across are refused, naming the dp that resolves them", coarse < 0 &&
+          strstr(err, "at least 3 dp") && strstr(err, "numerics.dp_m <= 0.0666667 m"), err);
 }
 
 static void group_csv(const char *work)

@@ -242,10 +242,15 @@ int surge_boulders_generate(const surge_params *p, surge_disc **out, char *err, 
                  "above and below (at most %g m)", d_max, depth, gap, depth - 2 * gap);
         return -1;
     }
-    if (!(d_max > d_min) || d_min < 3 * dp) {
-        snprintf(err, err_len, "boulders: diameters between %g and %g m: %s", d_min, d_max,
-                 d_min < 3 * dp ? "diameter_min_m must be at least 3 dp (a disc needs a few particles across)"
-                                : "diameter_max_m must be larger than diameter_min_m");
+    if (d_min < 3 * dp) {
+        snprintf(err, err_len, "boulders: diameters between %g and %g m: diameter_min_m must be at least 3 dp = %g m "
+                 "(a disc needs a few particles across): numerics.dp_m <= %g m, or a larger boulders.diameter_min_m",
+                 d_min, d_max, 3 * dp, d_min / 3);
+        return -1;
+    }
+    if (!(d_max > d_min)) {
+        snprintf(err, err_len, "boulders: diameters between %g and %g m: diameter_max_m must be larger than "
+                 "diameter_min_m", d_min, d_max);
         return -1;
     }
     if (p->boulders.count == 0 && !(p->boulders.solid_fraction > 0)) {
