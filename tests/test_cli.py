@@ -520,6 +520,14 @@ def group_inputs():
            "wall time per simulated second" in r.stdout, r)
     r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005")
     report("check_warns_coarse_discs", exited(r, 0) and "2.5 dp, fewer than 4" in r.stdout, r)
+    # the implicit scheme with discs under 2.5 dp in radius (the debris surge stopped at 1.5 dp), and not at 2.5 dp
+    r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.007", "-s",
+              "numerics.scheme=implicit")
+    r_fine = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005", "-s",
+                   "numerics.scheme=implicit")
+    report("check_warns_implicit_coarse_discs", exited(r, 0) and exited(r_fine, 0) and
+           "implicit scheme with discs under 2.5 dp in radius (the smallest here is 1.8 dp)" in r.stdout and
+           "dp <= 0.005 m gives 2.5" in r.stdout and "implicit scheme with discs" not in r_fine.stdout, r)
     # the implicit scheme at a fixed step shorter than its own at rest: the still tank's surface does not hold
     r = surge("check", os.path.join(cases_dir, "still_tank.ini"), "-s", "numerics.scheme=implicit", "-s",
               "numerics.dt_fixed_s=0.005")
