@@ -295,6 +295,17 @@ def group_inputs():
     # (0.0611 m is 30.55 spacings: 31 would move dp by 1.5 %)
     cross_field("periodic_length_not_dp_multiple", "demo.ini", {"domain.length_m": "0.0611", "fluid.x1_m": "0.05"},
                 ["domain.length_m", "0.0611", "whole number", "dp", "30.55 of them", "31"])
+    # the debris surge's case with only dp changed never fails its check (issue #25): a dp that does not divide its
+    # 33 m period is fitted, the wall layers and c0 follow dp, and discs are refused only below 3 dp across
+    debris = os.path.join(SOURCE, "cases", "debris_surge.ini")
+    discs = ["-s", "boulders.placement=graded", "-s", "boulders.count=28", "-s", "boulders.seed=1"]
+    failed = []
+    for dp in ("0.12", "0.08", "0.07", "0.066", "0.055", "0.045", "0.04", "0.035", "0.03", "0.022"):
+        for extra in ([], discs) if float(dp) <= 0.2 / 3 else ([],):
+            r = surge("check", debris, "-s", "numerics.dp_m=" + dp, *extra)
+            if not exited(r, 0):
+                failed.append("dp %s%s: %s" % (dp, " with discs" if extra else "", r.stderr.strip()[-300:]))
+    report("debris_surge_any_dp_checks", not failed, None, "; ".join(failed))
     fitted_dir = os.path.join(WORK, "dp_fitted")
     r = surge("run", os.path.join(SOURCE, "cases", "demo.ini"), "-s", "domain.length_m=0.6011", "-s",
               "time.end_s=0.0005", "-o", fitted_dir, "--overwrite")

@@ -61,8 +61,9 @@ PARKED = os.path.join(WORK, "parked")
 member_dir, parked_member = os.path.join(RUNS, "n6_s1_dp0.066"), os.path.join(PARKED, "n6_s1_dp0.066")
 rc, out, err = tool("park", "--runs-dir", RUNS, "--parked-dir", PARKED)
 parked_files = set(os.listdir(parked_member)) if os.path.isdir(parked_member) else set()
-check("park: the interrupted member's checkpoint, flow.csv, boulders.csv, params.ini and progress are parked",
-      rc == 0 and {"checkpoint.bin.gz", "flow.csv", "boulders.csv", "params.ini", "progress.json"} <= parked_files,
+check("park: the interrupted member's checkpoint, flow.csv, boulders.csv, params.ini and progress are parked, "
+      "no snapshot", rc == 0 and not any(f.endswith(".vtp.gz") for f in parked_files) and
+      {"checkpoint.bin.gz", "flow.csv", "boulders.csv", "params.ini", "progress.json"} <= parked_files,
       out + err[-1000:] + str(sorted(parked_files)))
 shutil.rmtree(member_dir)
 rc, out, err = tool("unpark", "--runs-dir", RUNS, "--parked-dir", PARKED)

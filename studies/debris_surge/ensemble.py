@@ -27,8 +27,8 @@ discs since 2026-11-28 (112 m/s; docs/method.md, "c0"); the members in docs/vali
 ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for their remaining members.
 park / unpark: a member longer than a session is carried in the committed tree, since nothing else survives from
 one session to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
-boulders.csv and small files (the checkpoint and first snapshot gzip-compressed: 0.79 MB for 60 discs at
-dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh checkout puts
+boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
+for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh checkout puts
 them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes deletes its parked copy. Resume with the surge that
 started the member (its params.ini and the commit named where it is reported).
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
@@ -381,7 +381,7 @@ def main():
             print("%d %d %d %s" % (k, count, seed, folder_of(args, count, seed)))
         return 0
     if args.command == "park":
-        return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA)
+        return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA, first_snapshot=False)
     if args.command == "unpark":
         return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
     if args.command == "collect" and not args.window[1] > args.window[0]:

@@ -238,10 +238,10 @@ def _names(folder):
     return sorted(n for n in os.listdir(folder) if not n.startswith(".")) if os.path.isdir(folder) else []
 
 
-def park(tool, runs_dir, parked_dir, extra_files=()):
+def park(tool, runs_dir, parked_dir, extra_files=(), first_snapshot=True):
     """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files (PARKED_FILES
-    and a study's extra_files, such as the debris surge's flow.csv and boulders.csv) and its first snapshot, the
-    large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
+    and a study's extra_files, such as the debris surge's flow.csv and boulders.csv) and, unless first_snapshot is
+    False (a study whose numbers need no snapshot), its first snapshot, the large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
     run is carried in it and resumed by unpark in a fresh checkout. A run still going is parked at its last periodic
     checkpoint (written atomically), with the wall time of its current piece counted up to that checkpoint. Returns
     the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
@@ -268,7 +268,7 @@ def park(tool, runs_dir, parked_dir, extra_files=()):
         try:
             step, time_s = checkpoint_time(checkpoint)
             os.makedirs(staging)
-            first = _first_snapshot(folder)
+            first = _first_snapshot(folder) if first_snapshot else None
             for f in PARKED_FILES + tuple(extra_files) + ((first,) if first else ()):
                 source = os.path.join(folder, f)
                 if not os.path.isfile(source):
@@ -342,9 +342,9 @@ def unpark(tool, parked_dir, runs_dir):
 
 
 
-def park_command(tool, runs_dir, parked_dir, extra_files=()):
+def park_command(tool, runs_dir, parked_dir, extra_files=(), first_snapshot=True):
     """A study's `park` command: park, saying so when there was nothing to park; exit status 0."""
-    if not park(tool, runs_dir, parked_dir, extra_files):
+    if not park(tool, runs_dir, parked_dir, extra_files, first_snapshot):
         print("%s: no unfinished run with a checkpoint in %s; nothing parked" % (tool, runs_dir))
     return 0
 
