@@ -236,6 +236,13 @@ for name, files in (("corrupt .gz", {"checkpoint.bin.gz": b"\x1f\x8b\x08\x00garb
     check("unpark: %s leaves nothing in the runs folder" % name, os.listdir(restored) == [], str(os.listdir(restored)))
 expect("park --parked-dir a file", tool(FC, "park", "--runs-dir", bad_ck_runs, "--parked-dir",
                                         path("run", "params.ini")), "--parked-dir", "not a folder")
+# the debris ensemble's park, unpark and run take the same folder checks
+ENSEMBLE = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
+for command in ("park", "unpark", "run"):
+    expect("ensemble %s --parked-dir a file" % command, tool(ENSEMBLE, command, "--parked-dir",
+                                                             path("run", "params.ini")), "--parked-dir", "not a folder")
+expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
+       "--runs-dir", "not a folder")
 
 # ---- 4. CSV tables and --png ----
 garbage_csv = path("fc_garbage.csv")

@@ -28,9 +28,10 @@ ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for 
 park / unpark: a member longer than a session is carried in the committed tree, since nothing else survives from
 one session to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
 boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
-for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh checkout puts
-them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes deletes its parked copy. Resume with the surge that
-started the member (its params.ini and the commit named where it is reported).
+for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh
+checkout puts them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes
+deletes its parked copy. Resume with the surge that started the member (its params.ini and the commit named where
+it is reported).
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and

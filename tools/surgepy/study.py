@@ -241,10 +241,10 @@ def _names(folder):
 def park(tool, runs_dir, parked_dir, extra_files=(), first_snapshot=True):
     """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files (PARKED_FILES
     and a study's extra_files, such as the debris surge's flow.csv and boulders.csv) and, unless first_snapshot is
-    False (a study whose numbers need no snapshot), its first snapshot, the large ones gzip-compressed. Only the committed tree survives from one session to the next; a parked
-    run is carried in it and resumed by unpark in a fresh checkout. A run still going is parked at its last periodic
-    checkpoint (written atomically), with the wall time of its current piece counted up to that checkpoint. Returns
-    the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
+    False (a study whose numbers need no snapshot), its first snapshot, the large ones gzip-compressed. Only the
+    committed tree survives from one session to the next; a parked run is carried in it and resumed by unpark in a
+    fresh checkout. A run still going is parked at its last periodic checkpoint (written atomically), with the wall
+    time of its current piece counted up to that checkpoint. Returns the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
     leaving its earlier parked copy, if any, as it was."""
     parked = []
     for name in _names(runs_dir):
@@ -341,7 +341,6 @@ def unpark(tool, parked_dir, runs_dir):
     return restored
 
 
-
 def park_command(tool, runs_dir, parked_dir, extra_files=(), first_snapshot=True):
     """A study's `park` command: park, saying so when there was nothing to park; exit status 0."""
     if not park(tool, runs_dir, parked_dir, extra_files, first_snapshot):
@@ -355,6 +354,7 @@ def unpark_command(tool, parked_dir, runs_dir):
         print("%s: nothing restored from %s (no parked run there, or each one's folder in %s already holds a run)"
               % (tool, parked_dir, runs_dir))
     return 0
+
 
 def particle_steps(tool, folder):
     """Fluid particles (params.ini header) x steps (last diagnostics row), and the final simulated time."""
