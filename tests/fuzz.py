@@ -25,14 +25,13 @@ import struct
 import subprocess
 import sys
 
-import zmq
+from surgepy import client as surge_client
 
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 OPTIONS = dict(zip(sys.argv[5::2], sys.argv[6::2]))
 SEED = int(OPTIONS.get("--seed", 1))
 DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120}
 COUNT = int(OPTIONS.get("--count", DEFAULT_COUNT[GROUP]))
-from surgepy import client as surge_client  # noqa: E402
 
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE", OMP_NUM_THREADS="1",
            ASAN_OPTIONS="halt_on_error=1:detect_leaks=1:allocator_may_return_null=1",

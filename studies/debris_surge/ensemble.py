@@ -238,6 +238,15 @@ def solid_fraction(folder):
     return sum(math.pi * float(r["r_m"]) ** 2 for r in rows) / block
 
 
+def run_dp(folder):
+    """The dp the member ran with, from its params.ini: a dp that does not divide the period is moved by surge
+    (tools/surge.c, fit_dp_to_period), so the folder's name holds the requested dp, not always the one run."""
+    try:
+        return RunParams(folder).positive("numerics", "dp_m")
+    except ParamsError as e:
+        fail(str(e))
+
+
 def uniform_flow(folder):
     """(Fr, mu_eq/mu0) of the uniform flow at the belt speed: depth h_n = sqrt(3 nu u_b / (g sin theta))."""
     p = RunParams(folder)
@@ -258,9 +267,11 @@ def command_collect(args):
             continue
         try:
             parts = dict((part[0], part[1:]) for part in name.split("_"))
-            count, seed, dp = int(parts["n"]), int(parts["s"]), float(parts["d"][1:])
+            count, seed = int(parts["n"]), int(parts["s"])
+            float(parts["d"][1:])
         except (KeyError, ValueError):
             continue
+        dp = run_dp(folder)
         try:
             progress = study.read_progress(folder)
         except ValueError as e:
