@@ -25,6 +25,11 @@ typedef int64_t lanes_mask __attribute__((vector_size(PAIR_LANES * sizeof(int64_
 typedef int32_t lanes_mask __attribute__((vector_size(PAIR_LANES * sizeof(int32_t))));
 #endif
 
+/* A record read as one vector: any alignment of a real, and allowed to alias the record's struct. (A memcpy into a
+ * vector, which GCC 12 made of two 16-byte copies through the stack when it targets AVX2, left each vector load
+ * waiting on two stores it could not forward from: docs/performance.md, "AVX2".) */
+typedef real lanes_vector_load __attribute__((vector_size(PAIR_LANES * sizeof(real)), aligned(sizeof(real)), may_alias));
+
 #if defined(__clang__)
 #define LANES_SHUFFLE(a, b, i0, i1, i2, i3, i4, i5, i6, i7) \
     __builtin_shufflevector(a, b, i0, i1, i2, i3, i4, i5, i6, i7)
@@ -72,7 +77,7 @@ static inline void lanes_gather_records(const void *records, const int32_t *inde
     const char *base = records;
     lanes_vector record[8];
     for (int l = 0; l < 8; l++)
-        memcpy(&record[l], base + (size_t)index[l] * sizeof(lanes_vector), sizeof record[l]);
+        record[l] = *(const lanes_vector_load *)(base + (size_t)index[l] * sizeof(lanes_vector));
     lanes_transpose(record, field);
 }
 
@@ -81,7 +86,7 @@ static inline void lanes_totals(const real *const lanes[8], real total[8])
 {
     lanes_vector v[8], column[8];
     for (int q = 0; q < 8; q++)
-        memcpy(&v[q], lanes[q], sizeof v[q]);
+        v[q] = *(const lanes_vector_load *)lanes[q];
     lanes_transpose(v, column); /* column l: lane l of every quantity */
     lanes_vector sum = column[0];
     for (int l = 1; l < 8; l++)
