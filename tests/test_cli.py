@@ -315,6 +315,25 @@ def group_inputs():
     report("periodic_dp_fitted_to_length", exited(r, 0) and not missing_text(r.stderr, [
         "note: numerics.dp_m = 0.002 m does not divide the periodic domain.length_m = 0.6011 m", "301 spacings",
         "0.15 % finer"]) and abs(0.6011 / dp_run - 301) < 1e-9, r, "params.ini dp_m = %r" % dp_run)
+    # the program and the machine: `surge version` names the source's commit (as git describes it), the compiler and
+    # the vector extensions, and the CPU; every run's params.ini carries the same two lines
+    r = surge("version")
+    git = subprocess.run(["git", "-C", SOURCE, "describe", "--always", "--dirty", "--abbrev=12"],
+                         capture_output=True, text=True)
+    commit = git.stdout.strip() if git.returncode == 0 and git.stdout.strip() else "unknown"
+    program = re.search(r"^program: (surge (\S+), .+, vectors .+)$", r.stdout, re.M)
+    machine = re.search(r"^machine: (.+ processors online.*)$", r.stdout, re.M)
+    params_text = open(params_path).read() if os.path.isfile(params_path) else ""
+    # the commit named is the checkout's, or (a build older than the last commit) another commit of this repository
+    built = program.group(2) if program else ""
+    known = built == commit or (built not in ("", "unknown") and subprocess.run(
+        ["git", "-C", SOURCE, "cat-file", "-e", built.split("-dirty")[0] + "^{commit}"],
+        capture_output=True).returncode == 0)
+    report("version_names_commit_compiler_vectors_machine", exited(r, 0) and program is not None and
+           machine is not None and known, r, "git describe: %s" % commit)
+    report("params_ini_names_program_and_machine", program is not None and machine is not None and
+           ("# program: %s\n" % program.group(1)) in params_text and ("# machine: %s\n" % machine.group(1)) in
+           params_text, None, params_text[:400])
     cross_field("wall_layers_too_thin", "still_tank.ini", {"walls.layers": "2"},
                 ["walls.layers", "2", "kernel support", "6"])
     cross_field("upstream_without_periodic", "still_tank.ini", {"walls.upstream": "true"},
@@ -607,7 +626,8 @@ def group_inputs():
     report("params_lists_every_case_key", ok and not undocumented, r if not ok else None,
            "not in 'surge params': " + ", ".join(sorted(set(undocumented))))
 
-    for args in (["--help"], ["-h"], ["run", "--help"], ["check", "--help"], ["params", "--help"]):
+    for args in (["--help"], ["-h"], ["run", "--help"], ["check", "--help"], ["params", "--help"],
+                 ["version", "--help"]):
         r = surge(*args)
         report("help_" + "_".join(a.strip("-") for a in args),
                exited(r, 0) and "usage" in r.stdout.lower(), r)

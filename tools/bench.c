@@ -13,6 +13,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "surge/platform.h"
 #include "surge/sim.h"
 
 #define MAX_OVERRIDES 32
@@ -174,7 +175,10 @@ int main(int argc, char **argv)
         }
     }
     double first_rate = 0;
-    printf("# surge-bench: %s, %.3g s of flow from rest\n", c.case_path, c.end_s);
+    char machine[512];
+    surge_machine_description(machine, sizeof machine);
+    printf("# surge-bench: %s, %.3g s of flow from rest\n# program: %s\n# machine: %s\n", c.case_path, c.end_s,
+           surge_build_description(), machine);
     if (ch || threads || layers) {
         c.ch = ch ? ch : "1.8";
         c.layers = layers ? layers : (!strcmp(c.ch, "1.0") ? "4" : "0");

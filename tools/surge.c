@@ -52,6 +52,7 @@ static const char *usage_main =
     "  render RUN_DIR    render a finished run's snapshots as PNG frames and/or a movie\n"
     "  check CASE        validate a case file without running it\n"
     "  params            print the parameter reference (Markdown)\n"
+    "  version           print the program (its commit, compiler and vector extensions) and the machine\n"
     "  keygen NAME       make a CURVE key pair for the live links: NAME.key (secret) and NAME.pub\n"
     "\n"
     "'surge COMMAND --help' describes each command.\n"
@@ -124,6 +125,9 @@ static const char *usage_keygen =
     "are never replaced. A run takes its own NAME.key with --curve-key and its clients' .pub files with\n"
     "--curve-clients; a client takes its own .key and the run's .pub (docs/protocol.md).\n";
 
+static const char *usage_version =
+    "usage: surge version\n\nPrints the program (its git commit, compiler and the vector extensions it was built for)\n"
+    "and the machine (CPU, processors, AVX2 and AVX-512), as every run's params.ini records them.\n";
 static const char *usage_params =
     "usage: surge params\n\nPrints the parameter reference (the source of docs/parameters.md).\n";
 
@@ -1172,6 +1176,20 @@ int main(int argc, char **argv)
             return EXIT_USAGE;
         }
         surge_params_write_reference(stdout);
+        return EXIT_OK;
+    }
+    if (!strcmp(argv[1], "version") || !strcmp(argv[1], "--version")) {
+        if (wants_help(argc - 2, argv + 2)) {
+            fputs(usage_version, stdout);
+            return EXIT_OK;
+        }
+        if (argc > 2) {
+            fprintf(stderr, "surge: version takes no arguments\n");
+            return EXIT_USAGE;
+        }
+        char machine[512];
+        surge_machine_description(machine, sizeof machine);
+        printf("program: %s\nmachine: %s\n", surge_build_description(), machine);
         return EXIT_OK;
     }
     fprintf(stderr, "surge: unknown command '%s'\n%s", argv[1], usage_main);

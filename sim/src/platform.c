@@ -8,6 +8,9 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
+
+#include "surge_build_commit.h"
 
 double surge_wall_clock_s(void)
 {
@@ -86,4 +89,86 @@ int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *
         return -1;
     }
     return 0;
+}
+
+#if defined(__clang__)
+#define SURGE_COMPILER "clang " __clang_version__
+#elif defined(__GNUC__)
+#define SURGE_COMPILER "gcc " __VERSION__
+#else
+#define SURGE_COMPILER "an unnamed C compiler"
+#endif
+
+#if defined(__AVX512F__)
+#define SURGE_VECTORS "AVX-512"
+#elif defined(__AVX2__) && defined(__FMA__)
+#define SURGE_VECTORS "AVX2 and FMA"
+#elif defined(__AVX2__)
+#define SURGE_VECTORS "AVX2"
+#elif defined(__AVX__)
+#define SURGE_VECTORS "AVX"
+#elif defined(__SSE2__)
+#define SURGE_VECTORS "SSE2"
+#elif defined(__ARM_NEON)
+#define SURGE_VECTORS "NEON"
+#else
+#define SURGE_VECTORS "none named"
+#endif
+
+const char *surge_build_description(void)
+{
+    return "surge " SURGE_BUILD_COMMIT ", " SURGE_COMPILER ", vectors " SURGE_VECTORS;
+}
+
+/* The value of "key<spaces>: value" in line, or NULL */
+static const char *cpuinfo_value(const char *line, const char *key)
+{
+    const size_t n = strlen(key);
+    if (strncmp(line, key, n) != 0)
+        return NULL;
+    line += n;
+    while (*line == ' ' || *line == '\t')
+        line++;
+    if (*line != ':')
+        return NULL;
+    line++;
+    while (*line == ' ')
+        line++;
+    return line;
+}
+
+/* Whether the space-separated list flags holds the word flag */
+static int has_flag(const char *flags, const char *flag)
+{
+    const size_t n = strlen(flag);
+    for (const char *p = flags; (p = strstr(p, flag)) != NULL; p += n)
+        if ((p == flags || p[-1] == ' ') && (p[n] == ' ' || p[n] == '\n' || p[n] == '\0'))
+            return 1;
+    return 0;
+}
+
+void surge_machine_description(char *buf, size_t len)
+{
+    char model_name[256] = "unknown CPU", family[32] = "", model[32] = "", line[8192];
+    int avx2 = -1, avx512 = -1; /* -1: the CPU's flags not read */
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    while (f && fgets(line, sizeof line, f) && line[0] != '\n') { /* the first processor's block */
+        const char *v;
+        if ((v = cpuinfo_value(line, "model name")) != NULL)
+            snprintf(model_name, sizeof model_name, "%.*s", (int)strcspn(v, "\n"), v);
+        else if ((v = cpuinfo_value(line, "cpu family")) != NULL)
+            snprintf(family, sizeof family, "%.*s", (int)strcspn(v, "\n"), v);
+        else if ((v = cpuinfo_value(line, "model")) != NULL)
+            snprintf(model, sizeof model, "%.*s", (int)strcspn(v, "\n"), v);
+        else if ((v = cpuinfo_value(line, "flags")) != NULL)
+            avx2 = has_flag(v, "avx2"), avx512 = has_flag(v, "avx512f");
+    }
+    if (f)
+        fclose(f);
+    const long processors = sysconf(_SC_NPROCESSORS_ONLN);
+    char identity[96] = "";
+    if (family[0] && model[0])
+        snprintf(identity, sizeof identity, ", x86 family %s model %s", family, model);
+    snprintf(buf, len, "%s%s, %ld processors online%s", model_name, identity, processors,
+             avx2 < 0 ? "" : avx512 ? ", AVX2 and AVX-512" : avx2 ? ", AVX2, no AVX-512" : ", no AVX2");
 }

@@ -47,10 +47,14 @@ static int write_params(const surge_sim *sim, const run_outputs *o, int threads,
         return -1;
     }
     const surge_derived *d = surge_sim_derived(sim);
+    char machine[512];
+    surge_machine_description(machine, sizeof machine);
     fprintf(f, "# surge: full resolved parameter set of this run (reloads as a case file)\n"
+               "# program: %s\n"
+               "# machine: %s\n"
                "# derived: h_m = %.9g, c0_mps = %.9g (expected speed %.6g m/s), particle_mass_kgpm = %.9g\n"
                "# derived: fluid particles = %d, wall particles = %d, threads = %d\n\n",
-            d->h_m, d->c0_mps, d->expected_speed_mps, d->particle_mass_kg, d->fluid_count, d->wall_count, threads);
+            surge_build_description(), machine, d->h_m, d->c0_mps, d->expected_speed_mps, d->particle_mass_kg, d->fluid_count, d->wall_count, threads);
     surge_params_write(surge_sim_params(sim), f);
     if (fclose(f) != 0) {
         snprintf(err, err_len, "cannot write '%s': %s", path, strerror(errno));

@@ -17,4 +17,14 @@ int surge_make_folders(const char *path, const char *what, char *err, size_t err
 int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *context), void *context, char *err,
                           size_t err_len);
 
+/* The program that is running: "surge COMMIT, COMPILER VERSION, vectors EXTENSIONS" (the source's git commit at the
+ * build, "-dirty" if it had changes, "unknown" without git; the widest vector extensions it was compiled for, which
+ * set the pair loops' speed and, through their lane count, the state hash: docs/performance.md). */
+const char *surge_build_description(void);
+
+/* The machine it runs on, into buf: the CPU's model name, its x86 family and model, the processors online and
+ * whether the CPU has AVX2 and AVX-512 (from /proc/cpuinfo; "unknown CPU" where that does not say). Timings are
+ * comparable only on the same CPU (docs/performance.md, "AVX2"). */
+void surge_machine_description(char *buf, size_t len);
+
 #endif
