@@ -7,6 +7,7 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - a run stopped by its budget is interrupted with a checkpoint; `park` carries it (checkpoint, flow.csv,
     boulders.csv) through a fresh runs folder and `unpark` restores it; the next `run` finishes it from its
     checkpoint and deletes the parked copy: its flow.csv then has one row every 0.5 s from 0 to the end, none twice;
+    its progress.json names the program that ran it, and a member continued under another program says so;
   - the discs ride in the flow: each run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
     disc ahead of the front;
@@ -70,7 +71,20 @@ rc, out, err = tool("unpark", "--runs-dir", RUNS, "--parked-dir", PARKED)
 check("unpark: the member is back in a fresh runs folder, interrupted, with its checkpoint",
       rc == 0 and os.path.isfile(os.path.join(member_dir, "checkpoint.bin")) and
       '"interrupted"' in open(os.path.join(member_dir, "progress.json")).read(), out + err[-1000:])
+# the member records the program that ran it (`surge version`); one that continues under another program says so
+version = subprocess.run([SURGE, "version"], capture_output=True, text=True).stdout
+program = version.split("\n")[0][len("program: "):] if version.startswith("program: ") else None
+member_progress = json.load(open(os.path.join(member_dir, "progress.json")))
+check("run: a member's progress names the program that ran it (%s)" % member_progress.get("programs"),
+      program is not None and member_progress.get("programs") == [program], version)
+OTHER = "surge 0123456789ab, gcc 0.0, vectors none"
+member_progress["programs"] = [OTHER]
+json.dump(member_progress, open(os.path.join(member_dir, "progress.json"), "w"))
 rc, out, err = tool("run", *run_args, "--parked-dir", PARKED)
+programs = json.load(open(os.path.join(member_dir, "progress.json"))).get("programs")
+check("run: a member continued under another program says so and records both (%s)" % programs,
+      rc == 0 and "it ran under %s and continues under %s" % (OTHER, program) in out and programs == [OTHER, program],
+      out[-2000:])
 check("run: the next run finishes every member, the unparked one from its checkpoint", rc == 0 and all(
     '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066"))
     and "--restart %s" % os.path.join(member_dir, "checkpoint.bin") in out, out + err[-2000:])

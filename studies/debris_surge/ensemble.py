@@ -30,8 +30,8 @@ one session to the next: `park` copies each interrupted (or still running) membe
 boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
 for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh
 checkout puts them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes
-deletes its parked copy. Resume with the surge that started the member (its params.ini and the commit named where
-it is reported).
+deletes its parked copy. Resume with the surge that started the member: its progress.json lists the programs that
+ran it (`surge version`: commit, compiler, vector extensions), and a member continued under another says so.
 collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and

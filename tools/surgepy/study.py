@@ -153,23 +153,71 @@ def _echo(stream, tail):
         tail.append(line)
 
 
+def surge_program(surge):
+    """The program line of `surge version` ("surge COMMIT, COMPILER, vectors ..."), or None for a surge without that
+    command (one older than 2026-11-28) or that cannot be run."""
+    try:
+        p = subprocess.run([surge, "version"], capture_output=True, text=True, timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    for line in p.stdout.split("\n") if p.returncode == 0 else []:
+        if line.startswith("program: "):
+            return line[len("program: "):]
+    return None
+
+
+def params_program(folder):
+    """The program a run folder's params.ini names (its "# program:" line), or None."""
+    try:
+        with open(os.path.join(folder, "params.ini")) as f:
+            for line in f:
+                if line.startswith("# program: "):
+                    return line[len("# program: "):].rstrip("\n")
+    except OSError:
+        pass
+    return None
+
+
+def _record_program(tool, folder, progress, program, resuming):
+    """Adds the program of this piece to progress["programs"] (each program once, in the order they ran) and, when
+    a run continues under another program than the one it ran last (its progress or, before progress recorded it,
+    its params.ini), says so: a checkpoint continues bit for bit only under the same build (docs/performance.md)."""
+    programs = progress.get("programs")
+    if not (isinstance(programs, list) and all(isinstance(p, str) for p in programs)):
+        programs = []
+    if not resuming:
+        programs = []
+    elif not programs and params_program(folder):
+        programs = [params_program(folder)]
+    if program and programs and programs[-1] != program:
+        sys.stdout.write("%s: %s: note: it ran under %s and continues under %s; the result is not bit for bit what "
+                         "one program would make\n" % (tool, folder, programs[-1], program))
+        sys.stdout.flush()
+    if program and (not programs or programs[-1] != program):
+        programs.append(program)
+    progress["programs"] = programs
+
+
 def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
     """Runs surge for one study point in folder: from its checkpoint when an earlier piece was interrupted, else
-    fresh_argv (which names the case and -o folder; the run starts over); common options go to both. At the deadline (wall clock,
-    None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
-    progress) with the wall time of all pieces in progress["wall_s"]; the caller records the final status. Stops the
-    study (exit 2) when surge fails on its input or output (stop_on_surge_error)."""
+    fresh_argv (which names the case and -o folder; the run starts over); common options go to both. At the deadline
+    (wall clock, None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
+    progress) with the wall time of all pieces in progress["wall_s"] and the programs that ran them in
+    progress["programs"] (`surge version`; a note when a run continues under another); the caller records the final
+    status. Stops the study (exit 2) when surge fails on its input or output (stop_on_surge_error)."""
     os.makedirs(folder, exist_ok=True)
     try:
         progress = read_progress(folder)
     except ValueError as e:
         fail(tool, str(e))
     checkpoint = os.path.join(folder, "checkpoint.bin")
-    if os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running"):
+    resuming = os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running")
+    if resuming:
         argv = [surge, "run", "--restart", checkpoint] + common
     else:
         argv = fresh_argv + common
         progress["wall_s"] = 0.0  # a fresh start (after a failed run, say) owes nothing to earlier pieces
+    _record_program(tool, folder, progress, surge_program(surge), resuming)
     sys.stdout.write("%s: %s\n" % (tool, " ".join(argv)))  # one write: members started together print whole lines
     sys.stdout.flush()
     start = time.time()
