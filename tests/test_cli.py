@@ -318,17 +318,21 @@ def group_inputs():
     # the program and the machine: `surge version` names the source's commit (as git describes it), the compiler and
     # the vector extensions, and the CPU; every run's params.ini carries the same two lines
     r = surge("version")
-    git = subprocess.run(["git", "-C", SOURCE, "describe", "--always", "--dirty", "--abbrev=12"],
-                         capture_output=True, text=True)
-    commit = git.stdout.strip() if git.returncode == 0 and git.stdout.strip() else "unknown"
+    def git(*args):  # (exit status, output) of git in the source; 127 where there is no git program
+        try:
+            p = subprocess.run(["git", "-C", SOURCE] + list(args), capture_output=True, text=True, timeout=60)
+            return p.returncode, p.stdout.strip()
+        except (OSError, subprocess.SubprocessError):
+            return 127, ""
+    status, described = git("describe", "--always", "--dirty", "--abbrev=12")
+    commit = described if status == 0 and described else "unknown"
     program = re.search(r"^program: (surge (\S+), .+, vectors .+)$", r.stdout, re.M)
     machine = re.search(r"^machine: (.+ processors online.*)$", r.stdout, re.M)
     params_text = open(params_path).read() if os.path.isfile(params_path) else ""
     # the commit named is the checkout's, or (a build older than the last commit) another commit of this repository
     built = program.group(2) if program else ""
-    known = built == commit or (built not in ("", "unknown") and subprocess.run(
-        ["git", "-C", SOURCE, "cat-file", "-e", built.split("-dirty")[0] + "^{commit}"],
-        capture_output=True).returncode == 0)
+    known = built == commit or (built not in ("", "unknown") and
+                                git("cat-file", "-e", built.split("-dirty")[0] + "^{commit}")[0] == 0)
     report("version_names_commit_compiler_vectors_machine", exited(r, 0) and program is not None and
            machine is not None and known, r, "git describe: %s" % commit)
     report("params_ini_names_program_and_machine", program is not None and machine is not None and
