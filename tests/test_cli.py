@@ -327,7 +327,7 @@ def group_inputs():
     status, described = git("describe", "--always", "--dirty", "--abbrev=12")
     commit = described if status == 0 and described else "unknown"
     program = re.search(r"^program: (surge (\S+), .+, vectors .+)$", r.stdout, re.M)
-    machine = re.search(r"^machine: (.+ processors online.*)$", r.stdout, re.M)
+    machine = re.search(r"^machine: (.+)$", r.stdout, re.M)
     params_text = open(params_path).read() if os.path.isfile(params_path) else ""
     # the commit named is the checkout's, or (a build older than the last commit) another commit of this repository
     built = program.group(2) if program else ""

@@ -5,7 +5,8 @@
                     [--set-b NAME=VALUE ...]
 
 A is the commit --base, exported with `git archive` into build/ab/<commit>/ and built there in Release with the
-current tools/bench.c (the public API it uses has not changed since f50cf94), so that A and B run the same driver
+current tools/bench.c (the public API it uses has not changed since f50cf94, but for the program and machine lines
+it prints, left out for a base older than 87303e8), so that A and B run the same driver
 on the same case file (this checkout's cases/incline_film.ini). For each configuration (C_h, threads) it runs
 surge-bench A B A B ... --pairs times, one at a time, with OMP_WAIT_POLICY=PASSIVE, and prints each run's
 particle-steps/s, the medians, each pair's ratio B/A, and the velocity error of both (which must agree). At
@@ -48,7 +49,11 @@ def build_base(revision):
         if archive.wait() != 0:
             fail("git archive %s failed" % sha)
     shutil.copyfile(os.path.join(ROOT, "tools", "bench.c"), os.path.join(tree, "tools", "bench.c"))
-    for cmd in (["cmake", "-S", tree, "-B", os.path.join(tree, "build"), "-DCMAKE_BUILD_TYPE=Release"],
+    # a base older than 87303e8 has no surge_build_description(): bench.c then leaves out its program/machine lines
+    with open(os.path.join(tree, "sim", "include", "surge", "platform.h")) as f:
+        has_build_info = "surge_build_description" in f.read()
+    flags = [] if has_build_info else ["-DCMAKE_C_FLAGS=-DSURGE_BENCH_WITHOUT_BUILD_INFO"]
+    for cmd in (["cmake", "-S", tree, "-B", os.path.join(tree, "build"), "-DCMAKE_BUILD_TYPE=Release"] + flags,
                 ["cmake", "--build", os.path.join(tree, "build"), "--target", "surge-bench", "-j%d" % os.cpu_count()]):
         proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         if proc.returncode != 0:

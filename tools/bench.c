@@ -175,10 +175,12 @@ int main(int argc, char **argv)
         }
     }
     double first_rate = 0;
+    printf("# surge-bench: %s, %.3g s of flow from rest\n", c.case_path, c.end_s);
+#ifndef SURGE_BENCH_WITHOUT_BUILD_INFO /* tools/ab_bench.py builds this file against commits older than 87303e8 */
     char machine[512];
     surge_machine_description(machine, sizeof machine);
-    printf("# surge-bench: %s, %.3g s of flow from rest\n# program: %s\n# machine: %s\n", c.case_path, c.end_s,
-           surge_build_description(), machine);
+    printf("# program: %s\n# machine: %s\n", surge_build_description(), machine);
+#endif
     if (ch || threads || layers) {
         c.ch = ch ? ch : "1.8";
         c.layers = layers ? layers : (!strcmp(c.ch, "1.0") ? "4" : "0");

@@ -166,9 +166,11 @@ void surge_machine_description(char *buf, size_t len)
     if (f)
         fclose(f);
     const long processors = sysconf(_SC_NPROCESSORS_ONLN);
-    char identity[96] = "";
+    char identity[96] = "", online[48] = "";
     if (family[0] && model[0])
         snprintf(identity, sizeof identity, ", x86 family %s model %s", family, model);
-    snprintf(buf, len, "%s%s, %ld processors online%s", model_name, identity, processors,
-             avx2 < 0 ? "" : avx512 ? ", AVX2 and AVX-512" : avx2 ? ", AVX2, no AVX-512" : ", no AVX2");
+    if (processors > 0)
+        snprintf(online, sizeof online, ", %ld processors online", processors);
+    snprintf(buf, len, "%s%s%s%s%s", model_name, identity, online,
+             avx2 < 0 ? "" : avx2 ? ", AVX2" : ", no AVX2", avx512 < 0 ? "" : avx512 ? ", AVX-512" : ", no AVX-512");
 }

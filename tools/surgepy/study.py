@@ -179,9 +179,12 @@ def params_program(folder):
 
 
 def _record_program(tool, folder, progress, program, resuming):
-    """Adds the program of this piece to progress["programs"] (each program once, in the order they ran) and, when
-    a run continues under another program than the one it ran last (its progress or, before progress recorded it,
-    its params.ini), says so: a checkpoint continues bit for bit only under the same build (docs/performance.md)."""
+    """Adds the program of this piece to progress["programs"] (in the order they ran, a program again only after
+    another) and, when a run continues under another program than the one it ran last (its progress or, before
+    progress recorded it, its params.ini), says so: a checkpoint continues bit for bit only under the same build
+    (docs/performance.md). A build from a changed work tree is named by its commit and a hash of the changes
+    (tools/build_commit.cmake), so any change, even to docs alone, counts as another program. Where `surge version`
+    fails (program None) the piece is not recorded."""
     programs = progress.get("programs")
     if not (isinstance(programs, list) and all(isinstance(p, str) for p in programs)):
         programs = []

@@ -18,8 +18,9 @@ int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *
                           size_t err_len);
 
 /* The program that is running: "surge COMMIT, COMPILER VERSION, vectors EXTENSIONS" (the source's git commit at the
- * build, "-dirty" if it had changes, "unknown" without git; the widest vector extensions it was compiled for, which
- * set the pair loops' speed and, through their lane count, the state hash: docs/performance.md). */
+ * build, with "-dirty.HASH" if it had changes, HASH a short hash of them, "unknown" without git: tools/
+ * build_commit.cmake; the widest vector extensions it was compiled for, which set the pair loops' speed and, through
+ * their lane count, the state hash: docs/performance.md). */
 const char *surge_build_description(void);
 
 /* The machine it runs on, into buf: the CPU's model name, its x86 family and model, the processors online and
