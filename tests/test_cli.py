@@ -335,6 +335,8 @@ def group_inputs():
                                 git("cat-file", "-e", built.split("-dirty")[0] + "^{commit}")[0] == 0)
     report("version_names_commit_compiler_vectors_machine", exited(r, 0) and program is not None and
            machine is not None and known, r, "git describe: %s" % commit)
+    expect_error("version_takes_no_arguments", ["version", "extra"], ["version takes no arguments"])
+    expect_error("params_takes_no_arguments", ["params", "extra"], ["params takes no arguments"])
     report("params_ini_names_program_and_machine", program is not None and machine is not None and
            ("# program: %s\n" % program.group(1)) in params_text and ("# machine: %s\n" % machine.group(1)) in
            params_text, None, params_text[:400])
