@@ -1,14 +1,18 @@
 #!/usr/bin/python3
 """The debris-surge ensemble end to end (studies/debris_surge/ensemble.py; issue #25), small and coarse: the fluid
-alone and 6 graded discs on the belt at dp = 0.066 m for 1.5 s of flow.
+alone, 6 graded discs, and graded discs covering phi = 0.04 of the fluid block (--phis), on the belt at dp = 0.066 m
+for 1.5 s of flow.
 
 Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
-  - `list` numbers the members; a --member out of range is refused;
+  - `list` numbers the members, the counts' and then the solid fractions'; a --member out of range is refused;
   - a run stopped by its budget is interrupted with a checkpoint; `park` carries it (checkpoint, flow.csv,
     boulders.csv) through a fresh runs folder and `unpark` restores it; the next `run` finishes it from its
     checkpoint and deletes the parked copy: its flow.csv then has one row every 0.5 s from 0 to the end, none twice;
     its progress.json names the program that ran it, and a member continued under another program says so;
-  - the discs ride in the flow: each run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
+  - the phi member is placed by solid fraction (params.ini: count 0, solid_fraction 0.04), and collect names it
+    (asked phi0.04) with the discs it placed and a realised phi of 0.03-0.05 (the placement takes its last disc when
+    that brings the area closer to the fraction, so it may overshoot);
+  - the discs ride in the flow: the 6-disc run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
     disc ahead of the front;
   - `collect` writes one table row per member and the box plots, and the fluid-alone member's Fr is within 10 % of
@@ -30,7 +34,7 @@ from checks import check, finish  # noqa: E402
 
 TOOL = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
 RUNS = os.path.join(WORK, "runs")
-COMMON = ["--counts", "0,6", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS]
+COMMON = ["--counts", "0,6", "--phis", "0.04", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS]
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
 
 
@@ -43,15 +47,19 @@ def tool(*args, timeout_s=900):
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 rc, out, err = tool("list", *COMMON)
-check("list: the fluid alone once, then each count with each seed", rc == 0 and out.split("\n")[:2] == [
-    "0 0 1 %s/n0_s1_dp0.066" % RUNS, "1 6 1 %s/n6_s1_dp0.066" % RUNS], out + err)
-rc, out, err = tool("run", *COMMON, "--member", "2", "--surge", SURGE)
-check("run: a member out of range is refused", rc == 2 and "members 0..1" in err, err[-500:])
+check("list: the fluid alone once, then each count with each seed, then each solid fraction with each seed",
+      rc == 0 and out.split("\n") == ["0 0 1 %s/n0_s1_dp0.066" % RUNS, "1 6 1 %s/n6_s1_dp0.066" % RUNS,
+                                      "2 phi0.04 1 %s/phi0.04_s1_dp0.066" % RUNS, ""], out + err)
+rc, out, err = tool("run", *COMMON, "--member", "3", "--surge", SURGE)
+check("run: a member out of range is refused", rc == 2 and "members 0..2" in err, err[-500:])
+rc, out, err = tool("list", *COMMON, "--phis", "0.9")
+check("list: a solid fraction above 0.8 is refused, named", rc == 2 and "--phis" in err and "0.9" in err, err[-500:])
 
 rc, out, err = tool("run", *COMMON, "--surge", SURGE, "--set", "numerics.c0_mps=abc")
 check("run: a --set value surge refuses stops the ensemble before any member, named",
       rc == 2 and "numerics.c0_mps" in err and not os.path.exists(RUNS), err[-500:])
 
+MEMBERS = ("n0_s1_dp0.066", "n6_s1_dp0.066", "phi0.04_s1_dp0.066")
 run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE, "--set", "contacts.margin_dp=2"]
 rc, out, err = tool("run", *run_args, "--member", "1", "--budget-s", "4")
 progress = open(os.path.join(RUNS, "n6_s1_dp0.066", "progress.json")).read()
@@ -86,7 +94,7 @@ check("run: a member continued under another program says so and records both (%
       rc == 0 and "it ran under %s and continues under %s" % (OTHER, program) in out and programs == [OTHER, program],
       out[-2000:])
 check("run: the next run finishes every member, the unparked one from its checkpoint", rc == 0 and all(
-    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in ("n0_s1_dp0.066", "n6_s1_dp0.066"))
+    '"done"' in open(os.path.join(RUNS, m, "progress.json")).read() for m in MEMBERS)
     and "--restart %s" % os.path.join(member_dir, "checkpoint.bin") in out, out + err[-2000:])
 check("run: a member that finishes deletes its parked copy", not os.path.exists(parked_member),
       str(os.listdir(PARKED)))
@@ -137,7 +145,7 @@ params = open(os.path.join(RUNS, "n6_s1_dp0.066", "params.ini")).read()
 check("run: --set reaches the member's parameters (params.ini: margin_dp = 2)",
       re.search(r"^margin_dp = 2$", params, re.M) is not None, params[:2000])
 
-for member in ("n0_s1_dp0.066", "n6_s1_dp0.066"):
+for member in MEMBERS:
     with open(os.path.join(RUNS, member, "flow.csv")) as f:
         rows = list(csv.DictReader(f))
     times = [float(r["time_s"]) for r in rows]
@@ -163,9 +171,17 @@ rows = list(csv.DictReader(open(table))) if os.path.isfile(table) else []
 fluid = [r for r in rows if r["count"] == "0"]
 froude = float(fluid[0]["froude"]) if fluid else float("nan")
 check("collect: a row per member and the box plots, with the most discs ever ahead of the front (none here)",
-      rc == 0 and len(rows) == 2 and os.path.getsize(png) > 10000 and
-      [r["most_boulders_ahead"] for r in sorted(rows, key=lambda r: int(r["count"]))] == ["0", "0"],
-      out + err[-1000:])
+      rc == 0 and len(rows) == 3 and os.path.getsize(png) > 10000 and
+      [r["most_boulders_ahead"] for r in rows] == ["0", "0", "0"], out + err[-1000:])
+by_fraction = [r for r in rows if r["asked"] == "phi0.04"]
+with open(os.path.join(RUNS, "phi0.04_s1_dp0.066", "boulders.csv")) as f:
+    placed = len(f.read().strip().split("\n")) - 1
+phi_params = open(os.path.join(RUNS, "phi0.04_s1_dp0.066", "params.ini")).read()
+check("collect: the phi member is named phi0.04, with the %d discs it placed and its realised phi (%s)"
+      % (placed, by_fraction[0]["phi"] if by_fraction else "?"),
+      len(by_fraction) == 1 and int(by_fraction[0]["count"]) == placed > 0 and
+      0.03 <= float(by_fraction[0]["phi"]) <= 0.05 and re.search(r"^solid_fraction = 0.04$", phi_params, re.M) and
+      re.search(r"^count = 0$", phi_params, re.M), out + err[-1000:])
 check("collect: the fluid alone runs at the uniform flow's Froude number within 10 %% (Fr %.3f, window %s-%s s)"
       % (froude, fluid[0]["window_start_s"] if fluid else "?", fluid[0]["window_end_s"] if fluid else "?"),
       abs(froude / 0.977 - 1) < 0.10, out)

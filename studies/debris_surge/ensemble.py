@@ -1,19 +1,22 @@
 #!/usr/bin/python3
-"""The boulder-laden debris surge (GMD 2025 Sect. 3.3, Table 3, Fig. 7) as an ensemble: N seeds per boulder count,
-each a run of cases/debris_surge.ini with graded boulders (docs/boulders.md), and the statistics of their Froude
-number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validation/debris_surge.md says more.
+"""The boulder-laden debris surge (GMD 2025 Sect. 3.3, Table 3, Fig. 7) as an ensemble: N seeds per boulder count
+or solid fraction, each a run of cases/debris_surge.ini with graded boulders (docs/boulders.md), and the statistics
+of their Froude number and equivalent viscosity (eq. 21, from each run's flow.csv). docs/validation/debris_surge.md
+says more.
 
-  studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--seeds 5] [--dp 0.05] [--end-s 75]
+  studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--phis F,...] [--seeds 5] [--dp 0.05] [--end-s 75]
         [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge] [--set NAME=VALUE ...]
         [--continue-stopped] [--parked-dir docs/validation/parked/debris_surge]
   studies/debris_surge/ensemble.py park|unpark [--runs-dir runs/debris_surge]
         [--parked-dir docs/validation/parked/debris_surge]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
-  studies/debris_surge/ensemble.py list [--counts ...] [--seeds ...] [--dp ...]
+  studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
-1..N; each runs in its own folder runs-dir/n<count>_s<seed>_dp<dp>, resumable (an interrupted member continues
+1..N, then (solid fraction, seed) pairs, seeds 1..N: graded discs drawn until they cover that fraction of the fluid
+block (the paper's phi = 0.53, say; --counts defaults to none when --phis is given); each runs in its own folder
+runs-dir/n<count>_s<seed>_dp<dp> or runs-dir/phi<fraction>_s<seed>_dp<dp>, resumable (an interrupted member continues
 from its checkpoint, a finished one is skipped (or, when --end-s asks for more flow than its checkpoint holds,
 continued from there to the new end, recorded in progress.json as extended_from_s), and so is one the health
 monitor stopped, whose folder keeps its
@@ -32,7 +35,8 @@ for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/de
 checkout puts them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes
 deletes its parked copy. Resume with the surge that started the member: its progress.json lists the programs that
 ran it (`surge version`: commit, compiler, vector extensions), and a member continued under another says so.
-collect: per member, the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
+collect: per member (its folder's n<count> or phi<fraction> in the table's asked column, the discs it placed in
+count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
@@ -59,7 +63,7 @@ TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
 PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked", "debris_surge")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
-COLUMNS = ["count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
+COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
            "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s", "wall_s", "status"]
 
 
@@ -85,17 +89,34 @@ def setting_arg(text):
     return text
 
 
+def phis_list(text):
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected comma-separated solid fractions, got '%s'" % text)
+    if not values or any(not 0 < v <= 0.8 for v in values) or len(set(values)) != len(values):
+        raise argparse.ArgumentTypeError("expected distinct solid fractions in (0, 0.8], got '%s'" % text)
+    return values
+
+
 def members(args):
-    """[(count, seed)] in a fixed order: count 0 once, every other count with seeds 1..N."""
-    return [(c, s) for c in args.counts for s in ([1] if c == 0 else range(1, args.seeds + 1))]
+    """[(asked, seed)] in a fixed order: the disc counts (count 0 once, every other count with seeds 1..N), then the
+    solid fractions, each with seeds 1..N. asked is ("n", count) or ("phi", solid fraction)."""
+    by_count = [(("n", c), s) for c in args.counts for s in ([1] if c == 0 else range(1, args.seeds + 1))]
+    return by_count + [(("phi", f), s) for f in args.phis for s in range(1, args.seeds + 1)]
 
 
-def folder_of(args, count, seed):
-    return os.path.join(args.runs_dir, "n%d_s%d_dp%g" % (count, seed, args.dp))
+def asked_name(asked):
+    """n<count> or phi<solid fraction>: the start of a member's folder name"""
+    return "n%d" % asked[1] if asked[0] == "n" else "phi%g" % asked[1]
 
 
-def run_member(args, count, seed, deadline):
-    folder = folder_of(args, count, seed)
+def folder_of(args, asked, seed):
+    return os.path.join(args.runs_dir, "%s_s%d_dp%g" % (asked_name(asked), seed, args.dp))
+
+
+def run_member(args, asked, seed, deadline):
+    folder = folder_of(args, asked, seed)
     try:
         progress = study.read_progress(folder) if os.path.isdir(folder) else {"status": "new"}
     except ValueError as e:
@@ -126,9 +147,10 @@ def run_member(args, count, seed, deadline):
         progress["continued_with"] = progress.get("continued_with", []) + [args.set]
         study.write_progress(folder, progress)
     fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite", "-s", "numerics.dp_m=%g" % args.dp]
-    if count > 0:
-        fresh += ["-s", "boulders.placement=graded", "-s", "boulders.count=%d" % count, "-s", "boulders.seed=%d" % seed,
-                  "-s", "boulders.density_ratio=0.9"]
+    if asked != ("n", 0):  # graded discs, by count or up to a solid fraction of the fluid block (boulder_scene.c)
+        fresh += ["-s", "boulders.placement=graded", "-s", "boulders.seed=%d" % seed, "-s", "boulders.density_ratio=0.9"]
+        fresh += (["-s", "boulders.count=%d" % asked[1]] if asked[0] == "n" else
+                  ["-s", "boulders.count=0", "-s", "boulders.solid_fraction=%g" % asked[1]])
     for setting in args.set:
         fresh += ["-s", setting]
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
@@ -184,10 +206,10 @@ def command_run(args):
             with lock:
                 if not queue:
                     return
-                count, seed = queue.pop(0)
+                asked, seed = queue.pop(0)
             if deadline and time.time() > deadline:
                 return
-            run_member(args, count, seed, deadline)
+            run_member(args, asked, seed, deadline)
 
     workers = [threading.Thread(target=worker) for _ in range(min(args.jobs, len(chosen)))]
     for w in workers:
@@ -225,17 +247,17 @@ def most_boulders_ahead(flow_csv):
 
 
 def solid_fraction(folder):
-    """Disc area (boulders.csv) over the initial fluid block's area (params.ini); 0 without discs."""
+    """(disc area (boulders.csv) over the initial fluid block's area (params.ini), discs); (0, 0) without discs."""
     path = os.path.join(folder, "boulders.csv")
     if not os.path.isfile(path):
-        return 0.0
+        return 0.0, 0
     try:
         p = RunParams(folder)
         block = (p.real("fluid", "x1_m") - p.real("fluid", "x0_m")) * p.positive("fluid", "depth_m")
     except ParamsError as e:
         fail(str(e))
     rows = study.read_rows(TOOL, path, {"r_m": float})
-    return sum(math.pi * float(r["r_m"]) ** 2 for r in rows) / block
+    return sum(math.pi * float(r["r_m"]) ** 2 for r in rows) / block, len(rows)
 
 
 def run_dp(folder):
@@ -263,21 +285,18 @@ def command_collect(args):
     for name in sorted(os.listdir(args.runs_dir)):
         folder = os.path.join(args.runs_dir, name)
         flow = os.path.join(folder, "flow.csv")
-        if not (name.startswith("n") and os.path.isfile(flow)):
+        folder_name = re.fullmatch(r"(n(\d+)|phi([0-9.]+))_s(\d+)_dp([0-9.e+-]+)", name)
+        if not (folder_name and os.path.isfile(flow)):
             continue
-        try:
-            parts = dict((part[0], part[1:]) for part in name.split("_"))
-            count, seed = int(parts["n"]), int(parts["s"])
-            float(parts["d"][1:])
-        except (KeyError, ValueError):
-            continue
+        asked, seed = folder_name.group(1), int(folder_name.group(4))
+        phi, count = solid_fraction(folder)
         dp = run_dp(folder)
         try:
             progress = study.read_progress(folder)
         except ValueError as e:
             fail(str(e))
         start, stop, n_rows, means, end = window_means(flow, args.window)
-        table.append({"count": count, "seed": seed, "dp_m": dp, "phi": solid_fraction(folder),
+        table.append({"asked": asked, "count": count, "seed": seed, "dp_m": dp, "phi": phi,
                       "window_start_s": start, "window_end_s": stop, "rows": n_rows, "froude": means["froude"],
                       "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
@@ -285,12 +304,12 @@ def command_collect(args):
                       "status": progress["status"]})
     if not table:
         fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
-    table.sort(key=lambda r: (r["dp_m"], r["count"], r["seed"]))
-    print("%6s %5s %7s %6s %13s %7s %7s %7s %7s" % ("count", "seed", "dp (m)", "phi", "window (s)", "Fr", "mu/mu0",
-                                                   "end (s)", "status"))
+    table.sort(key=lambda r: (r["dp_m"], r["asked"][0] == "p", asked_value(r["asked"]), r["seed"]))
+    print("%8s %6s %5s %7s %6s %13s %7s %7s %7s %7s" % ("asked", "count", "seed", "dp (m)", "phi", "window (s)", "Fr",
+                                                       "mu/mu0", "end (s)", "status"))
     for r in table:
-        print("%6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s" % (
-            r["count"], r["seed"], r["dp_m"], r["phi"], r["window_start_s"], r["window_end_s"], r["froude"],
+        print("%8s %6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s" % (
+            r["asked"], r["count"], r["seed"], r["dp_m"], r["phi"], r["window_start_s"], r["window_end_s"], r["froude"],
             r["mu_eq_over_mu0"], r["end_s"], r["status"][:7]))
     if args.csv:
         with open(args.csv, "w", newline="") as f:
@@ -305,18 +324,23 @@ def command_collect(args):
     return 0
 
 
+def asked_value(asked):
+    """the number in a member's n<count> or phi<solid fraction>"""
+    return float(asked[1:] if asked.startswith("n") else asked[3:])
+
+
 def box_plots(table, png, fr_uniform, mu_uniform):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     groups = {}
     for r in table:
-        groups.setdefault((r["dp_m"], r["count"]), []).append(r)
+        groups.setdefault((r["dp_m"], r["asked"]), []).append(r)
     fig, axes = plt.subplots(1, 2, figsize=(10, 4))
     for ax, key, label, reference in ((axes[0], "froude", "Fr", fr_uniform),
                                       (axes[1], "mu_eq_over_mu0", "mu_eq / mu0", mu_uniform)):
         positions, data, means = [], [], []
-        for (dp, count), rows in sorted(groups.items()):
+        for (dp, asked), rows in sorted(groups.items(), key=lambda g: (g[0][0], g[1][0]["phi"])):
             positions.append(sum(r["phi"] for r in rows) / len(rows))
             data.append([r[key] for r in rows])
             means.append(sum(data[-1]) / len(data[-1]))
@@ -344,10 +368,13 @@ def main():
     for name in ("run", "list"):
         p = sub.add_parser(name, help="run the members" if name == "run" else
                            "print the members, one a line: index, discs, seed, folder")
-        p.add_argument("--counts", type=counts_list, default=[0, 50, 100, 154],
-                       help="disc counts, comma-separated (default: the paper's 0,50,100,154)")
+        p.add_argument("--counts", type=counts_list, default=None,
+                       help="disc counts, comma-separated (default: the paper's 0,50,100,154, or none with --phis)")
+        p.add_argument("--phis", type=phis_list, default=[],
+                       help="solid fractions, comma-separated: members with graded discs covering that fraction of the "
+                            "fluid block's area, as near as the sizes drawn allow, after the counts' (default none)")
         p.add_argument("--seeds", type=cli_checks.positive_int, default=5,
-                       help="seeds 1..N per disc count (count 0 runs once; default 5)")
+                       help="seeds 1..N per disc count or solid fraction (count 0 runs once; default 5)")
         p.add_argument("--dp", type=cli_checks.positive, default=0.05, help="particle spacing, m (default 0.05)")
         p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"),
                        help="where the member folders go (default runs/debris_surge)")
@@ -388,9 +415,12 @@ def main():
     c.add_argument("--csv", help="write the table to this CSV file")
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     args = parser.parse_args()
+    if args.command in ("run", "list") and args.counts is None:
+        args.counts = [] if args.phis else [0, 50, 100, 154]
     if args.command == "list":
-        for k, (count, seed) in enumerate(members(args)):
-            print("%d %d %d %s" % (k, count, seed, folder_of(args, count, seed)))
+        for k, (asked, seed) in enumerate(members(args)):
+            print("%d %s %d %s" % (k, asked[1] if asked[0] == "n" else asked_name(asked), seed,
+                                   folder_of(args, asked, seed)))
         return 0
     if args.command == "park":
         return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA, first_snapshot=False)
