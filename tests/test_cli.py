@@ -554,6 +554,21 @@ def group_inputs():
     report("check_warns_few_particles_in_depth", exited(r, 0) and "4.5 particles" in r.stdout and
            "dp <= 0.0012 m gives 15" in r.stdout and "estimated memory" in r.stdout and
            "wall time per simulated second" in r.stdout, r)
+    # the wall-time estimate counts the wall particles with the fluid's: the debris surge with 60 discs has about as
+    # many of each, and a step costs about the same per wall particle (docs/performance.md)
+    r = surge("check", os.path.join(cases_dir, "debris_surge.ini"), "-s", "numerics.dp_m=0.04", "-s",
+              "boulders.placement=graded", "-s", "boulders.count=60", "-s", "boulders.seed=1")
+    counts = re.search(r"ok: (\d+) fluid \+ (\d+) wall particles", r.stdout)
+    cost = re.search(r"\((\d+) list entries per fluid particle\); at most ([0-9.e+]+) steps .* about ([0-9.e+]+) s of "
+                     r"wall time per simulated second on 2 cores, wall particles counted as fluid ones", r.stdout)
+    if counts and cost:
+        fluid, walls = int(counts.group(1)), int(counts.group(2))
+        entries, steps, estimate = int(cost.group(1)), float(cost.group(2)), float(cost.group(3))
+        expected = (fluid + walls) * steps * (1.37e-7 + 4.43e-9 * entries)
+    report("check_estimate_counts_walls", exited(r, 0) and counts is not None and cost is not None and
+           walls > 0.5 * fluid and abs(estimate / expected - 1) < 0.02, None,
+           "estimate %s s against (fluid + walls) x steps x cost %s s:\n%s" % (
+               cost.group(3) if cost else "?", "%.3g" % expected if counts and cost else "?", r.stdout + r.stderr))
     r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005")
     report("check_warns_coarse_discs", exited(r, 0) and "2.5 dp, fewer than 4" in r.stdout, r)
     # the implicit scheme with discs under 2.5 dp in radius (the debris surge stopped at 1.5 dp), and not at 2.5 dp
