@@ -26,7 +26,7 @@ static int allocate_discs(boulder_set *b, int n)
     ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
     ALLOC(b->spin_damping); ALLOC(b->omega_forces); ALLOC(b->angle_build); ALLOC(b->contact_radius);
     ALLOC(b->wetted); ALLOC(b->step_ax); ALLOC(b->step_ay); ALLOC(b->step_ax_n); ALLOC(b->step_ay_n);
-    ALLOC(b->drag_stiffness);
+    ALLOC(b->drag_stiffness); ALLOC(b->cos_angle); ALLOC(b->sin_angle);
 #undef ALLOC
     return ok ? 0 : -1;
 }
@@ -37,7 +37,7 @@ void boulders_free(boulder_set *b)
                       b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
                       b->ay, b->alpha, b->spin_damping, b->omega_forces, b->spin_coupling, b->of_wall,
                       b->local_x, b->local_y, b->angle_build, b->contact_radius, b->wetted, b->step_ax,
-                      b->step_ay, b->step_ax_n, b->step_ay_n, b->drag_stiffness};
+                      b->step_ay, b->step_ax_n, b->step_ay_n, b->drag_stiffness, b->cos_angle, b->sin_angle};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     contact_solver_destroy(b->contacts);
@@ -366,12 +366,25 @@ int boulders_cover(const surge_sim *sim, double x, double y)
 }
 
 /* eq. 11: u_k = V + Omega x (r_k - R0); the ghost node mirrors the particle across the circle. */
-/* Offset of the disc particle with id from its disc's centre at the given orientation. */
-static inline void disc_offset(const boulder_set *b, int id, double angle, double *rx, double *ry)
+/* Offset of the disc particle with id from its disc's centre at orientation (cos, sin) = (c, s). */
+static inline void rotated_offset(const boulder_set *b, int id, double c, double s, double *rx, double *ry)
 {
-    const double c = cos(angle), s = sin(angle);
     *rx = c * b->local_x[id] - s * b->local_y[id];
     *ry = s * b->local_x[id] + c * b->local_y[id];
+}
+
+/* The same at the given angle */
+static inline void disc_offset(const boulder_set *b, int id, double angle, double *rx, double *ry)
+{
+    rotated_offset(b, id, cos(angle), sin(angle), rx, ry);
+}
+
+void boulders_orient(const boulder_set *b)
+{
+    for (int i = 0; i < b->count; i++) {
+        b->cos_angle[i] = cos(b->angle[i]);
+        b->sin_angle[i] = sin(b->angle[i]);
+    }
 }
 
 /* The mDBC ghost offset of a disc particle at offset (rx, ry): mirrored across the disc's surface. */
@@ -388,13 +401,14 @@ void boulders_place_particles(surge_sim *sim)
     if (b->count == 0)
         return;
     const double period = sim->grid.period_m;
+    boulders_orient(b);
     #pragma omp parallel for schedule(static)
     for (int k = 0; k < sim->wall_count; k++) {
         const int id = sim->id[k], i = b->of_wall[id];
         if (i < 0)
             continue;
         double rx, ry;
-        disc_offset(b, id, b->angle[i], &rx, &ry);
+        rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
         double x = b->x[i] + rx;
         if (period > 0) {
             /* the periodic image nearest the particle's neighbour-list build position, so that the lists' images
@@ -425,8 +439,8 @@ void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *
 {
     const boulder_set *b = &sim->boulders;
     const int id = sim->id[k], i = b->of_wall[id];
-    const double c = cos(b->angle[i]), s = sin(b->angle[i]);
-    const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+    double rx, ry;
+    rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
     const double to_surface = b->radius[i] / sqrt(rx * rx + ry * ry);
     *vx = b->vx[i] - b->omega[i] * ry * to_surface;
     *vy = b->vy[i] + b->omega[i] * rx * to_surface;
@@ -499,12 +513,13 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         b->omega_forces[i] = b->omega[i];
     }
     const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
+    boulders_orient(b);
     for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
         const int id = sim->id[k], i = b->of_wall[id];
         if (i < 0)
             continue;
-        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
-        const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+        double rx, ry;
+        rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
         b->fx[i] += fx[k];
         b->fy[i] += fy[k];
         b->torque[i] += rx * fy[k] - ry * fx[k];

@@ -24,6 +24,8 @@ typedef struct boulder_set {
     double *wetted;         /* the fraction of the disc's surface the fluid wets (boulders_wetted_fraction) */
     double *step_ax, *step_ay; /* implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt */
     double *step_ax_n, *step_ay_n; /* and over the one before (a rolled-back step restores them) */
+    double *cos_angle, *sin_angle; /* scratch: cos and sin of angle as of the last boulders_orient (one per disc, not
+                                    * one per particle: a disc's particles share them) */
     real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */
     /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
     int32_t *of_wall;

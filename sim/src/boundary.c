@@ -102,6 +102,8 @@ void boundary_update(surge_sim *sim, int wall_pressure)
     const neighbour_lists *nl = &sim->neighbours;
     const double rho0 = sim->rho0;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy;
+    #pragma omp single
+    boulders_orient(&sim->boulders); /* for boulders_surface_velocity */
 
     #pragma omp for schedule(static)
     for (int b = 0; b < sim->wall_count; b++) {

@@ -282,7 +282,10 @@ void boulders_place_particles(surge_sim *sim);                /* positions and v
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);
 /* eq. 10, after interaction_compute; the pressures taken relative to reference_pa[disc] (NULL: 0) */
 void boulders_fluid_forces(surge_sim *sim, const double *reference_pa);
-/* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target). */
+/* Fills the discs' cos_angle and sin_angle from their angles (scratch; writes through the const set's arrays). */
+void boulders_orient(const boulder_set *b);
+/* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target), at the orientation of
+ * the last boulders_orient. */
 void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy);
 void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step start, moves to the half step */
 int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */

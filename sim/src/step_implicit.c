@@ -288,6 +288,7 @@ static inline ghost_span ghost_span_of(const surge_sim *sim, int kw)
 static void mirror_velocities(surge_sim *sim)
 {
     implicit_work *w = sim->implicit;
+    boulders_orient(&sim->boulders); /* for boulders_surface_velocity */
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         double vx = sim->wall_of[kw] == WALL_CORNER ? 0.0 : sim->vx[kw], vy = sim->vy[kw];
