@@ -4,7 +4,8 @@ alone, 6 graded discs, and graded discs covering phi = 0.04 of the fluid block (
 for 1.5 s of flow.
 
 Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
-  - `list` numbers the members, the counts' and then the solid fractions'; a --member out of range is refused;
+  - `list` numbers the members, the counts' and then the solid fractions'; a --member out of range is refused, and so
+    are discs that do not fit (phi = 0.53 at this dp), before any member runs;
   - a run stopped by its budget is interrupted with a checkpoint; `park` carries it (checkpoint, flow.csv,
     boulders.csv) through a fresh runs folder and `unpark` restores it; the next `run` finishes it from its
     checkpoint and deletes the parked copy: its flow.csv then has one row every 0.5 s from 0 to the end, none twice;
@@ -17,7 +18,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     disc ahead of the front;
   - `collect` writes one table row per member and the box plots, and the fluid-alone member's Fr is within 10 % of
     the uniform flow's (0.977) over its second half; drift_conservation holds the same surge to 5 % over 8 s; a
-    flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan.
+    flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
+    without its boulders.csv is refused, named.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -58,6 +60,10 @@ check("list: a solid fraction above 0.8 is refused, named", rc == 2 and "--phis"
 rc, out, err = tool("run", *COMMON, "--surge", SURGE, "--set", "numerics.c0_mps=abc")
 check("run: a --set value surge refuses stops the ensemble before any member, named",
       rc == 2 and "numerics.c0_mps" in err and not os.path.exists(RUNS), err[-500:])
+rc, out, err = tool("run", "--phis", "0.53", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS, "--surge", SURGE)
+check("run: discs that do not fit (phi = 0.53 at dp = 0.066 m) stop the ensemble before any member, the member and "
+      "the placement named", rc == 2 and "member phi0.53_s1_dp0.066" in err and "placed" in err and
+      not os.path.exists(RUNS), err[-500:])
 
 MEMBERS = ("n0_s1_dp0.066", "n6_s1_dp0.066", "phi0.04_s1_dp0.066")
 run_args = COMMON + ["--end-s", "1.5", "--surge", SURGE, "--set", "contacts.margin_dp=2"]
@@ -203,4 +209,9 @@ check("collect: a flow.csv without boulders_ahead_of_front (an earlier version's
       rc == 0 and [r["most_boulders_ahead"] for r in older_rows] == ["nan"], out + err[-1000:])
 check("collect: a member is reported at the dp of its params.ini (0.066 m), not its folder's requested 0.067 m (%s)"
       % [r["dp_m"] for r in older_rows], [float(r["dp_m"]) for r in older_rows] == [0.066], out + err[-1000:])
+# a member asked for discs whose boulders.csv is missing is refused, named, not reported as zero discs
+os.remove(os.path.join(older, "n6_s1_dp0.067", "boulders.csv"))
+rc, out, err = tool("collect", "--runs-dir", older)
+check("collect: a disc member without boulders.csv is refused, named", rc == 2 and "n6_s1_dp0.067" in err and
+      "no boulders.csv" in err, out + err[-1000:])
 sys.exit(finish())

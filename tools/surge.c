@@ -742,18 +742,19 @@ static void report_resolution(const surge_sim *sim, int verbose)
                         : (amg ? "amg" : "jacobi"));
         return;
     }
-    /* seconds per particle-step on 2 threads of the 2-core EPYC VM, fitted to the benchmark at C_h 1.0 and 1.8; a wall
-     * particle counts as a fluid one: in the debris surge a step costs about the same per wall particle (a disc's mDBC
-     * sums, forces and face search) as per fluid particle (docs/performance.md, "What surge check's estimate counts") */
+    /* seconds per particle-step on 2 threads of the 2-core EPYC VM, fitted to the benchmark at C_h 1.0 and 1.8; a
+     * wall particle counts as a fluid one: in the debris surge a step costs about the same per wall particle (a disc's
+     * mDBC sums, forces and face search) as per fluid particle (docs/performance.md, "What surge check's estimate
+     * counts") */
     const double per_particle_step_s = 1.37e-7 + 4.43e-9 * entries;
     const double particle_steps = d->fluid_count / dt;
     const double wall_time_s = (double)(d->fluid_count + d->wall_count) / dt * per_particle_step_s;
     if (verbose || bytes > 4e9)
         fprintf(out,
                 "%sestimated memory %.3g MB (%.0f list entries per fluid particle); at most %.3g steps and %.3g "
-                "particle-steps per simulated second (dt <= %.3g s), about %.3g s of wall time per simulated second "
-                "on 2 cores, wall particles counted as fluid ones (docs/performance.md)\n", verbose ? "  " : "surge: ",
-                bytes / 1e6, entries, 1 / dt, particle_steps, dt, wall_time_s);
+                "fluid particle-steps per simulated second (dt <= %.3g s), about %.3g s of wall time per simulated "
+                "second on 2 cores, wall particles counted as fluid ones (docs/performance.md)\n",
+                verbose ? "  " : "surge: ", bytes / 1e6, entries, 1 / dt, particle_steps, dt, wall_time_s);
 }
 
 static int command_run(int argc, char **argv)

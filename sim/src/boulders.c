@@ -373,7 +373,7 @@ static inline void rotated_offset(const boulder_set *b, int id, double c, double
     *ry = s * b->local_x[id] + c * b->local_y[id];
 }
 
-/* The same at the given angle */
+/* The same at the given angle. */
 static inline void disc_offset(const boulder_set *b, int id, double angle, double *rx, double *ry)
 {
     rotated_offset(b, id, cos(angle), sin(angle), rx, ry);

@@ -102,8 +102,10 @@ void boundary_update(surge_sim *sim, int wall_pressure)
     const neighbour_lists *nl = &sim->neighbours;
     const double rho0 = sim->rho0;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy;
-    #pragma omp single
-    boulders_orient(&sim->boulders); /* for boulders_surface_velocity */
+    if (sim->boulders.count > 0) { /* every thread sees the same count: all or none meet the single's barrier */
+        #pragma omp single
+        boulders_orient(&sim->boulders); /* for boulders_surface_velocity */
+    }
 
     #pragma omp for schedule(static)
     for (int b = 0; b < sim->wall_count; b++) {

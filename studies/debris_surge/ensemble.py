@@ -63,8 +63,9 @@ TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
 PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked", "debris_surge")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
-COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude", "mu_eq_over_mu0",
-           "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s", "wall_s", "status"]
+COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
+           "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
+           "wall_s", "status"]
 
 
 def fail(message):
@@ -90,12 +91,14 @@ def setting_arg(text):
 
 
 def phis_list(text):
+    """Solid fractions in [0.001, 0.8], distinct as written in folder names and settings (%g)"""
     try:
         values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError("expected comma-separated solid fractions, got '%s'" % text)
-    if not values or any(not 0 < v <= 0.8 for v in values) or len(set(values)) != len(values):
-        raise argparse.ArgumentTypeError("expected distinct solid fractions in (0, 0.8], got '%s'" % text)
+    if not values or any(not 0.001 <= v <= 0.8 for v in values) or len(set("%g" % v for v in values)) != len(values):
+        raise argparse.ArgumentTypeError("expected solid fractions in [0.001, 0.8], distinct to 6 digits, got '%s'"
+                                         % text)
     return values
 
 
@@ -113,6 +116,17 @@ def asked_name(asked):
 
 def folder_of(args, asked, seed):
     return os.path.join(args.runs_dir, "%s_s%d_dp%g" % (asked_name(asked), seed, args.dp))
+
+
+def scene_settings(args, asked, seed):
+    """The -s options of a member's scene: dp, its graded discs (by count, or drawn until they cover the solid
+    fraction of the fluid block; boulder_scene.c) and the --set parameters"""
+    settings = ["numerics.dp_m=%g" % args.dp]
+    if asked != ("n", 0):
+        settings += ["boulders.placement=graded", "boulders.seed=%d" % seed, "boulders.density_ratio=0.9"]
+        settings += (["boulders.count=%d" % asked[1]] if asked[0] == "n" else
+                     ["boulders.count=0", "boulders.solid_fraction=%g" % asked[1]])
+    return [item for setting in settings + args.set for item in ("-s", setting)]
 
 
 def run_member(args, asked, seed, deadline):
@@ -146,13 +160,7 @@ def run_member(args, asked, seed, deadline):
         progress["status"] = "interrupted"  # run_resumable continues an interrupted member from its checkpoint
         progress["continued_with"] = progress.get("continued_with", []) + [args.set]
         study.write_progress(folder, progress)
-    fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite", "-s", "numerics.dp_m=%g" % args.dp]
-    if asked != ("n", 0):  # graded discs, by count or up to a solid fraction of the fluid block (boulder_scene.c)
-        fresh += ["-s", "boulders.placement=graded", "-s", "boulders.seed=%d" % seed, "-s", "boulders.density_ratio=0.9"]
-        fresh += (["-s", "boulders.count=%d" % asked[1]] if asked[0] == "n" else
-                  ["-s", "boulders.count=0", "-s", "boulders.solid_fraction=%g" % asked[1]])
-    for setting in args.set:
-        fresh += ["-s", setting]
+    fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite"] + scene_settings(args, asked, seed)
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
               "-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
     rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common + continued, deadline)
@@ -192,6 +200,13 @@ def command_run(args):
         checked = subprocess.run(vet, capture_output=True, text=True)
         if checked.returncode != 0:
             fail("--set: %s" % (checked.stderr.strip().splitlines() or ["surge check failed"])[-1])
+    for asked, seed in chosen:  # a new member's discs must fit (placement), before any member runs for hours
+        if asked != ("n", 0) and not os.path.isdir(folder_of(args, asked, seed)):
+            checked = subprocess.run([args.surge, "check", CASE] + scene_settings(args, asked, seed),
+                                     capture_output=True, text=True)
+            if checked.returncode != 0:
+                fail("member %s: %s" % (os.path.basename(folder_of(args, asked, seed)),
+                                        (checked.stderr.strip().splitlines() or ["surge check failed"])[-1]))
     if args.continue_stopped:
         fixed = sorted(set(setting.split("=", 1)[0] for setting in args.set) - live_parameters(args.surge))
         if fixed:
@@ -285,11 +300,13 @@ def command_collect(args):
     for name in sorted(os.listdir(args.runs_dir)):
         folder = os.path.join(args.runs_dir, name)
         flow = os.path.join(folder, "flow.csv")
-        folder_name = re.fullmatch(r"(n(\d+)|phi([0-9.]+))_s(\d+)_dp([0-9.e+-]+)", name)
+        folder_name = re.fullmatch(r"(n(\d+)|phi(\d+(?:\.\d+)?))_s(\d+)_dp([0-9.e+-]+)", name)
         if not (folder_name and os.path.isfile(flow)):
             continue
         asked, seed = folder_name.group(1), int(folder_name.group(4))
         phi, count = solid_fraction(folder)
+        if count == 0 and asked != "n0":
+            fail("%s: a member with discs (%s) but no boulders.csv" % (folder, asked))
         dp = run_dp(folder)
         try:
             progress = study.read_progress(folder)
@@ -367,7 +384,7 @@ def main():
     sub = parser.add_subparsers(dest="command", required=True)
     for name in ("run", "list"):
         p = sub.add_parser(name, help="run the members" if name == "run" else
-                           "print the members, one a line: index, discs, seed, folder")
+                           "print the members, one a line: index, discs (or phi<fraction>), seed, folder")
         p.add_argument("--counts", type=counts_list, default=None,
                        help="disc counts, comma-separated (default: the paper's 0,50,100,154, or none with --phis)")
         p.add_argument("--phis", type=phis_list, default=[],
