@@ -758,6 +758,59 @@ static int test_c0_discs(void)
     return failures;
 }
 
+/* boulders_orient's table is fresh wherever it is read: after every disc is turned by hand, boundary_update (no-slip
+ * targets) and boulders_place_particles (positions) give what cos and sin of the new angles give, to round-off.
+ * Without the refresh both would still use the angles of the last call. */
+static int test_disc_orientation(void)
+{
+    surge_sim *sim = case_sim("debris_surge.ini", 0.066, sixty_graded_discs_c0);
+    if (!sim)
+        return 1;
+    for (int n = 0; n < 20; n++)
+        if (surge_sim_step(sim) != 0)
+            return 1;
+    boulder_set *b = &sim->boulders;
+    if (neighbours_update(sim) != 0)
+        return 1;
+    interaction_prepare(sim, 1);
+    boundary_update(sim, 1);
+    for (int i = 0; i < b->count; i++)
+        b->angle[i] += 0.3 + 0.01 * i;
+    boundary_update(sim, 1); /* refreshes the table for boulders_surface_velocity */
+    double worst_velocity = 0, worst_position = 0;
+    int particles = 0;
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
+        const double rx = c * b->local_x[id] - s * b->local_y[id], ry = s * b->local_x[id] + c * b->local_y[id];
+        const double to_surface = b->radius[i] / sqrt(rx * rx + ry * ry);
+        double vx, vy;
+        boulders_surface_velocity(sim, k, &vx, &vy);
+        worst_velocity = fmax(worst_velocity, hypot(vx - (b->vx[i] - b->omega[i] * ry * to_surface),
+                                                    vy - (b->vy[i] + b->omega[i] * rx * to_surface)));
+        particles++;
+    }
+    boulders_place_particles(sim);
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        const double c = cos(b->angle[i]), s = sin(b->angle[i]);
+        const double ry = s * b->local_x[id] + c * b->local_y[id];
+        worst_position = fmax(worst_position, fabs(sim->y[k] - (b->y[i] + ry)));
+    }
+    printf("disc_orientation: %d disc particles, largest velocity difference %.3g m/s, position %.3g m\n", particles,
+           worst_velocity, worst_position);
+    expect_below("disc_orientation: disc particles checked (at least 1000; minus the count)", 1000 - particles, 0);
+    expect_below("disc_orientation: surface velocity against cos and sin of the turned angle (m/s)", worst_velocity,
+                 1e-12);
+    expect_below("disc_orientation: position against cos and sin of the turned angle (m)", worst_position, 1e-12);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 /* interaction_wall_face (whole vectors, each lane's nearest candidate, the chosen face recomputed) against the
  * scalar search it replaced, on the 60-disc debris surge after 0.2 s: the same face (gap, normal, wall speed, wall
  * particle or disc) and the same near-boulder flag for every fluid particle, with disc faces and bed faces among
@@ -1155,6 +1208,8 @@ int main(int argc, char **argv)
         return test_c0_discs() ? 1 : 0;
     if (!strcmp(argv[1], "face_search"))
         return test_face_search() ? 1 : 0;
+    if (!strcmp(argv[1], "disc_orientation"))
+        return test_disc_orientation() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_auto"))
         return test_implicit_auto() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_projection"))
