@@ -19,7 +19,10 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `collect` writes one table row per member and the box plots, and the fluid-alone member's Fr is within 10 % of
     the uniform flow's (0.977) over its second half; drift_conservation holds the same surge to 5 % over 8 s; a
     flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
-    without its boulders.csv is refused, named.
+    without its boulders.csv is refused, named;
+  - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
+    value that is not a finite number, with an asked that is neither n<count> nor phi<fraction>, or from another
+    scene (another uniform flow) is refused, naming the file.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -191,6 +194,35 @@ check("collect: the phi member is named phi0.04, with the %d discs it placed and
 check("collect: the fluid alone runs at the uniform flow's Froude number within 10 %% (Fr %.3f, window %s-%s s)"
       % (froude, fluid[0]["window_start_s"] if fluid else "?", fluid[0]["window_end_s"] if fluid else "?"),
       abs(froude / 0.977 - 1) < 0.10, out)
+check("collect: each row carries the uniform flow's Froude number, from its params.ini (0.977)",
+      len(rows) == 3 and all(abs(float(r["uniform_froude"]) - 0.9774) < 1e-3 for r in rows), str(rows)[-500:])
+# plot: the box plots again from collect's table and a hand-made one (members whose folders are gone); tables that
+# cannot be plotted are refused, naming the file, the line and the column
+by_hand = os.path.join(WORK, "by_hand.csv")
+with open(by_hand, "w") as f:
+    f.write("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude,source\n"
+            "n6,0.066,0.05,0.93,1.2,0.97735,by hand\nn6,0.066,0.06,0.92,1.3,0.97735,by hand\n")
+plotted = os.path.join(WORK, "plotted.png")
+rc, out, err = tool("plot", "--csv", table, "--csv", by_hand, "--png", plotted)
+check("plot: box plots from collect's table and a hand-made one", rc == 0 and os.path.getsize(plotted) > 10000,
+      out + err[-1000:])
+refusals = [("asked,dp_m,phi,froude,uniform_froude\nn6,0.066,0.05,0.93,0.97735\n", "no column mu_eq_over_mu0"),
+            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,nan,0.97735\n",
+             "line 2: mu_eq_over_mu0 is not a finite number"),
+            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,x,0.97735\n",
+             "mu_eq_over_mu0 = 'x' is not a number"),
+            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nsix,0.066,0.05,0.93,1.2,0.97735\n",
+             "line 2: asked = 'six'"),
+            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,1.2,0.5\n",
+             "different uniform flows")]
+for k, (text, expected) in enumerate(refusals):
+    bad = os.path.join(WORK, "bad%d.csv" % k)
+    with open(bad, "w") as f:
+        f.write(text)
+    rc, out, err = tool("plot", "--csv", table, "--csv", bad, "--png", os.path.join(WORK, "bad.png"))
+    check("plot: a table that cannot be plotted is refused, named (%s)" % expected,
+          rc == 2 and expected in err and ("bad%d.csv" % k) in err and not os.path.exists(os.path.join(WORK, "bad.png")),
+          err[-500:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

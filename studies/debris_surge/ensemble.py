@@ -11,6 +11,7 @@ says more.
         [--parked-dir docs/validation/parked/debris_surge]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
+  studies/debris_surge/ensemble.py plot --csv FILE [--csv FILE ...] --png FILE
   studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
@@ -41,6 +42,9 @@ count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a ru
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png).
+plot: the same box plots from one or more tables that collect wrote (--csv), or that were written by hand with its
+columns asked, dp_m, phi, froude, mu_eq_over_mu0 and uniform_froude (members whose folders are gone; other columns
+may be empty), one box per dp and asked.
 """
 import argparse
 import csv
@@ -65,7 +69,9 @@ PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked", "debris_surge")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
-           "wall_s", "status"]
+           "wall_s", "status", "uniform_froude"]
+PLOTTED = {"asked": str, "dp_m": float, "phi": float, "froude": float, "mu_eq_over_mu0": float,
+           "uniform_froude": float}  # the columns `plot` reads from a table
 
 
 def fail(message):
@@ -284,13 +290,17 @@ def run_dp(folder):
         fail(str(e))
 
 
-def uniform_flow(folder):
-    """(Fr, mu_eq/mu0) of the uniform flow at the belt speed: depth h_n = sqrt(3 nu u_b / (g sin theta))."""
-    p = RunParams(folder)
-    nu, g = p.positive("fluid", "viscosity_m2ps"), p.positive("body", "gravity_mps2")
-    u_b, theta = abs(p.real("walls", "bottom_speed_mps")), math.radians(p.real("body", "slope_deg"))
+def uniform_froude(folder):
+    """Fr of the uniform flow at the belt speed, from the member's params.ini: depth h_n = sqrt(3 nu u_b / (g sin
+    theta)), Fr = u_b / sqrt(g h_n); its mu_eq/mu0 is 1 by eq. 21."""
+    try:
+        p = RunParams(folder)
+        nu, g = p.positive("fluid", "viscosity_m2ps"), p.positive("body", "gravity_mps2")
+        u_b, theta = abs(p.real("walls", "bottom_speed_mps")), math.radians(p.real("body", "slope_deg"))
+    except ParamsError as e:
+        fail(str(e))
     h_n = math.sqrt(3 * nu * u_b / (g * math.sin(theta)))
-    return u_b / math.sqrt(g * h_n), 1.0
+    return u_b / math.sqrt(g * h_n)
 
 
 def command_collect(args):
@@ -318,7 +328,7 @@ def command_collect(args):
                       "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
                       "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
-                      "status": progress["status"]})
+                      "status": progress["status"], "uniform_froude": uniform_froude(folder)})
     if not table:
         fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
     table.sort(key=lambda r: (r["dp_m"], r["asked"][0] == "p", asked_value(r["asked"]), r["seed"]))
@@ -335,9 +345,23 @@ def command_collect(args):
             for r in table:
                 w.writerow(r)
     if args.png:
-        fr0, mu0 = uniform_flow(os.path.join(args.runs_dir, sorted(
-            n for n in os.listdir(args.runs_dir) if os.path.isfile(os.path.join(args.runs_dir, n, "params.ini")))[0]))
-        box_plots(table, args.png, fr0, mu0)
+        box_plots(table, args.png, "the members of %s" % args.runs_dir)
+    return 0
+
+
+def command_plot(args):
+    """Box plots from tables that collect wrote (or made by hand with the same columns)."""
+    table = []
+    for path in args.csv:
+        rows = study.read_rows(TOOL, path, PLOTTED)
+        for line, r in enumerate(rows, start=2):
+            row = {k: kind(r[k]) for k, kind in PLOTTED.items()}
+            bad = [k for k, kind in PLOTTED.items() if kind is float and not math.isfinite(row[k])]
+            if bad or not re.fullmatch(r"n\d+|phi\d+(\.\d+)?", row["asked"]):
+                fail("%s, line %d: %s" % (path, line, "%s is not a finite number" % bad[0] if bad else
+                                         "asked = %r is neither n<count> nor phi<fraction>" % row["asked"]))
+            table.append(row)
+    box_plots(table, args.png, ", ".join(args.csv))
     return 0
 
 
@@ -346,7 +370,14 @@ def asked_value(asked):
     return float(asked[1:] if asked.startswith("n") else asked[3:])
 
 
-def box_plots(table, png, fr_uniform, mu_uniform):
+def box_plots(table, png, source):
+    """Fr and mu_eq/mu0 against phi, one box per (dp, asked) group, with the uniform flow's values (mu_eq/mu0 = 1
+    by eq. 21) as the phi = 0 reference: every row must give the same uniform Fr (the same scene)."""
+    references = [r["uniform_froude"] for r in table]
+    if max(references) > 1.001 * min(references):
+        fail("%s: the rows come from scenes with different uniform flows (Fr %g to %g)"
+             % (source, min(references), max(references)))
+    fr_uniform, mu_uniform = sum(references) / len(references), 1.0
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -431,6 +462,11 @@ def main():
                    help="the averaging window, s of flow (default the paper's 20 75)")
     c.add_argument("--csv", help="write the table to this CSV file")
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
+    d = sub.add_parser("plot", help="box plots from tables that collect wrote")
+    d.add_argument("--csv", action="append", required=True, metavar="FILE",
+                   help="a table collect wrote (--csv), or one with its columns %s; repeatable"
+                        % ", ".join(PLOTTED))
+    d.add_argument("--png", type=cli_checks.png_file, required=True, help="draw the box plots to this PNG file")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
@@ -445,6 +481,8 @@ def main():
         return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
     if args.command == "collect" and not args.window[1] > args.window[0]:
         fail("--window: the end must come after the start")
+    if args.command == "plot":
+        return command_plot(args)
     return command_run(args) if args.command == "run" else command_collect(args)
 
 
