@@ -21,8 +21,9 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
     without its boulders.csv is refused, named;
   - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
-    value that is not a finite number, with an asked that is neither n<count> nor phi<fraction>, or from another
-    scene (another uniform flow) is refused, naming the file.
+    value that is not a finite number or outside its range, with an asked that is neither n<count> nor
+    phi<fraction>, with a member twice, averaged over another window or from another scene (another uniform flow)
+    is refused, naming the file and the line (after a blank line too).
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -199,22 +200,27 @@ check("collect: each row carries the uniform flow's Froude number, from its para
 # plot: the box plots again from collect's table and a hand-made one (members whose folders are gone); tables that
 # cannot be plotted are refused, naming the file, the line and the column
 by_hand = os.path.join(WORK, "by_hand.csv")
+window = "%s,%s" % (rows[0]["window_start_s"], rows[0]["window_end_s"]) if rows else "0,1"
+header = "asked,seed,dp_m,phi,window_start_s,window_end_s,froude,mu_eq_over_mu0,uniform_froude"
 with open(by_hand, "w") as f:
-    f.write("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude,source\n"
-            "n6,0.066,0.05,0.93,1.2,0.97735,by hand\nn6,0.066,0.06,0.92,1.3,0.97735,by hand\n")
-plotted = os.path.join(WORK, "plotted.png")
+    f.write(header + ",source\n" + "".join("n6,%d,0.066,%s,%s,%s,%s,0.97735,by hand\n" % (seed, phi, window, fr, mu)
+                                          for seed, phi, fr, mu in ((1, 0.05, 0.93, 1.2), (2, 0.06, 0.92, 1.3))))
+plotted, plotted_collect_only = os.path.join(WORK, "plotted.png"), os.path.join(WORK, "plotted_collect_only.png")
 rc, out, err = tool("plot", "--csv", table, "--csv", by_hand, "--png", plotted)
-check("plot: box plots from collect's table and a hand-made one", rc == 0 and os.path.getsize(plotted) > 10000,
-      out + err[-1000:])
-refusals = [("asked,dp_m,phi,froude,uniform_froude\nn6,0.066,0.05,0.93,0.97735\n", "no column mu_eq_over_mu0"),
-            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,nan,0.97735\n",
-             "line 2: mu_eq_over_mu0 is not a finite number"),
-            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,x,0.97735\n",
-             "mu_eq_over_mu0 = 'x' is not a number"),
-            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nsix,0.066,0.05,0.93,1.2,0.97735\n",
-             "line 2: asked = 'six'"),
-            ("asked,dp_m,phi,froude,mu_eq_over_mu0,uniform_froude\nn6,0.066,0.05,0.93,1.2,0.5\n",
-             "different uniform flows")]
+rc_alone, out_alone, err_alone = tool("plot", "--csv", table, "--png", plotted_collect_only)
+check("plot: box plots from collect's table and a hand-made one (its box drawn: another picture than collect's alone)",
+      rc == 0 and rc_alone == 0 and os.path.getsize(plotted) > 10000
+      and open(plotted, "rb").read() != open(plotted_collect_only, "rb").read(), out + err[-1000:] + err_alone[-500:])
+good = "n6,3,0.066,0.05,%s,0.93,1.2,0.97735\n" % window
+refusals = [(header.replace(",mu_eq_over_mu0", "") + "\n" + good.replace(",1.2", ""), "no column mu_eq_over_mu0"),
+            (header + "\n" + good.replace(",1.2,", ",nan,"), "line 2: mu_eq_over_mu0 = nan is not a finite number"),
+            (header + "\n" + good.replace(",1.2,", ",x,"), "mu_eq_over_mu0 = 'x' is not a number"),
+            (header + "\n" + good.replace("n6,", "six,"), "line 2: asked = 'six'"),
+            (header + "\n" + good.replace(",0.97735", ",0.5"), "different uniform flows"),
+            (header + "\n\n" + good.replace(",0.93,", ",1.7e308,"), "line 3: froude = 1.7e308 is outside (0, 100)"),
+            (header + "\n" + good.replace("0.066,0.05,", "0.066,-0.05,"), "line 2: phi = -0.05 is outside [0, 1)"),
+            (header + "\n" + good + good, "line 3: dp 0.066 m, n6, seed 3 again (first at"),
+            (header + "\n" + "n6,3,0.066,0.05,20,40,0.93,1.2,0.97735\n", "is not the first row's")]
 for k, (text, expected) in enumerate(refusals):
     bad = os.path.join(WORK, "bad%d.csv" % k)
     with open(bad, "w") as f:

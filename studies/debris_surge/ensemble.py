@@ -70,8 +70,12 @@ PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
            "wall_s", "status", "uniform_froude"]
-PLOTTED = {"asked": str, "dp_m": float, "phi": float, "froude": float, "mu_eq_over_mu0": float,
-           "uniform_froude": float}  # the columns `plot` reads from a table
+PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
+           "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
+PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
+                  "uniform_froude": (0.0, 100.0), "window_start_s": (0.0, 1e6), "window_end_s": (0.0, 1e6)}
+ZERO_ALLOWED = ("phi", "window_start_s")  # the fluid alone, a window from the start; every other bound is open
+WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this
 
 
 def fail(message):
@@ -299,6 +303,8 @@ def uniform_froude(folder):
         u_b, theta = abs(p.real("walls", "bottom_speed_mps")), math.radians(p.real("body", "slope_deg"))
     except ParamsError as e:
         fail(str(e))
+    if u_b <= 0 or math.sin(theta) <= 0:
+        return math.nan  # no uniform flow down a flat or rising channel, or without a moving belt
     h_n = math.sqrt(3 * nu * u_b / (g * math.sin(theta)))
     return u_b / math.sqrt(g * h_n)
 
@@ -351,15 +357,31 @@ def command_collect(args):
 
 def command_plot(args):
     """Box plots from tables that collect wrote (or made by hand with the same columns)."""
-    table = []
+    table, where = [], {}
     for path in args.csv:
-        rows = study.read_rows(TOOL, path, PLOTTED)
-        for line, r in enumerate(rows, start=2):
+        for line, r in study.read_numbered_rows(TOOL, path, PLOTTED):
             row = {k: kind(r[k]) for k, kind in PLOTTED.items()}
-            bad = [k for k, kind in PLOTTED.items() if kind is float and not math.isfinite(row[k])]
-            if bad or not re.fullmatch(r"n\d+|phi\d+(\.\d+)?", row["asked"]):
-                fail("%s, line %d: %s" % (path, line, "%s is not a finite number" % bad[0] if bad else
-                                         "asked = %r is neither n<count> nor phi<fraction>" % row["asked"]))
+            place = "%s, line %d" % (path, line)
+            for k, (low, high) in PLOTTED_RANGES.items():
+                if not (low < row[k] < high or (k in ZERO_ALLOWED and row[k] == low)):
+                    fail("%s: %s = %s is %s" % (place, k, r[k], "not a finite number" if not math.isfinite(row[k])
+                                                else "outside %s%g, %g)" % ("[" if k in ZERO_ALLOWED else "(",
+                                                                              low, high)))
+            if not re.fullmatch(r"n\d+|phi\d+(\.\d+)?", row["asked"]):
+                fail("%s: asked = %r is neither n<count> nor phi<fraction>" % (place, row["asked"]))
+            if row["window_end_s"] <= row["window_start_s"]:
+                fail("%s: the window %s-%s s is empty" % (place, r["window_start_s"], r["window_end_s"]))
+            member = (row["dp_m"], row["asked"], row["seed"])
+            if member in where:
+                fail("%s: dp %g m, %s, seed %d again (first at %s): a member counted twice"
+                     % (place, row["dp_m"], row["asked"], row["seed"], where[member]))
+            where[member] = place
+            first = table[0] if table else row
+            if any(abs(row[k] - first[k]) > WINDOW_TOLERANCE_S for k in ("window_start_s", "window_end_s")):
+                fail("%s: its window %g-%g s is not the first row's, %g-%g s (%s): members averaged over other "
+                     "windows are not comparable" % (place, row["window_start_s"], row["window_end_s"],
+                                                     first["window_start_s"], first["window_end_s"],
+                                                     where[(first["dp_m"], first["asked"], first["seed"])]))
             table.append(row)
     box_plots(table, args.png, ", ".join(args.csv))
     return 0
@@ -464,7 +486,8 @@ def main():
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     d = sub.add_parser("plot", help="box plots from tables that collect wrote")
     d.add_argument("--csv", action="append", required=True, metavar="FILE",
-                   help="a table collect wrote (--csv), or one with its columns %s; repeatable"
+                   help="a table collect wrote (--csv; before 2026-11-28 it had no uniform_froude), or one with its "
+                        "columns %s; repeatable"
                         % ", ".join(PLOTTED))
     d.add_argument("--png", type=cli_checks.png_file, required=True, help="draw the box plots to this PNG file")
     args = parser.parse_args()

@@ -36,7 +36,7 @@ KIND_NAMES = {float: "a number", int: "an integer"}
 
 
 def _read_table(program, csv_path, types, header=None):
-    """The rows (dicts) of a CSV table, which must have the columns of types ({column: float, int or str}) and in
+    """The rows of a CSV table as (line, dict) pairs, the line where the row ends, which must have the columns of types ({column: float, int or str}) and in
     each row a value there that the type reads (float: a number, nan included); with header, exactly these columns
     in this order. Fails naming the file, and the line and column, otherwise."""
     try:
@@ -62,7 +62,7 @@ def _read_table(program, csv_path, types, header=None):
                     except ValueError:
                         fail(program, "%s, line %d: %s = %r is not %s" % (csv_path, reader.line_num, column,
                                                                           row[column], KIND_NAMES[kind]))
-                rows.append(row)
+                rows.append((reader.line_num, row))
     except OSError as e:
         fail(program, "%s: cannot read it (%s)" % (csv_path, e.strerror or e))
     except (UnicodeDecodeError, csv.Error) as e:
@@ -70,12 +70,18 @@ def _read_table(program, csv_path, types, header=None):
     return rows
 
 
-def read_rows(program, csv_path, types):
-    """The rows of a CSV table (see _read_table); fails with a message naming the file when it has none."""
+def read_numbered_rows(program, csv_path, types):
+    """The rows of a CSV table with their lines, as (line, dict) pairs (see _read_table); fails with a message naming
+    the file when it has none."""
     rows = _read_table(program, csv_path, types)
     if not rows:
         fail(program, "%s: no rows" % csv_path)
     return rows
+
+
+def read_rows(program, csv_path, types):
+    """The rows (dicts) of a CSV table (see read_numbered_rows)."""
+    return [row for _, row in read_numbered_rows(program, csv_path, types)]
 
 
 def existing_rows(program, csv_path, columns, types):
@@ -83,7 +89,7 @@ def existing_rows(program, csv_path, columns, types):
     end on a table it cannot extend: it must have this tool's columns, in order, and values of these types."""
     if not os.path.lexists(csv_path):
         return []
-    return _read_table(program, csv_path, types, header=columns)
+    return [row for _, row in _read_table(program, csv_path, types, header=columns)]
 
 
 def append_row(csv_path, columns, row):
