@@ -22,8 +22,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     without its boulders.csv is refused, named;
   - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
     value that is not a finite number or outside its range, with an asked that is neither n<count> nor
-    phi<fraction>, with a member twice, averaged over another window or from another scene (another uniform flow)
-    is refused, naming the file and the line (after a blank line too).
+    phi<fraction>, with a member twice, averaged over another window (unless --window-tolerance-s allows it) or
+    from another scene (another uniform flow) is refused, naming the file and the line (after a blank line too).
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -229,6 +229,9 @@ for k, (text, expected) in enumerate(refusals):
     check("plot: a table that cannot be plotted is refused, named (%s)" % expected,
           rc == 2 and expected in err and ("bad%d.csv" % k) in err and not os.path.exists(os.path.join(WORK, "bad.png")),
           err[-500:])
+tolerant = os.path.join(WORK, "bad%d.csv" % (len(refusals) - 1))  # the row averaged over 20-40 s
+rc, out, err = tool("plot", "--csv", table, "--csv", tolerant, "--png", plotted, "--window-tolerance-s", "100")
+check("plot: --window-tolerance-s lets a row averaged over another window stand beside the others", rc == 0 and os.path.getsize(plotted) > 10000, out + err[-500:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

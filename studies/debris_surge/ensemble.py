@@ -75,7 +75,7 @@ PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
                   "uniform_froude": (0.0, 100.0), "window_start_s": (0.0, 1e6), "window_end_s": (0.0, 1e6)}
 ZERO_ALLOWED = ("phi", "window_start_s")  # the fluid alone, a window from the start; every other bound is open
-WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this
+WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this (plot's default)
 
 
 def fail(message):
@@ -377,11 +377,12 @@ def command_plot(args):
                      % (place, row["dp_m"], row["asked"], row["seed"], where[member]))
             where[member] = place
             first = table[0] if table else row
-            if any(abs(row[k] - first[k]) > WINDOW_TOLERANCE_S for k in ("window_start_s", "window_end_s")):
-                fail("%s: its window %g-%g s is not the first row's, %g-%g s (%s): members averaged over other "
-                     "windows are not comparable" % (place, row["window_start_s"], row["window_end_s"],
-                                                     first["window_start_s"], first["window_end_s"],
-                                                     where[(first["dp_m"], first["asked"], first["seed"])]))
+            if any(abs(row[k] - first[k]) > args.window_tolerance_s for k in ("window_start_s", "window_end_s")):
+                fail("%s: its window %g-%g s is not the first row's, %g-%g s (%s), within %g s: members averaged "
+                     "over other windows are not comparable (--window-tolerance-s)"
+                     % (place, row["window_start_s"], row["window_end_s"], first["window_start_s"],
+                        first["window_end_s"], where[(first["dp_m"], first["asked"], first["seed"])],
+                        args.window_tolerance_s))
             table.append(row)
     box_plots(table, args.png, ", ".join(args.csv))
     return 0
@@ -425,8 +426,10 @@ def box_plots(table, png, source):
         ax.set_xlim(-0.05, max(positions) + 0.1)
         ax.legend(fontsize=8)
     dps = sorted({r["dp_m"] for r in table})
-    fig.suptitle("debris surge ensemble (dp %s m; boxes: quartiles, whiskers: extremes)"
-                 % ", ".join("%g" % d for d in dps))
+    windows = sorted({"%.4g-%.4g s" % (r["window_start_s"], r["window_end_s"]) for r in table})
+    fig.suptitle("debris surge ensemble (dp %s m; %s %s; boxes: quartiles, whiskers: extremes)"
+                 % (", ".join("%g" % d for d in dps), "window" if len(windows) == 1 else "windows",
+                    ", ".join(windows)))
     fig.tight_layout()
     fig.savefig(png, dpi=100)
     print("%s: wrote %s" % (TOOL, png))
@@ -490,6 +493,9 @@ def main():
                         "columns %s; repeatable"
                         % ", ".join(PLOTTED))
     d.add_argument("--png", type=cli_checks.png_file, required=True, help="draw the box plots to this PNG file")
+    d.add_argument("--window-tolerance-s", type=cli_checks.non_negative, default=WINDOW_TOLERANCE_S,
+                   help="how far, s, a row's averaging window may lie from the first row's (default %g: one flow "
+                        "row); the title lists the windows" % WINDOW_TOLERANCE_S)
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
