@@ -23,7 +23,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
     value that is not a finite number or outside its range, with an asked that is neither n<count> nor
     phi<fraction>, with a member twice, averaged over another window (unless --window-tolerance-s allows it) or
-    from another scene (another uniform flow) is refused, naming the file and the line (after a blank line too).
+    from another scene (another uniform flow) is refused, naming the file and the line (after a blank line too);
+    a member on a flat channel has uniform_froude nan in collect's table, and collect's box plots are then refused.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import csv
@@ -227,11 +228,30 @@ for k, (text, expected) in enumerate(refusals):
         f.write(text)
     rc, out, err = tool("plot", "--csv", table, "--csv", bad, "--png", os.path.join(WORK, "bad.png"))
     check("plot: a table that cannot be plotted is refused, named (%s)" % expected,
-          rc == 2 and expected in err and ("bad%d.csv" % k) in err and not os.path.exists(os.path.join(WORK, "bad.png")),
-          err[-500:])
+          rc == 2 and expected in err and ("bad%d.csv" % k) in err
+          and not os.path.exists(os.path.join(WORK, "bad.png")), err[-500:])
 tolerant = os.path.join(WORK, "bad%d.csv" % (len(refusals) - 1))  # the row averaged over 20-40 s
 rc, out, err = tool("plot", "--csv", table, "--csv", tolerant, "--png", plotted, "--window-tolerance-s", "100")
-check("plot: --window-tolerance-s lets a row averaged over another window stand beside the others", rc == 0 and os.path.getsize(plotted) > 10000, out + err[-500:])
+check("plot: --window-tolerance-s lets a row averaged over another window stand beside the others",
+      rc == 0 and os.path.getsize(plotted) > 10000, out + err[-500:])
+# a member on a flat channel has no uniform flow: collect tables it with uniform_froude nan, and its box plots are
+# refused, named, instead of a reference line at nan
+flat = os.path.join(WORK, "flat_runs")
+shutil.rmtree(flat, ignore_errors=True)
+shutil.copytree(os.path.join(RUNS, "n6_s1_dp0.066"), os.path.join(flat, "n6_s1_dp0.066"))
+flat_params = os.path.join(flat, "n6_s1_dp0.066", "params.ini")
+with open(flat_params) as f:
+    params_text = f.read()
+with open(flat_params, "w") as f:
+    f.write(re.sub(r"(?m)^slope_deg = .*$", "slope_deg = 0", params_text))
+flat_table, flat_png = os.path.join(WORK, "flat.csv"), os.path.join(WORK, "flat.png")
+rc, out, err = tool("collect", "--runs-dir", flat, "--csv", flat_table)
+flat_rows = list(csv.DictReader(open(flat_table))) if os.path.isfile(flat_table) else []
+check("collect: a member on a flat channel is tabled with uniform_froude nan",
+      rc == 0 and [r["uniform_froude"] for r in flat_rows] == ["nan"], out + err[-1000:])
+rc, out, err = tool("collect", "--runs-dir", flat, "--png", flat_png)
+check("collect: box plots without a uniform flow are refused, named", rc == 2 and "no uniform flow" in err and
+      not os.path.exists(flat_png), out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

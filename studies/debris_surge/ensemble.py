@@ -43,8 +43,9 @@ the front (discs that left the surge, which may then roll round the period); a t
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png).
 plot: the same box plots from one or more tables that collect wrote (--csv), or that were written by hand with its
-columns asked, dp_m, phi, froude, mu_eq_over_mu0 and uniform_froude (members whose folders are gone; other columns
-may be empty), one box per dp and asked.
+columns asked, seed, dp_m, phi, window_start_s, window_end_s, froude, mu_eq_over_mu0 and uniform_froude (members
+whose folders are gone; other columns may be empty), one box per dp and asked; a member given twice, a value out of
+range, or rows averaged over windows further apart than --window-tolerance-s (default 0.5 s) are refused.
 """
 import argparse
 import csv
@@ -397,6 +398,9 @@ def box_plots(table, png, source):
     """Fr and mu_eq/mu0 against phi, one box per (dp, asked) group, with the uniform flow's values (mu_eq/mu0 = 1
     by eq. 21) as the phi = 0 reference: every row must give the same uniform Fr (the same scene)."""
     references = [r["uniform_froude"] for r in table]
+    if not all(math.isfinite(f) for f in references):
+        fail("%s: a member has no uniform flow (uniform_froude nan: a channel without slope or belt), so no reference"
+             % source)
     if max(references) > 1.001 * min(references):
         fail("%s: the rows come from scenes with different uniform flows (Fr %g to %g)"
              % (source, min(references), max(references)))

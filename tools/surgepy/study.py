@@ -36,9 +36,10 @@ KIND_NAMES = {float: "a number", int: "an integer"}
 
 
 def _read_table(program, csv_path, types, header=None):
-    """The rows of a CSV table as (line, dict) pairs, the line where the row ends, which must have the columns of types ({column: float, int or str}) and in
-    each row a value there that the type reads (float: a number, nan included); with header, exactly these columns
-    in this order. Fails naming the file, and the line and column, otherwise."""
+    """The rows of a CSV table as (line, dict) pairs, line being where the row ends; the table must have the columns
+    of types ({column: float, int or str}) and in each row a value there that the type reads (float: a number, nan
+    included); with header, exactly these columns in this order. Fails naming the file, and the line and column,
+    otherwise."""
     try:
         with open(csv_path, newline="") as f:
             reader = csv.DictReader(f)
