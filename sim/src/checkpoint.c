@@ -10,11 +10,8 @@
  *             (version 4) angle at the last neighbour-list build [f64 each] |
  *             i32 contact count | keys[i64] lambda_n[f64] lambda_t[f64] (the contact solver's warm start) |
  *         (version 3, boulders) wall x_build[f64] y_build[f64] by wall id |
- *         (version 5, implicit scheme) pressure[f64] by particle id (the next step's p_n) |
- *             (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
- *                 (version 8) their drag stiffness and wetted fraction [f64 each] (the coupling's step limit) |
- *             (version 6) the last step's phi and the held multigrid hierarchies (step_implicit_write; version 7
- *             adds the last step's psi) |
+ *         (version 5 on) the scheme's own state, where it has one (the implicit scheme's:
+ *             scheme/implicit/implicit_checkpoint.c) |
  *         u64 state hash | (version 4) u64 FNV-1a of every byte before it, then the end of the file
  * The version 4 checksum covers what the state hash does not (the parameters, dt, first_dt, build positions, the
  * warm start): a checkpoint edited or damaged anywhere is refused, and so are bytes after its end. Versions 1 (no
@@ -99,51 +96,6 @@ static int read_wall_build_positions(FILE *f, surge_sim *sim)
     }
     free(by_id);
     return rc ? -1 : 0;
-}
-
-/* The implicit scheme's pressure by particle id: its next step starts from it */
-static int write_implicit_pressure(FILE *f, const surge_sim *sim)
-{
-    if (!sim->implicit_pressure_by_id)
-        return 0;
-    const boulder_set *b = &sim->boulders;
-    const size_t n = (size_t)b->count * sizeof(double);
-    return write_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)) |
-           (b->count > 0 ? write_all(f, b->step_ax, n) | write_all(f, b->step_ay, n) | write_all(f, b->step_ax_n, n) |
-                               write_all(f, b->step_ay_n, n) | write_all(f, b->drag_stiffness, n) |
-                               write_all(f, b->wetted, n)
-                         : 0) |
-           step_implicit_write(f, sim);
-}
-
-/* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit (and had
- * no boulders) */
-static int read_implicit_pressure(FILE *f, surge_sim *sim, uint32_t version)
-{
-    if (!sim->implicit_pressure_by_id || version < 5)
-        return 0;
-    if (read_all(f, sim->implicit_pressure_by_id, (size_t)sim->count * sizeof(double)))
-        return -1;
-    for (int i = 0; i < sim->count; i++) /* outside the state hash: finite and not absurd (1e12 Pa) */
-        if (!(fabs(sim->implicit_pressure_by_id[i]) < 1e12))
-            return -1;
-    boulder_set *b = &sim->boulders;
-    const size_t n = (size_t)b->count * sizeof(double);
-    if (b->count > 0 && (read_all(f, b->step_ax, n) || read_all(f, b->step_ay, n) || read_all(f, b->step_ax_n, n) ||
-                         read_all(f, b->step_ay_n, n)))
-        return -1;
-    for (int i = 0; i < b->count; i++) /* outside the state hash too: finite and not absurd (1e6 m/s^2) */
-        if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
-              fabs(b->step_ay_n[i]) < 1e6))
-            return -1;
-    if (b->count > 0 && version >= 8) {
-        if (read_all(f, b->drag_stiffness, n) || read_all(f, b->wetted, n))
-            return -1;
-        for (int i = 0; i < b->count; i++) /* outside the state hash: finite, not negative, not absurd */
-            if (!(b->drag_stiffness[i] >= 0 && b->drag_stiffness[i] < 1e12 && b->wetted[i] >= 0 && b->wetted[i] <= 2))
-                return -1;
-    }
-    return version >= 6 ? step_implicit_read(f, sim, version) : 0;
 }
 
 static int write_boulders(FILE *f, const boulder_set *b)
@@ -247,7 +199,8 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
              write_all(f, &lists_built, 4) | write_all(f, sim->neighbours.x_build + w, nf * sizeof(double)) |
              write_all(f, sim->neighbours.y_build + w, nf * sizeof(double)) |
-             write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) | write_implicit_pressure(f, sim) |
+             write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) |
+             (sim->scheme->checkpoint_write ? sim->scheme->checkpoint_write(f, sim) : 0) |
              write_all(f, &hash, 8);
     free(params_text);
     uint64_t checksum = 0;
@@ -344,9 +297,8 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "%s: truncated or corrupt wall build positions", path);
         goto fail;
     }
-    if (read_implicit_pressure(f, sim, version)) {
-        snprintf(err, err_len, "%s: truncated or corrupt implicit-scheme state (pressure, disc accelerations or "
-                 "multigrid hierarchies)", path);
+    if (sim->scheme->checkpoint_read && sim->scheme->checkpoint_read(f, sim, version)) {
+        snprintf(err, err_len, "%s: truncated or corrupt %s-scheme state", path, sim->scheme->name);
         goto fail;
     }
     if (read_all(f, &hash, 8)) {

@@ -19,7 +19,7 @@ static surge_health_check check_particle(const surge_sim *sim, int a, double *va
     /* weakly-compressible SPH holds only well below c0: a particle past it is a blow-up, caught in the step it
      * happens (a disc-laden surge's particle went from 4 to 2141 m/s in one step at c0 = 78 m/s, 2026-11-25) */
     const double speed2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
-    if (p->numerics.scheme == SURGE_SCHEME_EXPLICIT && speed2 > sim->derived.c0_mps * sim->derived.c0_mps) {
+    if (!sim->scheme->incompressible && speed2 > sim->derived.c0_mps * sim->derived.c0_mps) {
         *value = sqrt(speed2);
         return SURGE_CHECK_SPEED;
     }

@@ -106,7 +106,7 @@ static int write_diagnostics(const surge_sim *sim, run_outputs *o, char *err, si
     if (fprintf(o->csv, "%.9g,%lld,%.6g,%.9g,%.6g,%.6g,%.9g,%.6g,%.6g", d.time_s, (long long)d.step, d.dt_s,
                 d.kinetic_energy_jpm, d.max_speed_mps, d.max_density_deviation, d.fluid_volume_m2, d.mean_vx_mps,
                 d.bottom_wall_speed_mps) < 0 ||
-        (surge_sim_params(sim)->numerics.scheme == SURGE_SCHEME_IMPLICIT &&
+        (surge_sim_reports_solves(sim) &&
          fprintf(o->csv, ",%d,%.3g,%d,%.3g", d.pressure_iterations, d.pressure_residual, d.viscous_iterations,
                  d.viscous_residual) < 0) ||
         fputc('\n', o->csv) == EOF || fflush(o->csv) != 0) {
@@ -304,7 +304,7 @@ surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *e
         }
     }
     const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
-    o.csv = open_series(&o, "diagnostics.csv", p->numerics.scheme == SURGE_SCHEME_IMPLICIT
+    o.csv = open_series(&o, "diagnostics.csv", surge_sim_reports_solves(sim)
                         ? "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
                           "mean_vx_mps,bottom_wall_speed_mps,pressure_iterations,pressure_residual,"
                           "viscous_iterations,viscous_residual"

@@ -236,11 +236,11 @@ static int allocate_state(surge_sim *s, int n)
  * of the rows above (rho0 g_n dp per row, half for its own) through the Tait inverse, and moves *y from row
  * r - 1's height (0 before row 0) to row r's. Rows sit dp rho0 / rho apart, so that each particle's area m / rho
  * is the area the lattice gives it and the kernel sum starts consistent with the density (docs/method.md). The
- * implicit scheme's fluid is incompressible: rows dp apart at rho0. */
+ * fluid of an incompressible scheme starts in rows dp apart at rho0. */
 static double fluid_row(const surge_sim *s, long rows, long r, double g_normal, double *y)
 {
     const double dp = s->params.numerics.dp_m;
-    if (s->params.numerics.scheme == SURGE_SCHEME_IMPLICIT) { /* incompressible: every row at rho0, dp apart */
+    if (s->scheme->incompressible) { /* incompressible: every row at rho0, dp apart */
         *y = r == 0 ? 0.5 * dp : *y + dp;
         return s->rho0;
     }

@@ -20,7 +20,7 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
                sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
         break;
     case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
-        if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT) { /* no speed of sound: below */
+        if (sim->scheme->incompressible) { /* no speed of sound: below */
             coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.h_m;
             break;
         }
@@ -31,11 +31,11 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
     default: return;
     }
     double dx = -coef * sim->grad_c_x[a], dy = -coef * sim->grad_c_y[a];
-    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT && p->shifting.form == SURGE_SHIFT_LIND && sim->near_surface[a]) {
-        /* the implicit scheme's Lind form (Lind et al. 2012): dr = -(A_L/2) h^2 grad C per step, and in the free-surface
-         * layer only along the surface, where nothing else keeps the particles apart (their pressure is 0). The
-         * surface's normal is the neighbours' grad C averaged: the particle's own is the shift's direction, so
-         * projecting on it would leave nothing (as it did before 2026-11-26, eleventh session) */
+    if (sim->scheme->incompressible && p->shifting.form == SURGE_SHIFT_LIND && sim->near_surface[a]) {
+        /* an incompressible scheme's Lind form (Lind et al. 2012): dr = -(A_L/2) h^2 grad C per step, and in the
+         * free-surface layer only along the surface, where nothing else keeps the particles apart (their pressure is 0).
+         * The surface's normal is the neighbours' grad C averaged: the particle's own is the shift's direction, so
+         * projecting on it would leave nothing */
         const double along = dx * sim->surface_nx[a] + dy * sim->surface_ny[a];
         dx -= along * sim->surface_nx[a], dy -= along * sim->surface_ny[a];
     }

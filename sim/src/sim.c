@@ -1,5 +1,5 @@
-/* The solver: scene set-up, the choice of time-stepping scheme (step_explicit.c, step_implicit.c), snapshots,
- * diagnostics and the state hash. */
+/* The solver's public interface: scene set-up, the time-stepping scheme (scheme/scheme.h), snapshots, diagnostics and
+ * the state hash. */
 #include <limits.h>
 #include <math.h>
 #include <stdlib.h>
@@ -42,6 +42,7 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->params = *params;
     sim->params.walls.layers = surge_params_wall_layers(params); /* resolve the automatic value */
     const surge_params *p = &sim->params;
+    sim->scheme = scheme_of(p);
     const double dp = p->numerics.dp_m;
     sim->derived.h_m = p->numerics.ch * sqrt(2.0) * dp;
     sim->derived.expected_speed_mps = scene_expected_speed(p);
@@ -67,9 +68,7 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     sim->second_row_kernel_ratio = lattice_kernel_sum(&sim->kernel, dp, 1) / sim->lattice_kernel_sum;
     for (int k = 0; k < SURGE_KERNEL_ROWS; k++)
         sim->row_kernel_ratio[k] = lattice_kernel_sum(&sim->kernel, dp, k) / sim->lattice_kernel_sum;
-    sim->list_lookahead_s = p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
-                            : 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
-                                                                : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
+    sim->list_lookahead_s = sim->scheme->lookahead_s(sim);
     update_body_force(sim);
     if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0 ||
         neighbours_init(sim, err, err_len) != 0) {
@@ -78,14 +77,9 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
     }
     sim->derived.wall_count = sim->wall_count;
     sim->derived.fluid_count = sim->count - sim->wall_count;
-    if (p->numerics.scheme == SURGE_SCHEME_IMPLICIT) {
-        if (!(sim->implicit_pressure_by_id = calloc((size_t)sim->count, sizeof *sim->implicit_pressure_by_id))) {
-            snprintf(err, err_len, "out of memory for the implicit scheme's pressure");
-            surge_sim_destroy(sim);
-            return NULL;
-        }
-        for (int a = sim->wall_count; a < sim->count; a++) /* ids are the indices until the first sort */
-            sim->implicit_pressure_by_id[sim->id[a]] = sim->pressure[a];
+    if (sim->scheme->create && sim->scheme->create(sim, err, err_len) != 0) {
+        surge_sim_destroy(sim);
+        return NULL;
     }
     sim->derived.boulder_count = sim->boulders.count;
     sim->derived.smallest_boulder_radius_m = INFINITY;
@@ -111,8 +105,8 @@ void surge_sim_destroy(surge_sim *sim)
                       sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
-    step_implicit_free(sim);
-    free(sim->implicit_pressure_by_id);
+    if (sim->scheme_data)
+        sim->scheme->destroy(sim);
     grid_free(&sim->grid);
     neighbours_free(&sim->neighbours);
     boulders_free(&sim->boulders);
@@ -131,7 +125,7 @@ void sim_restore_step_start(surge_sim *sim)
 
 int surge_sim_step(surge_sim *sim)
 {
-    return sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT ? step_implicit(sim) : step_explicit(sim);
+    return sim->scheme->step(sim);
 }
 
 double surge_sim_time(const surge_sim *sim) { return sim->time_s; }
@@ -161,6 +155,8 @@ int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, cha
     return 0;
 }
 
+bool surge_sim_reports_solves(const surge_sim *sim) { return sim->scheme->reports_solves; }
+
 double surge_sim_expected_speed_mps(const surge_sim *sim) { return scene_expected_speed(&sim->params); }
 
 int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
@@ -171,7 +167,7 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
     snap->time_s = sim->time_s;
     snap->dt_s = sim->dt_s;
     const real rho0 = (real)sim->rho0, b_pa = (real)sim->b_pa;
-    const int implicit = sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT;
+    const int solved_pressure = sim->scheme->incompressible;
     for (int i = 0; i < sim->count; i++) {
         const int k = sim->id[i];
         snap->x_m[k] = surge_sim_wrapped_x(sim, sim->x[i]);
@@ -179,8 +175,8 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
         snap->vx_mps[k] = (float)sim->vx[i];
         snap->vy_mps[k] = (float)sim->vy[i];
         snap->density_kgpm3[k] = (float)sim->rho[i];
-        /* the implicit scheme's pressure is its solve's (walls: their mirror), not the equation of state's */
-        snap->pressure_pa[k] = implicit ? (float)sim->pressure[i] : (float)tait_pressure(sim->rho[i], rho0, b_pa);
+        /* an incompressible scheme's pressure is its solve's (walls: their mirror), not the equation of state's */
+        snap->pressure_pa[k] = solved_pressure ? (float)sim->pressure[i] : (float)tait_pressure(sim->rho[i], rho0, b_pa);
         snap->kind[k] = sim->kind[k];
         snap->id[k] = k;
     }
@@ -223,8 +219,8 @@ surge_diagnostics surge_sim_diagnostics(const surge_sim *sim)
     d.max_density_deviation = dev;
     d.fluid_volume_m2 = vol;
     d.mean_vx_mps = sim->count > sim->wall_count ? sum_vx / (sim->count - sim->wall_count) : 0;
-    d.pressure_iterations = sim->pressure_iterations, d.viscous_iterations = sim->viscous_iterations;
-    d.pressure_residual = sim->pressure_residual, d.viscous_residual = sim->viscous_residual;
+    if (sim->scheme->diagnostics)
+        sim->scheme->diagnostics(sim, &d);
     return d;
 }
 

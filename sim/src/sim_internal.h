@@ -9,6 +9,7 @@
 #include "kernel.h"
 #include "lanes.h"
 #include "precision.h"
+#include "scheme/scheme.h"
 #include "surge/sim.h"
 
 /* Which wall a wall particle belongs to. WALL_CORNER is the bed under the upstream wall: it moves with the belt
@@ -162,10 +163,8 @@ struct surge_sim {
     surge_health health;
 
     double list_lookahead_s;       /* how far ahead of a step's start its force evaluations reach (neighbours.c) */
-    struct implicit_work *implicit; /* the implicit scheme's arrays (step_implicit.c); NULL for the explicit one */
-    double *implicit_pressure_by_id; /* implicit scheme: the fluid's pressure by particle id (checkpointed) */
-    int32_t pressure_iterations, viscous_iterations; /* the implicit scheme's last solves */
-    double pressure_residual, viscous_residual;
+    const time_scheme *scheme;    /* the time-stepping scheme (scheme/scheme.h) */
+    void *scheme_data;             /* and its own state */
 };
 
 /* x wrapped into [0, period) in a periodic domain (positions are wrapped only at neighbour-list builds) */
@@ -177,22 +176,16 @@ static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
     return x;
 }
 
-/* The contact distance of the scheme in use (m): no step or shift ends closer to a wall face (the explicit scheme's
- * face repulsion acts within it) */
+/* The contact distance of the scheme in use (m): no step or shift ends closer to a wall face */
 static inline double sim_contact_reach_m(const surge_sim *sim)
 {
-    const surge_params *p = &sim->params;
-    return (p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? p->implicit.contact_reach_dp
-                                                         : p->walls.face_repulsion_reach_dp) * p->numerics.dp_m;
+    return sim->scheme->contact_reach_dp(&sim->params) * sim->params.numerics.dp_m;
 }
 
-/* The neighbour lists' skin (m). The implicit scheme's lists have none: its step moves the fastest particle 0.1-0.35 h,
- * past half of any skin, so its lists are built at every step anyway, and a skin's pairs beyond the kernel's support
- * only cost (12 % of a step on the Freydier front at 0.2 h; docs/method.md) */
+/* The neighbour lists' skin (m) of the scheme in use */
 static inline double sim_neighbour_skin_m(const surge_sim *sim)
 {
-    return sim->params.numerics.scheme == SURGE_SCHEME_IMPLICIT ? 0.0
-                                                                 : sim->params.numerics.neighbour_skin_h * sim->derived.h_m;
+    return sim->scheme->neighbour_skin_h(&sim->params) * sim->derived.h_m;
 }
 
 /* scene.c */
@@ -302,16 +295,6 @@ void shifting_compute(surge_sim *sim, double dt_s);
 
 /* sim.c: back to the state saved at the start of the step (x_n, ..., rho_n) */
 void sim_restore_step_start(surge_sim *sim);
-
-/* step_explicit.c, step_implicit.c: one step of each scheme (surge_sim_step); step_implicit_free releases the
- * implicit scheme's arrays */
-int step_explicit(surge_sim *sim);
-int step_implicit(surge_sim *sim);
-void step_implicit_free(surge_sim *sim);
-/* the implicit scheme's state outside the particles (the last step's phi and psi, the held multigrid hierarchies) in a
- * checkpoint (version: the checkpoint's); -1 on a write or read error or a corrupt block */
-int step_implicit_write(FILE *f, const surge_sim *sim);
-int step_implicit_read(FILE *f, surge_sim *sim, uint32_t version);
 
 /* health.c */
 int health_check(surge_sim *sim);

@@ -80,13 +80,15 @@ typedef struct surge_diagnostics {
     double fluid_volume_m2;        /* sum m/rho (per metre of width) */
     double mean_vx_mps;            /* fluid mean x velocity */
     double bottom_wall_speed_mps;  /* current belt velocity */
-    int32_t pressure_iterations;   /* implicit scheme, last step: iterations of the pressure solve (0: explicit) */
+    int32_t pressure_iterations;   /* a scheme with linear solves, last step: iterations of the pressure solve (else 0) */
     int32_t viscous_iterations;    /* and of the viscous solve */
     double pressure_residual;      /* relative residuals the solves reached */
     double viscous_residual;
 } surge_diagnostics;
 
 surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
+/* Whether the scheme in use solves linear systems: the diagnostics' iterations and residuals mean something */
+bool surge_sim_reports_solves(const surge_sim *sim);
 
 /* 64-bit FNV-1a hash of the fluid's positions, velocities and densities, the boulders' state, step and time:
  * equal hashes mean bit-identical states. */

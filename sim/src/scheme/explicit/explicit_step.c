@@ -4,9 +4,10 @@
 #include <string.h>
 
 #include "sim_internal.h"
+#include "scheme/scheme.h"
 
 /* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7), from the largest acceleration squared and viscous
- * speed over the fluid (reduced in step_explicit's predictor region) */
+ * speed over the fluid (reduced in explicit_step's predictor region) */
 static double variable_dt(const surge_sim *sim, double max_acc2, double max_visc_mps)
 {
     const surge_params *p = &sim->params;
@@ -34,7 +35,7 @@ static void evaluate_rates(surge_sim *sim, int corrector)
     boulders_fluid_forces(sim, NULL);
 }
 
-int step_explicit(surge_sim *sim)
+static int explicit_step(surge_sim *sim)
 {
     const int first = sim->wall_count, n = sim->count;
     const double t_n = sim->time_s;
@@ -133,3 +134,22 @@ int step_explicit(surge_sim *sim)
     return 0;
 }
 
+
+static double explicit_contact_reach_dp(const surge_params *p) { return p->walls.face_repulsion_reach_dp; }
+static double explicit_neighbour_skin_h(const surge_params *p) { return p->numerics.neighbour_skin_h; }
+
+/* The corrector evaluates the forces half a step ahead, and a step is at most C_CFL h / c0 */
+static double explicit_lookahead_s(const surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    return 0.5 * (p->numerics.dt_fixed_s > 0 ? p->numerics.dt_fixed_s
+                                             : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
+}
+
+const time_scheme scheme_explicit = {
+    .name = "explicit",
+    .contact_reach_dp = explicit_contact_reach_dp,
+    .neighbour_skin_h = explicit_neighbour_skin_h,
+    .lookahead_s = explicit_lookahead_s,
+    .step = explicit_step,
+};

@@ -1,0 +1,187 @@
+/* The implicit scheme's private header: its work arrays and the functions its files share (implicit_step.c has the
+ * step and the scheme's description). */
+#ifndef SURGE_IMPLICIT_H
+#define SURGE_IMPLICIT_H
+
+#include <stdbool.h>
+#include <stdio.h>
+
+#include "amg.h"
+#include "lanes.h"
+#include "pair_terms.h"
+#include "sim_internal.h"
+
+#define DOT_BLOCK 4096        /* dot products: partial sums over fixed blocks, added in order */
+#define MIN_SHEPARD_SUM 0.1   /* a ghost node with less fluid around it is dry (as boundary.c) */
+#define MIN_DETERMINANT 1e-3  /* below it the first-order interpolation falls back to Shepard's (as boundary.c) */
+#define CONTACT_ROUNDING_DP 1e-4 /* a gap this close to the contact distance (dp) is at it */
+#define SPARSE_KEEP 0.3       /* the multigrid's stand-in keeps entries at least this fraction of the row's largest:
+                               * on a lattice the 20 neighbours within 2.3 dp at C_h 1.8, the 8 within 1.9 dp at
+                               * C_h 1.3 (0.2 and 0.5 were slower on the Freydier front, docs/method.md) */
+
+/* A multigrid hierarchy kept over steps (implicit.multigrid_rebuild_steps; checkpointed) */
+typedef struct held_multigrid {
+    amg_system *amg;
+    int64_t built_step;       /* the step whose stand-in it was built on */
+    int32_t base_iterations;  /* its solve's iterations at that step (-1 until then) */
+    int32_t last_iterations;  /* and at the last step */
+} held_multigrid;
+
+enum { MULTIGRID_VISCOUS, MULTIGRID_PRESSURE };
+
+/* The vectors a hierarchy's V-cycle takes at once: the viscous solve's two velocity components, the pressure */
+static inline int multigrid_blocks(int which) { return which == MULTIGRID_VISCOUS ? 2 : 1; }
+
+typedef struct implicit_work {
+    size_t fluid_cap, wall_cap, mirror_cap, ghost_cap; /* entries the per-entry arrays hold */
+    real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
+    real *wall_w, *wall_gx, *wall_gy;    /* per wall-list entry */
+    real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
+    real *mirror_nw;                     /* and in the derivative along the ghost's normal there */
+    real *ghost_w, *ghost_nw;            /* the same for a disc particle's ghost list (ghost_span) */
+    double *mirror_vx, *mirror_vy;       /* per wall: the wall velocity no-slip mirrors about (implicit_mirror_velocities) */
+    double *disc_reference_pa;           /* per disc: the mean pressure of its particles (implicit_disc_forces) */
+    int disc_cap;
+    real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (implicit_assemble_pressure) */
+    double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
+    held_multigrid multigrid[2];         /* implicit.preconditioner = amg: the viscous and the pressure hierarchy */
+    amg_system *amg;                     /* this solve's: one of multigrid[] */
+    int pressure_by_multigrid;           /* this step's pressure solves use amg (there is a free surface) */
+    int vcycle_blocks;                   /* implicit_solve()'s preconditioner: 0 the diagonal, else one V-cycle of amg's
+                                          * hierarchy on each of this many blocks of nf unknowns */
+    int vcycle_honours_fixed;            /* and the free-surface rows the identity (the pressure's) */
+    int64_t *matrix_first;               /* amg: the sparse stand-in, row i's entries from matrix_first[i] */
+    int32_t *matrix_col;
+    double *matrix_val;
+    size_t matrix_cap;
+    uint8_t *dry;                        /* per wall: its ghost node sees (almost) no fluid */
+    real *wetness;                       /* per wall: 0 (its ghost node above the fluid) to 1 (in it) */
+    real *immersion;                     /* per wall: 0 (its ghost node's kernel not full) to 1 (inside the fluid) */
+    double *wall_sum;                    /* per fixed wall: sum of dp^2 W of the walls at its ghost node (fixed) */
+    int wall_sum_ready;
+    double *minv_xx, *minv_xy, *minv_yy; /* per fluid particle: inverse kernel moment matrix (identity if singular) */
+    double *kernel_ratio;                /* sum_b m W_ab / (rho0 lattice sum) */
+    double *weighted_rx, *weighted_ry;   /* sum_b w_ab r_ab: the Laplacian's first-moment error */
+    double *grad_x, *grad_y;             /* scratch: the pressure gradient inside the operator */
+    double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
+    uint8_t *fixed;                      /* free-surface particle: p = 0 */
+    uint8_t *near_disc;                  /* per fluid particle: a disc particle within the kernel's support */
+    double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
+                                          * free surface, where that can be read (else 0) */
+    double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */
+    double *neumann_pa;                  /* per wall: p_w - p_ghost, the Neumann offset of the field being set */
+    double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
+    double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
+    double *phi_by_id, *psi_by_id;       /* per particle id: the last step's phi and psi, the next one's guesses */
+    double *dvx_by_id, *dvy_by_id;       /* per particle id: the last step's v* - v_n, the next viscous solve's guess */
+    double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
+    double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (implicit_part_close_pairs) */
+    double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
+    double *pressure_by_id;              /* per particle id: the fluid's pressure, the next step's p_n (checkpointed) */
+    int32_t pressure_iterations, viscous_iterations; /* the last step's solves (diagnostics) */
+    double pressure_residual, viscous_residual;
+} implicit_work;
+
+/* The scheme's private data */
+static inline implicit_work *implicit_of(const surge_sim *sim) { return sim->scheme_data; }
+
+typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
+enum { AFFINE, LINEAR_FROM_ZERO, LINEAR_FROM_GUESS }; /* implicit_solve()'s operator and first guess */
+
+/* Whether the scene is large enough for the solves' loops to run on several threads: a BiCGSTAB iteration is ten or
+ * so short loops, and below this size waking the other threads at each costs more than it saves (the 800-particle
+ * tank: 0.53 s on one thread, 4.75 s on two with passive waiting; docs/method.md) */
+#define WIDE_FLUID_PARTICLES 20000
+static inline int wide(const surge_sim *sim) { return sim->count - sim->wall_count >= WIDE_FLUID_PARTICLES; }
+
+/* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
+ * ghost turns with the disc); r_ghost - r_j = dx0[e] - moved_j + shift, and weight[e] the entry's mirror weight */
+typedef struct ghost_span {
+    int64_t from, to;
+    const int32_t *index;
+    const real *dx0, *dy0;
+    real *weight, *normal_weight;
+    real shift_x, shift_y;
+} ghost_span;
+
+static inline ghost_span ghost_span_of(const surge_sim *sim, int kw)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    implicit_work *w = implicit_of(sim);
+    if (sim->wall_of[kw] != WALL_BOULDER)
+        return (ghost_span){nl->wall_fluid_first[kw], nl->wall_fluid_first[kw + 1], nl->wall_fluid_index,
+                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, w->mirror_nw, 0, 0};
+    return (ghost_span){nl->ghost_fluid_first[kw], nl->ghost_fluid_first[kw + 1], nl->ghost_fluid_index,
+                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w, w->ghost_nw,
+                        nl->moved_x[kw] + (sim->ghost_dx[kw] - nl->ghost_dx_build[kw]),
+                        nl->moved_y[kw] + (sim->ghost_dy[kw] - nl->ghost_dy_build[kw])};
+}
+
+/* The interpolated value at wall kw's ghost node of the fluid field x */
+static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
+{
+    const ghost_span g = ghost_span_of(sim, kw);
+    double sum[PAIR_LANES] = {0};
+    for (int64_t e = g.from; e < g.to; e += PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++)
+            sum[l] += g.weight[e + l] * x[g.index[e + l] - sim->wall_count];
+    return lanes_total(sum);
+}
+
+/* The fluid's velocity interpolated at wall kw's ghost node */
+static inline void ghost_velocity(const surge_sim *sim, int kw, double *vx, double *vy)
+{
+    const ghost_span g = ghost_span_of(sim, kw);
+    double sx = 0, sy = 0;
+    for (int64_t e = g.from; e < g.to; e++)
+        sx += g.weight[e] * sim->vx[g.index[e]], sy += g.weight[e] * sim->vy[g.index[e]];
+    *vx = sx, *vy = sy;
+}
+
+/* The derivative of the velocity's component along the ghost's normal n (from the wall into the fluid), along n,
+ * at the wall's ghost node: n . grad (v . n), from the first-order interpolation's gradient rows (implicit_geometry) */
+static inline double ghost_normal_strain(const surge_sim *sim, int kw)
+{
+    const ghost_span g = ghost_span_of(sim, kw);
+    const double glen = sqrt((double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw]);
+    const double nx = sim->ghost_dx[kw] / glen, ny = sim->ghost_dy[kw] / glen;
+    double s = 0;
+    for (int64_t e = g.from; e < g.to; e++)
+        s += g.normal_weight[e] * (sim->vx[g.index[e]] * nx + sim->vy[g.index[e]] * ny);
+    return s;
+}
+
+/* work.c */
+int implicit_reserve_work(surge_sim *sim); /* sizes the work arrays for the current lists; -1 when out of memory */
+int implicit_create(surge_sim *sim, char *err, size_t err_len);
+void implicit_destroy(surge_sim *sim);
+/* implicit_checkpoint.c */
+int implicit_checkpoint_write(FILE *f, const surge_sim *sim);
+int implicit_checkpoint_read(FILE *f, surge_sim *sim, uint32_t version);
+/* geometry.c */
+void implicit_mirror_velocities(surge_sim *sim);
+void implicit_geometry(surge_sim *sim);
+/* operators.c */
+void implicit_viscous_operator(surge_sim *sim, const double *x, double *out);
+void implicit_wall_pressures(surge_sim *sim, const double *x, const double *offset_pa);
+void implicit_wall_offsets_to_rhs(surge_sim *sim, const double *offset_pa);
+void implicit_pressure_gradient(surge_sim *sim, const double *x);
+void implicit_assemble_pressure(surge_sim *sim);
+int implicit_assemble_sparse(surge_sim *sim, const double *diag, const real *fluid_coef, double fluid_scale,
+                             const real *wall_coef, double wall_scale, int honour_fixed);
+void implicit_pressure_operator(surge_sim *sim, const double *x, double *out);
+/* krylov.c */
+double implicit_dot(const implicit_work *w, const double *a, const double *b, int n);
+int implicit_solve(surge_sim *sim, affine_operator op, int n, int homogeneous, double tolerance, int max_iterations,
+                   double *residual);
+/* multigrid.c */
+int implicit_multigrid(const surge_sim *sim, bool viscous);
+int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const double *diag, const real *fluid_coef,
+                             double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed);
+void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
+int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
+/* coupling.c */
+void implicit_part_close_pairs(surge_sim *sim);
+void implicit_disc_forces(surge_sim *sim);
+
+#endif

@@ -1,0 +1,460 @@
+/* The implicit scheme (numerics.scheme = implicit): an incompressible projection with implicit viscosity for slow
+ * viscous flows, whose time step follows the flow's own speed instead of the speed of sound (docs/method.md,
+ * "The implicit scheme"). An incremental pressure-correction step (Goda 1979; Cummins & Rudman 1999 for SPH) from
+ * t_n, everything evaluated at the step's start positions:
+ *  1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure (so a
+ *     fluid at rest stays at rest), no-slip walls by their mDBC mirror 2 v_wall - v_ghost;
+ *  2. -lap phi = -(rho0/dt) div v*, phi = 0 on free-surface particles and, at a wall particle, phi_w = phi_ghost
+ *     with the wall's normal velocity in div v* (the Neumann condition that leaves no velocity through the wall);
+ *     then, with the same operator, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2, the rest-density correction (the
+ *     source after Asai et al. 2012), which moves the particles and not their velocities;
+ *  3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi, r_n+1 = r_n + dt v_n+1 - dt^2 grad psi / rho0 + the
+ *     shift.
+ * The pair coefficients of a step are computed once into arrays along the neighbour lists; the solves (BiCGSTAB,
+ * matrix-free) then only gather, preconditioned by the diagonal or by a multigrid V-cycle on a sparse stand-in of
+ * the operator (implicit.preconditioner). Every particle gathers in list order and every dot
+ * product sums in fixed blocks, so the results do not depend on the thread count. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "implicit.h"
+
+/* dt = min(cfl h / u_max, force_cfl sqrt(h / |g|)) from the velocities at the step's start */
+static double implicit_dt(const surge_sim *sim)
+{
+    const surge_params *p = &sim->params;
+    if (p->numerics.dt_fixed_s > 0)
+        return p->numerics.dt_fixed_s;
+    double max_v2 = 0;
+    #pragma omp parallel for schedule(static) reduction(max : max_v2) if (wide(sim))
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
+        max_v2 = v2 > max_v2 ? v2 : max_v2;
+    }
+    const boulder_set *b = &sim->boulders;
+    for (int i = 0; i < b->count; i++) { /* a disc's surface moves with it */
+        const double v = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
+        max_v2 = fmax(max_v2, v * v);
+    }
+    const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
+    double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
+    /* the discs' coupling: a disc's drag stiffness k (its last step's) against its mass and added mass
+     * (boulders_advance_implicit; docs/method.md) */
+    for (int i = 0; i < b->count && p->implicit.disc_coupling > 0; i++)
+        if (b->drag_stiffness[i] > 0) {
+            const double added = p->implicit.added_mass * sim->rho0 * SURGE_PI * b->radius[i] * b->radius[i] * b->wetted[i];
+            dt = fmin(dt, p->implicit.disc_coupling * (b->mass[i] + added) / b->drag_stiffness[i]);
+        }
+    if (isfinite(dt))
+        return dt;
+    /* no gravity and at rest: the walls' speeds set the scale */
+    return p->implicit.cfl * h / fmax(fabs(p->walls.bottom_speed_mps) + fabs(p->walls.top_speed_mps), 1e-12);
+}
+
+static void fail_solve(surge_sim *sim, const char *what, int iterations, double residual, double t_n)
+{
+    sim->health = (surge_health){.check = SURGE_CHECK_SOLVER, .particle_id = -1, .step = sim->step + 1,
+                                 .time_s = t_n, .value = residual};
+    snprintf(sim->health.message, sizeof sim->health.message,
+             "health check failed: %s at step %lld, t = %.9g s (the %s solve reached a relative residual of %.3g "
+             "in %d iterations; implicit.max_iterations = %d, tolerance %g; try a smaller implicit.cfl)",
+             surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, t_n, what, residual,
+             iterations, sim->params.implicit.max_iterations,
+             what[0] == 'v' ? sim->params.implicit.viscous_tolerance
+             : what[0] == 'r' ? sim->params.implicit.density_tolerance : sim->params.implicit.pressure_tolerance);
+}
+
+/* Fluid particle i's per-lane partial sums of the velocity gradient G = -sum_b V_b f v_ab (x) r_ab and of its
+ * Laplacian weights (lanes.h), added in lane order at the end */
+typedef struct gradient_lanes {
+    double xx[PAIR_LANES], xy[PAIR_LANES], yx[PAIR_LANES], yy[PAIR_LANES], w[PAIR_LANES];
+} gradient_lanes;
+
+/* The pairs of list entries from..to of a fluid particle with velocity (vxa, vya): its fluid list (neighbours at
+ * sim->vx, vy) or (walls) its wall list (walls at wall_x, wall_y) */
+static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim *sim, double vxa, double vya,
+                                                                 int64_t from, int64_t to, int walls, gradient_lanes *s)
+{
+    const implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const int32_t *restrict index = walls ? nl->wall_index : nl->fluid_index;
+    const real *restrict gx = walls ? w->wall_gx : w->fluid_gx, *restrict gy = walls ? w->wall_gy : w->fluid_gy;
+    const real *restrict weight = walls ? w->wall_w : w->fluid_w;
+    for (int64_t e0 = from; e0 < to; e0 += PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++) {
+            const int64_t e = e0 + l;
+            const int b = index[e];
+            const double dvx = vxa - (walls ? w->wall_x[b] : sim->vx[b]), dvy = vya - (walls ? w->wall_y[b] : sim->vy[b]);
+            s->xx[l] -= dvx * gx[e], s->xy[l] -= dvx * gy[e];
+            s->yx[l] -= dvy * gx[e], s->yy[l] -= dvy * gy[e];
+            s->w[l] += weight[e];
+        }
+}
+
+static int implicit_step(surge_sim *sim)
+{
+    const int first = sim->wall_count, n = sim->count, nf = n - first;
+    const double t_n = sim->time_s;
+    const surge_params *prm = &sim->params;
+    if (neighbours_update(sim) != 0 || implicit_reserve_work(sim) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
+        return -1;
+    }
+    implicit_work *w = implicit_of(sim);
+    const double dt = implicit_dt(sim);
+    sim->dt_s = dt;
+    if (sim->step == 0 && sim->first_dt_s == 0)
+        sim->first_dt_s = dt;
+    boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step (the discs':
+                                          * at its start; their fluid forces come after the step) */
+    #pragma omp parallel
+    {
+        interaction_prepare(sim, 0);
+        boundary_update(sim, 0); /* the walls' normals and depths (the contact rule) */
+    }
+    implicit_geometry(sim);
+    implicit_mirror_velocities(sim);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int a = first; a < n; a++) {
+        sim->x_n[a] = sim->x[a], sim->y_n[a] = sim->y[a];
+        sim->vx_n[a] = sim->vx[a], sim->vy_n[a] = sim->vy[a], sim->rho_n[a] = sim->rho[a];
+    }
+
+    /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure,
+     * from the guess v_n */
+    const double rho0 = sim->rho0, dt_nu = dt * prm->fluid.viscosity_m2ps;
+    const neighbour_lists *nl = &sim->neighbours;
+    double *by_id = implicit_of(sim)->pressure_by_id;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
+    /* the walls' p_n: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int kw = 0; kw < first; kw++)
+        w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
+    implicit_wall_pressures(sim, w->pressure_n, w->neumann_pa);
+    implicit_pressure_gradient(sim, w->pressure_n);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        double lane_w[PAIR_LANES] = {0}; /* per-lane partial sums (lanes.h) */
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++)
+                lane_w[l] += w->fluid_w[e + l];
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++)
+                lane_w[l] += w->wall_w[e + l];
+        const double sum_w = lanes_total(lane_w);
+        w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
+        w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
+        /* from v_n plus the last step's change: a slow flow's is much the same from step to step */
+        w->x[i] = sim->vx_n[a] + w->dvx_by_id[sim->id[a]], w->x[nf + i] = sim->vy_n[a] + w->dvy_by_id[sim->id[a]];
+        w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
+    }
+    double residual = 0;
+    int iterations = 0;
+    if (dt_nu > 0) {
+        /* by multigrid: one hierarchy for both components (the walls mirror each component on its own) */
+        if (implicit_multigrid(sim, true) &&
+            implicit_multigrid_setup(sim, MULTIGRID_VISCOUS, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0))
+            iterations = -2;
+        else {
+            w->vcycle_blocks = implicit_multigrid(sim, true) ? 2 : 0;
+            iterations = implicit_solve(sim, implicit_viscous_operator, 2 * nf, AFFINE, prm->implicit.viscous_tolerance,
+                               prm->implicit.max_iterations, &residual);
+            w->vcycle_blocks = 0;
+            if (implicit_multigrid(sim, true))
+                implicit_multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
+        }
+        w->viscous_iterations = iterations, w->viscous_residual = residual;
+        if (iterations == -2) {
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
+        if (iterations < 0) {
+            fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, t_n);
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
+    } else /* no viscosity: the operator is the identity */
+        memcpy(w->x, w->rhs, 2 * (size_t)nf * sizeof *w->x);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        sim->vx[a] = (real)w->x[i], sim->vy[a] = (real)w->x[nf + i];
+        w->dvx_by_id[sim->id[a]] = w->x[i] - sim->vx_n[a], w->dvy_by_id[sim->id[a]] = w->x[nf + i] - sim->vy_n[a];
+    }
+
+    /* 2. the correction phi: the walls' Neumann offsets from v* at their ghosts, the source from div v* and the
+     * density */
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int kw = 0; kw < first; kw++) {
+        /* the wall's own velocity: only its normal part matters, and the belt-wall corner's (mirrored through the
+         * corner point, its normal slanted) is the fixed upstream wall's, not the belt's */
+        const double wall_vx = w->mirror_vx[kw], wall_vy = w->mirror_vy[kw];
+        double gvx = wall_vx, gvy = wall_vy;
+        if (!w->dry[kw])
+            ghost_velocity(sim, kw, &gvx, &gvy);
+        /* a wall whose ghost node lies inside the fluid: the wall's phi is the ghost's plus the inhomogeneous
+         * Neumann offset, so that -(dt/rho0) dphi/dn takes the normal velocity at the wall's face away, that at the
+         * ghost less half the ghost's distance times its normal strain (the first-order interpolation's gradient:
+         * a flow that turns at the wall has none to take away, a column moving into it all of its own), and
+         * continuity sees the normal velocity continued linearly through the face, (v_g - v_w).n - |g| strain;
+         * where the free surface or a contact line cuts the ghost's kernel (its velocity extrapolated from a few
+         * particles), and by default everywhere (implicit.wall_neumann_offset 0): the wall's own normal velocity in
+         * the divergence, no offset; in between by the immersion (docs/method.md, "Walls": without the offset the
+         * first column against a wall sits compressed and below the bulk's pressure) */
+        const double immersed = prm->implicit.wall_neumann_offset * w->immersion[kw];
+        const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
+        const double into = ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]) / glen2;
+        const double strain = immersed > 0 ? ghost_normal_strain(sim, kw) : 0.0;
+        w->wall_x[kw] = gvx - ((1.0 - immersed) * into + immersed * strain) * sim->ghost_dx[kw];
+        w->wall_y[kw] = gvy - ((1.0 - immersed) * into + immersed * strain) * sim->ghost_dy[kw];
+        w->neumann_pa[kw] = -immersed * rho0 / dt * (into - 0.5 * strain) * glen2;
+    }
+    const double alpha = prm->implicit.density_correction, h = sim->derived.h_m;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        const double vxa = sim->vx[a], vya = sim->vy[a];
+        gradient_lanes lanes;
+        memset(&lanes, 0, sizeof lanes);
+        gradient_pairs(sim, vxa, vya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &lanes);
+        gradient_pairs(sim, vxa, vya, nl->wall_first[i], nl->wall_first[i + 1], 1, &lanes);
+        const double g_xx = lanes_total(lanes.xx), g_xy = lanes_total(lanes.xy), g_yx = lanes_total(lanes.yx);
+        const double g_yy = lanes_total(lanes.yy), sum_w = lanes_total(lanes.w);
+        /* div v = tr(G M^-1) */
+        const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
+        /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
+         * where that cannot be read (a partly dry wall in reach), a deficit is not an expansion and only an excess
+         * counts (clumped particles, which nothing else pushes apart where the pressure is near 0) */
+        const double compression = w->near_disc[i] ? fmax(0.0, w->kernel_ratio[i] - 1.0)
+                                   : !sim->near_surface[a] ? w->kernel_ratio[i] - 1.0
+                                   : w->expected_ratio[i] > 0 ? w->kernel_ratio[i] / w->expected_ratio[i] - 1.0
+                                   : fmax(0.0, w->kernel_ratio[i] - 1.0);
+        w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
+        w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v;
+        w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
+        /* the correction starts from the last step's: a steady flow's is much the same from step to step */
+        w->x[i] = w->fixed[i] ? 0.0 : w->phi_by_id[sim->id[a]];
+    }
+    implicit_assemble_pressure(sim);
+    /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
+     * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
+    int free_surface = 0;
+    for (int i = 0; i < nf && !free_surface; i++)
+        free_surface = w->fixed[i];
+    /* ... and, with a disc, need not be consistent either: the ghosts' normal velocities over a disc need not sum to
+     * zero. There the fluid takes the explicit scheme's compressibility, -lap phi + phi/(c0 dt)^2 (the Tait equation
+     * of state linearised, p = c0^2 (rho - rho0)): a source the incompressible equation cannot meet becomes a
+     * uniform pressure instead of a solve that does not converge (docs/method.md, "Closed domains") */
+    const double closed_kappa = free_surface ? 0.0 : 1.0 / (sim->derived.c0_mps * sim->derived.c0_mps * dt * dt);
+    if (!free_surface)
+        for (int i = 0; i < nf; i++)
+            w->pressure_diag[i] += closed_kappa, w->diag[i] += closed_kappa;
+    w->pressure_by_multigrid = implicit_multigrid(sim, false) && free_surface;
+    if (w->pressure_by_multigrid &&
+        implicit_multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1)) {
+        sim_restore_step_start(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    if (prm->implicit.wall_neumann_offset > 0)
+        implicit_wall_offsets_to_rhs(sim, w->neumann_pa);
+    iterations = implicit_pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
+    if (w->pressure_by_multigrid)
+        implicit_multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
+    w->pressure_iterations = iterations, w->pressure_residual = residual;
+    if (iterations < 0) {
+        fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
+        sim_restore_step_start(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    if (!free_surface) { /* the uniform part is no flow: the fluid's mean pressure keeps its start value */
+        const double mean = implicit_dot(w, w->x, NULL, nf) / nf;
+        for (int i = 0; i < nf; i++)
+            w->x[i] -= mean;
+    }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->phi_by_id[sim->id[first + i]] = w->x[i];
+    /* 2b. the rest-density correction psi, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2 with the same operator, moves
+     * the particles by -dt^2 grad psi / rho0 and leaves their velocities alone: a spacing error is not a flow, and
+     * in one equation with the divergence its kicks were 0.34 u_max in Poiseuille's start-up (docs/method.md) */
+    if (alpha > 0) {
+        memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
+        memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
+        /* from the last step's psi: a spacing error the last step left is corrected again */
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->x[i] = w->fixed[i] ? 0.0 : w->psi_by_id[sim->id[first + i]];
+        const int density_iterations = implicit_pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
+        if (density_iterations < 0) {
+            fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
+            sim_restore_step_start(sim);
+            boundary_wall_speeds(sim, t_n);
+            return -1;
+        }
+        w->pressure_iterations += density_iterations;
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->psi_by_id[sim->id[first + i]] = w->x[i];
+        implicit_wall_pressures(sim, w->x, NULL);
+        implicit_pressure_gradient(sim, w->x);
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++) {
+            /* plus a shift where the kernel sum says compressed, -2 w (rho_k/rho0 - 1) h^2 grad C with grad C =
+             * sum_b V_b grad W_ab (walls by their wetness): zero on a regular lattice and where the spacing is at
+             * rest or wider, it pushes apart particles that have closed on each other, also on the free surface,
+             * where psi is 0 (docs/method.md) */
+            const double compression = fmax(0.0, w->kernel_ratio[i] - 1.0);
+            double sx = 0, sy = 0;
+            if (compression > 0) {
+                for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                    sx += w->fluid_gx[e], sy += w->fluid_gy[e];
+                for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+                    const double wet = w->wetness[nl->wall_index[e]];
+                    sx += wet * w->wall_gx[e], sy += wet * w->wall_gy[e];
+                }
+            }
+            const double shift = 2.0 * prm->implicit.anti_clumping * compression * h * h;
+            w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i] - shift * sx;
+            w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i] - shift * sy;
+        }
+        memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
+    } else {
+        memset(w->density_dx, 0, (size_t)nf * sizeof *w->density_dx);
+        memset(w->density_dy, 0, (size_t)nf * sizeof *w->density_dy);
+    }
+    implicit_wall_pressures(sim, w->x, w->neumann_pa);
+
+    /* 3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi */
+    implicit_pressure_gradient(sim, w->x);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        const double p_new = w->fixed[i] ? 0.0 : w->pressure_n[i] + w->x[i];
+        by_id[sim->id[a]] = p_new;
+        sim->pressure[a] = (real)p_new;
+        w->pressure_n[i] = p_new;
+        w->x[i] = sim->vx[a] - dt / rho0 * w->grad_x[i];
+        w->x[nf + i] = sim->vy[a] - dt / rho0 * w->grad_y[i];
+        /* the density the spacing says in the bulk (an output; the scheme holds rho0); next to a disc only an
+         * excess (above) */
+        sim->rho[a] = (real)(sim->near_surface[a] ? rho0
+                             : w->near_disc[i] ? rho0 * fmax(1.0, w->kernel_ratio[i]) : rho0 * w->kernel_ratio[i]);
+    }
+    /* the walls' pressure for the outputs: p_n+1 continued hydrostatically, as the next step takes it */
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int kw = 0; kw < first; kw++)
+        sim->pressure[kw] = (real)(w->dry[kw] ? 0.0 : ghost_value(sim, kw, w->pressure_n) -
+                                   rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
+    const double face_reach_m = sim_contact_reach_m(sim);
+    /* a particle the contact rule on positions (below) left at the reach is in contact: its gap, read back in
+     * single precision, may come out a rounding either side of the reach */
+    const double contact_m = face_reach_m + CONTACT_ROUNDING_DP * prm->numerics.dp_m;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        double vx1 = w->x[i], vy1 = w->x[nf + i];
+        /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md); a
+         * disc takes the reaction */
+        const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
+        const int contact = sim->face_gap_m[a] < contact_m && approach_mps < 0;
+        if (contact)
+            vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
+        sim->face_push_x[a] = (real)(contact ? -approach_mps * sim->face_nx[a] / dt : 0.0);
+        sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
+        sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
+    }
+    if (prm->implicit.pair_distance_dp > 0)
+        implicit_part_close_pairs(sim);
+    else {
+        memset(w->pair_dx, 0, (size_t)nf * sizeof *w->pair_dx);
+        memset(w->pair_dy, 0, (size_t)nf * sizeof *w->pair_dy);
+    }
+    if (sim->boulders.count > 0)
+        implicit_disc_forces(sim);
+    #pragma omp parallel
+    shifting_compute(sim, dt);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int a = first; a < n; a++) {
+        double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first] + w->pair_dx[a - first];
+        double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
+        /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
+         * at the reach (the explicit scheme's face repulsion acts over many small steps; one large step needs the
+         * constraint itself; docs/method.md) */
+        const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -
+                                 dt * sim->face_vn_mps[a];
+        if (sim->face_gap_m[a] < prm->numerics.dp_m && gap_after < face_reach_m)
+            dx += (face_reach_m - gap_after) * sim->face_nx[a], dy += (face_reach_m - gap_after) * sim->face_ny[a];
+        sim->x[a] = sim->x_n[a] + dx;
+        sim->y[a] = sim->y_n[a] + dy;
+    }
+    if (sim->boulders.count > 0 && boulders_advance_implicit(sim, dt, prm->implicit.added_mass) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = t_n + dt};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
+        sim_restore_step_start(sim);
+        boulders_restore(sim);
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    sim->time_s = t_n + dt;
+    sim->step++;
+    if (health_check(sim) != 0) {
+        sim_restore_step_start(sim);
+        if (sim->boulders.count > 0)
+            boulders_restore_implicit(sim);
+        sim->time_s = t_n;
+        sim->step--;
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    return 0;
+}
+
+static double implicit_contact_reach_dp(const surge_params *p) { return p->implicit.contact_reach_dp; }
+
+/* No skin: the step moves the fastest particle 0.1-0.35 h, past half of any skin, so the lists are built at every step
+ * anyway, and a skin's pairs beyond the kernel's support only cost (12 % of a step on the Freydier front at 0.2 h;
+ * docs/method.md) */
+static double implicit_neighbour_skin_h(const surge_params *p)
+{
+    (void)p;
+    return 0.0;
+}
+
+/* Everything is evaluated at the step's start */
+static double implicit_lookahead_s(const surge_sim *sim)
+{
+    (void)sim;
+    return 0.0;
+}
+
+static void implicit_diagnostics(const surge_sim *sim, surge_diagnostics *d)
+{
+    const implicit_work *w = implicit_of(sim);
+    d->pressure_iterations = w->pressure_iterations, d->viscous_iterations = w->viscous_iterations;
+    d->pressure_residual = w->pressure_residual, d->viscous_residual = w->viscous_residual;
+}
+
+const time_scheme scheme_implicit = {
+    .name = "implicit",
+    .incompressible = true,
+    .reports_solves = true,
+    .contact_reach_dp = implicit_contact_reach_dp,
+    .neighbour_skin_h = implicit_neighbour_skin_h,
+    .lookahead_s = implicit_lookahead_s,
+    .create = implicit_create,
+    .destroy = implicit_destroy,
+    .step = implicit_step,
+    .checkpoint_write = implicit_checkpoint_write,
+    .checkpoint_read = implicit_checkpoint_read,
+    .diagnostics = implicit_diagnostics,
+};

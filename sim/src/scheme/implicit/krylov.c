@@ -1,0 +1,137 @@
+/* BiCGSTAB, matrix-free on the implicit scheme's operators, with the diagonal or a multigrid V-cycle as its
+ * preconditioner; dot products in fixed blocks, so the result does not depend on the thread count. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "implicit.h"
+
+/* sum_i a_i b_i (b NULL: sum_i a_i) over n, in fixed blocks added in order: the same for any thread count */
+double implicit_dot(const implicit_work *w, const double *a, const double *b, int n)
+{
+    const int blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum = 0;
+        for (int i = from; i < to; i++)
+            sum += b ? a[i] * b[i] : a[i];
+        w->partial[k] = sum;
+    }
+    double sum = 0;
+    for (int k = 0; k < blocks; k++)
+        sum += w->partial[k];
+    return sum;
+}
+
+/* The linear part of the operator: F(x) - F(0) (offset holds F(0)), or F(x) itself where F is linear */
+static void apply_linear(surge_sim *sim, affine_operator op, int linear, const double *x, double *out, int n)
+{
+    op(sim, x, out);
+    if (linear)
+        return;
+    const double *offset = implicit_of(sim)->offset;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < n; i++)
+        out[i] -= offset[i];
+}
+
+/* out = M^-1 in: the diagonal (Jacobi) or one V-cycle per block of nf unknowns; -1 when hypre fails */
+static int precondition(surge_sim *sim, const double *in, double *out, int n)
+{
+    implicit_work *w = implicit_of(sim);
+    if (w->vcycle_blocks == 0) {
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < n; i++)
+            out[i] = in[i] / w->diag[i];
+        return 0;
+    }
+    const int nf = n / w->vcycle_blocks;
+    if (amg_vcycle(w->amg, w->vcycle_blocks, in, out) != 0)
+        return -1;
+    if (w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
+        for (int i = 0; i < nf; i++)
+            if (w->fixed[i])
+                out[i] = in[i];
+    return 0;
+}
+
+/* Solves F(x) = rhs for the affine operator op (n unknowns) by BiCGSTAB, preconditioned as precondition() says
+ * (van der Vorst 1992), to |residual| <= tolerance |rhs - F(0)|, from the guess in x. homogeneous: F is linear
+ * (F(0) = 0), LINEAR_FROM_ZERO where x is 0 too (no operator call before the iterations), LINEAR_FROM_GUESS from the
+ * guess in x. Returns the iterations, or -1 when max_iterations pass first or the method breaks down; *residual: the
+ * relative residual reached. */
+int implicit_solve(surge_sim *sim, affine_operator op, int n, int homogeneous, double tolerance, int max_iterations,
+                 double *residual)
+{
+    implicit_work *w = implicit_of(sim);
+    double *x = w->x, *r = w->r, *rhat = w->rhat, *p = w->p, *v = w->v, *s = w->s, *t = w->t, *y = w->y, *z = w->z;
+    const int from_guess = homogeneous == LINEAR_FROM_GUESS;
+    if (from_guess)
+        op(sim, x, r);
+    else if (!homogeneous) {
+        op(sim, (memset(y, 0, (size_t)n * sizeof *y), y), w->offset);
+        apply_linear(sim, op, 0, x, r, n);
+    }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < n; i++) {
+        const double b = homogeneous ? w->rhs[i] : w->rhs[i] - w->offset[i];
+        r[i] = homogeneous == LINEAR_FROM_ZERO ? b : b - r[i];
+        rhat[i] = b; /* the shadow residual: the right-hand side (nonzero whenever there is work) */
+        p[i] = v[i] = 0;
+    }
+    const double b_norm = sqrt(implicit_dot(w, rhat, rhat, n));
+    double r_norm = sqrt(implicit_dot(w, r, r, n));
+    *residual = b_norm > 0 ? r_norm / b_norm : 0;
+    if (b_norm == 0 || r_norm <= tolerance * b_norm)
+        return 0;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < n; i++)
+        rhat[i] = r[i];
+    double rho = 1, alpha = 1, omega = 1;
+    for (int it = 1; it <= max_iterations; it++) {
+        const double rho_new = implicit_dot(w, rhat, r, n);
+        if (rho_new == 0 || omega == 0)
+            return -1;
+        const double beta = rho_new / rho * alpha / omega;
+        rho = rho_new;
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < n; i++)
+            p[i] = r[i] + beta * (p[i] - omega * v[i]);
+        if (precondition(sim, p, y, n) != 0)
+            return -1;
+        apply_linear(sim, op, homogeneous, y, v, n);
+        const double rv = implicit_dot(w, rhat, v, n);
+        if (rv == 0)
+            return -1;
+        alpha = rho / rv;
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < n; i++) {
+            x[i] += alpha * y[i];
+            s[i] = r[i] - alpha * v[i];
+        }
+        const double s_norm = sqrt(implicit_dot(w, s, s, n));
+        if (s_norm <= tolerance * b_norm) {
+            *residual = s_norm / b_norm;
+            return it;
+        }
+        if (precondition(sim, s, z, n) != 0)
+            return -1;
+        apply_linear(sim, op, homogeneous, z, t, n);
+        const double tt = implicit_dot(w, t, t, n);
+        omega = tt > 0 ? implicit_dot(w, t, s, n) / tt : 0;
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < n; i++) {
+            x[i] += omega * z[i];
+            r[i] = s[i] - omega * t[i];
+        }
+        r_norm = sqrt(implicit_dot(w, r, r, n));
+        *residual = r_norm / b_norm;
+        if (!isfinite(r_norm))
+            return -1;
+        if (r_norm <= tolerance * b_norm)
+            return it;
+    }
+    return -1;
+}

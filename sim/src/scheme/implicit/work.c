@@ -1,0 +1,109 @@
+/* The implicit scheme's work arrays: sized to the neighbour lists at each step, freed with the scheme. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "implicit.h"
+
+static int grow(void **array, size_t need, size_t size)
+{
+    void *grown = realloc(*array, (need + 1) * size);
+    if (!grown)
+        return -1;
+    *array = grown;
+    return 0;
+}
+
+#define GROW(field, need) (grow((void **)&w->field, need, sizeof *w->field))
+
+/* Sizes the work arrays for the current lists; -1 when out of memory. */
+int implicit_reserve_work(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const size_t nf = (size_t)(sim->count - sim->wall_count), nw = (size_t)sim->wall_count;
+    const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
+    const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
+    if (fe > w->fluid_cap || !w->fluid_w) {
+        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe))
+            return -1;
+        w->fluid_cap = fe;
+    }
+    if (we > w->wall_cap || !w->wall_w) {
+        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we))
+            return -1;
+        w->wall_cap = we;
+    }
+    if (me > w->mirror_cap || !w->mirror_w) {
+        if (GROW(mirror_w, me) || GROW(mirror_nw, me))
+            return -1;
+        w->mirror_cap = me;
+    }
+    if (sim->boulders.count > w->disc_cap || !w->disc_reference_pa) {
+        if (GROW(disc_reference_pa, (size_t)sim->boulders.count))
+            return -1;
+        w->disc_cap = sim->boulders.count;
+    }
+    if (ge > w->ghost_cap || !w->ghost_w) {
+        if (GROW(ghost_w, ge) || GROW(ghost_nw, ge))
+            return -1;
+        w->ghost_cap = ge;
+    }
+    double **by_id[] = {&w->phi_by_id, &w->psi_by_id, &w->dvx_by_id, &w->dvy_by_id};
+    for (size_t k = 0; k < sizeof by_id / sizeof by_id[0]; k++)
+        if (!*by_id[k] && !(*by_id[k] = calloc((size_t)sim->count + 1, sizeof **by_id[k])))
+            return -1;
+    if (!w->minv_xx) {
+        const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
+        if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
+            GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
+            GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
+            GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
+            GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
+            GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
+            GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
+            GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
+            return -1;
+    }
+    return 0;
+}
+
+/* The scheme's data, and the fluid's pressure by particle id at rest (the scene's), which its first step starts from */
+int implicit_create(surge_sim *sim, char *err, size_t err_len)
+{
+    implicit_work *w = calloc(1, sizeof *w);
+    sim->scheme_data = w;
+    if (!w || !(w->pressure_by_id = calloc((size_t)sim->count, sizeof *w->pressure_by_id))) {
+        snprintf(err, err_len, "out of memory for the implicit scheme's pressure");
+        return -1;
+    }
+    for (int a = sim->wall_count; a < sim->count; a++) /* ids are the indices until the first sort */
+        w->pressure_by_id[sim->id[a]] = sim->pressure[a];
+    return 0;
+}
+
+void implicit_destroy(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    if (!w)
+        return;
+    void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
+                      w->mirror_nw, w->ghost_w, w->ghost_nw, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
+                      w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
+                      w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
+                      w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->z, w->partial};
+    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
+        free(arrays[i]);
+    amg_destroy(w->multigrid[MULTIGRID_VISCOUS].amg);
+    amg_destroy(w->multigrid[MULTIGRID_PRESSURE].amg);
+    free(w->matrix_first);
+    free(w->matrix_col);
+    free(w->matrix_val);
+    free(w);
+    sim->scheme_data = NULL;
+}
