@@ -194,9 +194,7 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
              write_all(f, &plen, 8) | write_all(f, params_text, params_len) |
              write_all(f, &sim->step, 8) | write_all(f, &sim->time_s, 8) | write_all(f, &sim->dt_s, 8) |
              write_all(f, &sim->first_dt_s, 8) | write_all(f, &sim->count, 4) | write_all(f, &sim->wall_count, 4) |
-             write_all(f, sim->x + w, nf * sizeof(double)) | write_all(f, sim->y + w, nf * sizeof(double)) |
-             write_all(f, sim->vx + w, nf * sizeof(real)) | write_all(f, sim->vy + w, nf * sizeof(real)) |
-             write_all(f, sim->rho + w, nf * sizeof(real)) | write_all(f, sim->id + w, nf * sizeof(int32_t)) |
+             fields_write(f, sim) |
              write_all(f, &lists_built, 4) | write_all(f, sim->neighbours.x_build + w, nf * sizeof(double)) |
              write_all(f, sim->neighbours.y_build + w, nf * sizeof(double)) |
              write_boulders(f, &sim->boulders) | write_wall_build_positions(f, sim) |
@@ -268,9 +266,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     }
     const size_t w = (size_t)wall_count, nf = (size_t)(count - wall_count);
     uint64_t hash = 0;
-    if (read_all(f, sim->x + w, nf * sizeof(double)) || read_all(f, sim->y + w, nf * sizeof(double)) ||
-        read_all(f, sim->vx + w, nf * sizeof(real)) || read_all(f, sim->vy + w, nf * sizeof(real)) ||
-        read_all(f, sim->rho + w, nf * sizeof(real)) || read_all(f, sim->id + w, nf * sizeof(int32_t))) {
+    if (fields_read(f, sim)) {
         snprintf(err, err_len, "%s: truncated checkpoint", path);
         goto fail;
     }

@@ -154,28 +154,12 @@ static void counting_sort(const surge_sim *sim, int first, int n, const int32_t 
     start[0] = first;
 }
 
-static void gather_d(double *a, double *scratch, const int32_t *order, int first, int n)
+/* The sorted fields (particles/fields.h) and the neighbour lists' build positions follow their particles */
+static void permute(surge_sim *sim, const int32_t *order, int first, int n)
 {
-    #pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; i++)
-        scratch[i] = a[order[i]];
-    memcpy(a + first, scratch, (size_t)n * sizeof *a);
-}
-
-static void gather_r(real *a, real *scratch, const int32_t *order, int first, int n)
-{
-    #pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; i++)
-        scratch[i] = a[order[i]];
-    memcpy(a + first, scratch, (size_t)n * sizeof *a);
-}
-
-static void gather_i(int32_t *a, int32_t *scratch, const int32_t *order, int first, int n)
-{
-    #pragma omp parallel for schedule(static)
-    for (int i = 0; i < n; i++)
-        scratch[i] = a[order[i]];
-    memcpy(a + first, scratch, (size_t)n * sizeof *a);
+    fields_permute(sim, order, first, n, sim->sort_scratch_d);
+    fields_gather(sim->neighbours.x_build, sizeof(double), order, first, n, sim->sort_scratch_d);
+    fields_gather(sim->neighbours.y_build, sizeof(double), order, first, n, sim->sort_scratch_d);
 }
 
 void grid_sort_walls(surge_sim *sim)
@@ -186,20 +170,7 @@ void grid_sort_walls(surge_sim *sim)
     for (int i = 0; i < n; i++)
         by_id[sim->id[i]] = i;
     counting_sort(sim, 0, n, by_id, sim->grid.wall_start, sim->sort_key, order);
-    gather_d(sim->x, sim->sort_scratch_d, order, 0, n);
-    gather_d(sim->y, sim->sort_scratch_d, order, 0, n);
-    gather_d(sim->neighbours.x_build, sim->sort_scratch_d, order, 0, n);
-    gather_d(sim->neighbours.y_build, sim->sort_scratch_d, order, 0, n);
-    gather_r(sim->vx, sim->sort_scratch_r, order, 0, n);
-    gather_r(sim->vy, sim->sort_scratch_r, order, 0, n);
-    gather_r(sim->rho, sim->sort_scratch_r, order, 0, n);
-    gather_r(sim->ghost_dx, sim->sort_scratch_r, order, 0, n);
-    gather_r(sim->ghost_dy, sim->sort_scratch_r, order, 0, n);
-    gather_i(sim->id, sim->sort_scratch_i, order, 0, n);
-    for (int i = 0; i < n; i++)
-        sim->sort_scratch_i[i] = sim->wall_of[order[i]];
-    for (int i = 0; i < n; i++)
-        sim->wall_of[i] = (uint8_t)sim->sort_scratch_i[i];
+    permute(sim, order, 0, n);
 }
 
 void grid_sort_fluid(surge_sim *sim)
@@ -207,12 +178,5 @@ void grid_sort_fluid(surge_sim *sim)
     const int first = sim->wall_count, n = sim->count - sim->wall_count;
     int32_t *order = sim->sort_key + sim->count;
     counting_sort(sim, first, n, NULL, sim->grid.fluid_start, sim->sort_key, order);
-    gather_d(sim->x, sim->sort_scratch_d, order, first, n);
-    gather_d(sim->y, sim->sort_scratch_d, order, first, n);
-    gather_d(sim->neighbours.x_build, sim->sort_scratch_d, order, first, n);
-    gather_d(sim->neighbours.y_build, sim->sort_scratch_d, order, first, n);
-    gather_r(sim->vx, sim->sort_scratch_r, order, first, n);
-    gather_r(sim->vy, sim->sort_scratch_r, order, first, n);
-    gather_r(sim->rho, sim->sort_scratch_r, order, first, n);
-    gather_i(sim->id, sim->sort_scratch_i, order, first, n);
+    permute(sim, order, first, n);
 }

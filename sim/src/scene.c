@@ -211,23 +211,11 @@ static int wall_capacity(const surge_params *p)
 static int allocate_state(surge_sim *s, int n)
 {
     s->count = n;
-    int ok = 1;
+    int ok = fields_allocate(s) == 0;
 #define ALLOC(ptr, len) ok &= ((ptr) = calloc((size_t)(len) > 0 ? (size_t)(len) : 1, sizeof *(ptr))) != NULL
-    ALLOC(s->x, n); ALLOC(s->y, n); ALLOC(s->vx, n); ALLOC(s->vy, n); ALLOC(s->rho, n); ALLOC(s->id, n);
-    ALLOC(s->x_n, n); ALLOC(s->y_n, n); ALLOC(s->vx_n, n); ALLOC(s->vy_n, n); ALLOC(s->rho_n, n);
-    ALLOC(s->ax, n); ALLOC(s->ay, n); ALLOC(s->drho, n); ALLOC(s->pressure, n); ALLOC(s->inv_rho, n); ALLOC(s->pair_state, n); ALLOC(s->wall_state, n); ALLOC(s->face_state, n); ALLOC(s->visc_speed_mps, n);
-    ALLOC(s->face_nx, n); ALLOC(s->face_ny, n); ALLOC(s->face_gap_m, n); ALLOC(s->face_vn_mps, n);
-    ALLOC(s->face_disc, n); ALLOC(s->face_push_x, n); ALLOC(s->face_push_y, n);
-    ALLOC(s->grad_c_x, n); ALLOC(s->grad_c_y, n); ALLOC(s->surface_nx, n); ALLOC(s->surface_ny, n); ALLOC(s->div_r, n); ALLOC(s->grad_rho_x, n); ALLOC(s->grad_rho_y, n);
-    ALLOC(s->shift_x, n); ALLOC(s->shift_y, n); ALLOC(s->shift_div, n);
-    ALLOC(s->surface, n); ALLOC(s->near_surface, n); ALLOC(s->kind, n);
-    ALLOC(s->wall_of, s->wall_count); ALLOC(s->ghost_dx, s->wall_count); ALLOC(s->ghost_dy, s->wall_count);
     ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);
     ALLOC(s->boulders.local_y, s->wall_count); ALLOC(s->boulders.spin_coupling, s->wall_count);
-    ALLOC(s->wall_vx, s->wall_count); ALLOC(s->wall_vy, s->wall_count);
-    ALLOC(s->wall_cont_vx, s->wall_count); ALLOC(s->wall_cont_vy, s->wall_count);
-    ALLOC(s->wall_nx, s->wall_count); ALLOC(s->wall_ny, s->wall_count); ALLOC(s->wall_depth_m, s->wall_count); ALLOC(s->ghost_fluid_sum, s->wall_count);
-    ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n); ALLOC(s->sort_scratch_r, n);
+    ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n);
 #undef ALLOC
     return ok ? 0 : -1;
 }

@@ -95,32 +95,16 @@ void surge_sim_destroy(surge_sim *sim)
 {
     if (!sim)
         return;
-    void *arrays[] = {sim->x, sim->y, sim->vx, sim->vy, sim->rho, sim->id, sim->x_n, sim->y_n, sim->vx_n,
-                      sim->vy_n, sim->rho_n, sim->ax, sim->ay, sim->drho, sim->pressure, sim->inv_rho, sim->pair_state, sim->wall_state, sim->face_state, sim->visc_speed_mps,
-                      sim->face_nx, sim->face_ny, sim->face_gap_m, sim->face_vn_mps, sim->face_disc,
-                      sim->face_push_x, sim->face_push_y,
-                      sim->grad_c_x, sim->grad_c_y, sim->surface_nx, sim->surface_ny, sim->shift_x, sim->shift_y, sim->shift_div, sim->grad_rho_x, sim->grad_rho_y, sim->div_r, sim->surface,
-                      sim->near_surface, sim->kind,
-                      sim->wall_of, sim->ghost_dx, sim->ghost_dy, sim->ghost_fluid_sum, sim->wall_vx, sim->wall_vy, sim->wall_cont_vx, sim->wall_cont_vy, sim->wall_nx, sim->wall_ny, sim->wall_depth_m,
-                      sim->sort_key, sim->sort_scratch_i, sim->sort_scratch_d, sim->sort_scratch_r};
-    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
-        free(arrays[i]);
+    fields_free(sim);
+    free(sim->sort_key);
+    free(sim->sort_scratch_i);
+    free(sim->sort_scratch_d);
     if (sim->scheme_data)
         sim->scheme->destroy(sim);
     grid_free(&sim->grid);
     neighbours_free(&sim->neighbours);
     boulders_free(&sim->boulders);
     free(sim);
-}
-
-void sim_restore_step_start(surge_sim *sim)
-{
-    const size_t nf = (size_t)(sim->count - sim->wall_count), w = (size_t)sim->wall_count;
-    memcpy(sim->x + w, sim->x_n + w, nf * sizeof *sim->x);
-    memcpy(sim->y + w, sim->y_n + w, nf * sizeof *sim->y);
-    memcpy(sim->vx + w, sim->vx_n + w, nf * sizeof *sim->vx);
-    memcpy(sim->vy + w, sim->vy_n + w, nf * sizeof *sim->vy);
-    memcpy(sim->rho + w, sim->rho_n + w, nf * sizeof *sim->rho);
 }
 
 int surge_sim_step(surge_sim *sim)
@@ -224,37 +208,21 @@ surge_diagnostics surge_sim_diagnostics(const surge_sim *sim)
     return d;
 }
 
-static uint64_t fnv1a(uint64_t h, const void *data, size_t len)
-{
-    const unsigned char *p = data;
-    for (size_t i = 0; i < len; i++) {
-        h ^= p[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
-
 uint64_t surge_sim_state_hash(const surge_sim *sim)
 {
     uint64_t h = 14695981039346656037ull;
-    const size_t w = (size_t)sim->wall_count, nf = (size_t)(sim->count - sim->wall_count);
-    h = fnv1a(h, &sim->step, sizeof sim->step);
-    h = fnv1a(h, &sim->time_s, sizeof sim->time_s);
-    h = fnv1a(h, sim->x + w, nf * sizeof *sim->x);
-    h = fnv1a(h, sim->y + w, nf * sizeof *sim->y);
-    h = fnv1a(h, sim->vx + w, nf * sizeof *sim->vx);
-    h = fnv1a(h, sim->vy + w, nf * sizeof *sim->vy);
-    h = fnv1a(h, sim->rho + w, nf * sizeof *sim->rho);
-    h = fnv1a(h, sim->id + w, nf * sizeof *sim->id);
+    h = fields_fnv1a(h, &sim->step, sizeof sim->step);
+    h = fields_fnv1a(h, &sim->time_s, sizeof sim->time_s);
+    h = fields_hash(sim, h);
     const boulder_set *b = &sim->boulders;
     const size_t nb = (size_t)b->count * sizeof(double);
     if (b->count > 0) {
-        h = fnv1a(h, b->x, nb);
-        h = fnv1a(h, b->y, nb);
-        h = fnv1a(h, b->angle, nb);
-        h = fnv1a(h, b->vx, nb);
-        h = fnv1a(h, b->vy, nb);
-        h = fnv1a(h, b->omega, nb);
+        h = fields_fnv1a(h, b->x, nb);
+        h = fields_fnv1a(h, b->y, nb);
+        h = fields_fnv1a(h, b->angle, nb);
+        h = fields_fnv1a(h, b->vx, nb);
+        h = fields_fnv1a(h, b->vy, nb);
+        h = fields_fnv1a(h, b->omega, nb);
     }
     return h;
 }

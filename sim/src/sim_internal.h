@@ -8,6 +8,7 @@
 #include "boulders.h"
 #include "kernel.h"
 #include "lanes.h"
+#include "particles/fields.h"
 #include "precision.h"
 #include "scheme/scheme.h"
 #include "surge/sim.h"
@@ -112,51 +113,18 @@ struct surge_sim {
     double rho_h_per_m;        /* hydrostatic density gradient rho0 g_n / c0^2 (density diffusion) */
 
     int32_t count, wall_count;
-    /* state, structure of arrays, in cell order */
-    double *x, *y;
-    real *vx, *vy, *rho;
-    int32_t *id;
-    /* copies at the start of the step (symplectic scheme, roll-back) */
-    double *x_n, *y_n;
-    real *vx_n, *vy_n, *rho_n;
-    /* per-particle rates and scratch */
-    real *ax, *ay, *drho, *pressure, *inv_rho;
-    pair_state *pair_state;    /* the same per-neighbour fields packed (interaction.c) */
-    wall_pair_state *wall_state; /* the walls' (boundary.c) */
-    wall_face_state *face_state; /* the walls' for the face search (boundary.c) */
-    real *visc_speed_mps;      /* max_b |h v_ab.r_ab/(r_ab^2+eta^2)| per fluid particle, a speed (dt_cv) */
-    real *face_nx, *face_ny;   /* normal of the nearest wall face within dp (corrector pass; 0, 0: none) */
-    real *face_gap_m;          /* the particle's distance from that face (negative past it) */
-    real *face_vn_mps;         /* that wall's (or disc's) velocity along the normal */
-    int32_t *face_disc;        /* the disc whose face pushes the particle this evaluation (-1: none) */
-    real *face_push_x, *face_push_y; /* and the push, an acceleration; the disc takes the reaction */
-    real *grad_c_x, *grad_c_y; /* concentration gradient (shifting) */
-    real *surface_nx, *surface_ny; /* implicit scheme, near the free surface: the neighbours' grad C averaged, as a
-                                    * unit vector (the surface's normal, along which its shift does not act) */
-    real *grad_rho_x, *grad_rho_y; /* renormalised density gradient (Antuono density diffusion) */
-    real *div_r;
-    real *shift_x, *shift_y;   /* this step's shifting displacement (m) */
-    real *shift_div;           /* its divergence div(dr), the relative volume change it makes */
-    int32_t *surface;          /* free-surface flag from the last predictor pass (int32: the pair loop gathers it) */
-    uint8_t *near_surface;     /* on or next to the free surface (Lind: no shift) */
-    /* wall particles only */
-    uint8_t *wall_of;          /* WALL_*; the velocity of a wall particle is in vx, vy */
-    real *ghost_dx, *ghost_dy; /* offset from wall particle to its mDBC ghost node */
-    real *ghost_fluid_sum;     /* sum of W V_j of the fluid at the ghost node: ~1 wetted, 0 dry (boundary_update) */
-    real *wall_vx, *wall_vy;   /* no-slip velocity 2 v_wall - v_ghost (viscous term) */
-    real *wall_cont_vx, *wall_cont_vy; /* velocity in the continuity equation: the wall's, plus no penetration */
-    real *wall_nx, *wall_ny;   /* unit normal from the wall particle toward its ghost (into the fluid) */
-    real *wall_depth_m;        /* the wall particle's distance below the wall face (half its ghost offset) */
+    /* the per-particle fields, structure of arrays in cell order (particles/fields.h) */
+    SURGE_STEP_FIELDS(FIELD_MEMBER)
+    SURGE_STEP_FIELDS(FIELD_COPY_MEMBER)
+    SURGE_PARTICLE_FIELDS(FIELD_MEMBER)
     double wall_speed[WALL_COUNT];
-    uint8_t *kind;             /* surge_particle_kind, by id */
 
     boulder_set boulders;
 
     cell_grid grid;
     neighbour_lists neighbours;
-    int32_t *sort_key, *sort_scratch_i;
+    int32_t *sort_key, *sort_scratch_i; /* the cell sort's keys (2 count) and scratch (count each) */
     double *sort_scratch_d;
-    real *sort_scratch_r;
 
     double time_s, dt_s, first_dt_s;
     int64_t step;
@@ -166,6 +134,14 @@ struct surge_sim {
     const time_scheme *scheme;    /* the time-stepping scheme (scheme/scheme.h) */
     void *scheme_data;             /* and its own state */
 };
+
+/* Particle a's copies at the step's start (the step fields of particles/fields.h) */
+static inline void fields_save_step_start(surge_sim *sim, int a)
+{
+#define SAVE_FIELD(name, type, extent, roles, meaning) sim->name##_n[a] = sim->name[a];
+    SURGE_STEP_FIELDS(SAVE_FIELD)
+#undef SAVE_FIELD
+}
 
 /* x wrapped into [0, period) in a periodic domain (positions are wrapped only at neighbour-list builds) */
 static inline double surge_sim_wrapped_x(const surge_sim *sim, double x)
@@ -292,9 +268,6 @@ void boulders_free(boulder_set *b);
 
 /* shifting.c: this step's shifting displacements and their divergence (after the corrector's pass; worksharing) */
 void shifting_compute(surge_sim *sim, double dt_s);
-
-/* sim.c: back to the state saved at the start of the step (x_n, ..., rho_n) */
-void sim_restore_step_start(surge_sim *sim);
 
 /* health.c */
 int health_check(surge_sim *sim);

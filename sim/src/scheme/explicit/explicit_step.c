@@ -65,11 +65,7 @@ static int explicit_step(surge_sim *sim)
         const double half = 0.5 * dt;
         #pragma omp for schedule(static)
         for (int a = first; a < n; a++) {
-            sim->x_n[a] = sim->x[a];
-            sim->y_n[a] = sim->y[a];
-            sim->vx_n[a] = sim->vx[a];
-            sim->vy_n[a] = sim->vy[a];
-            sim->rho_n[a] = sim->rho[a];
+            fields_save_step_start(sim, a);
             sim->rho[a] = (real)(sim->rho_n[a] + half * sim->drho[a]);
             sim->vx[a] = (real)(sim->vx_n[a] + half * sim->ax[a]);
             sim->vy[a] = (real)(sim->vy_n[a] + half * sim->ay[a]);
@@ -91,7 +87,7 @@ static int explicit_step(surge_sim *sim)
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n + dt};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         boulders_restore(sim);
         return -1;
     }
@@ -124,7 +120,7 @@ static int explicit_step(surge_sim *sim)
     boundary_wall_speeds(sim, sim->time_s);
 
     if (health_check(sim) != 0) {
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         boulders_restore(sim);
         sim->time_s = t_n;
         sim->step--;

@@ -119,10 +119,8 @@ static int implicit_step(surge_sim *sim)
     implicit_geometry(sim);
     implicit_mirror_velocities(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int a = first; a < n; a++) {
-        sim->x_n[a] = sim->x[a], sim->y_n[a] = sim->y[a];
-        sim->vx_n[a] = sim->vx[a], sim->vy_n[a] = sim->vy[a], sim->rho_n[a] = sim->rho[a];
-    }
+    for (int a = first; a < n; a++)
+        fields_save_step_start(sim, a);
 
     /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure,
      * from the guess v_n */
@@ -259,7 +257,7 @@ static int implicit_step(surge_sim *sim)
     w->pressure_by_multigrid = implicit_multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
         implicit_multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1)) {
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
@@ -271,7 +269,7 @@ static int implicit_step(surge_sim *sim)
     w->pressure_iterations = iterations, w->pressure_residual = residual;
     if (iterations < 0) {
         fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
     }
@@ -296,7 +294,7 @@ static int implicit_step(surge_sim *sim)
         const int density_iterations = implicit_pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
         if (density_iterations < 0) {
             fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
-            sim_restore_step_start(sim);
+            fields_restore_step_start(sim);
             boundary_wall_speeds(sim, t_n);
             return -1;
         }
@@ -400,7 +398,7 @@ static int implicit_step(surge_sim *sim)
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n + dt};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         boulders_restore(sim);
         boundary_wall_speeds(sim, t_n);
         return -1;
@@ -408,7 +406,7 @@ static int implicit_step(surge_sim *sim)
     sim->time_s = t_n + dt;
     sim->step++;
     if (health_check(sim) != 0) {
-        sim_restore_step_start(sim);
+        fields_restore_step_start(sim);
         if (sim->boulders.count > 0)
             boulders_restore_implicit(sim);
         sim->time_s = t_n;
