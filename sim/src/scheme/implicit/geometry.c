@@ -101,23 +101,18 @@ static inline __attribute__((always_inline)) void geometry_pairs(surge_sim *sim,
     }
 }
 
-/* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
- * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
-void implicit_geometry(surge_sim *sim)
+/* The walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at the
+ * node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned; the node's wetness and
+ * immersion */
+static void mirror_weights(surge_sim *sim)
 {
     implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
     const kernel2d *k = &sim->kernel;
     const real grad_coef = k->grad_coef, inv_h = k->inv_h, alpha = k->alpha, support2 = k->support2;
-    const real mass = (real)sim->mass, vol = (real)(sim->mass / sim->rho0);
+    const real vol = (real)(sim->mass / sim->rho0);
     const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
-    const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
-    const int first = sim->wall_count, n = sim->count;
     const int offsets = sim->params.implicit.wall_neumann_offset > 0;
-    if (!w->wall_sum_ready || sim->boulders.count > 0)
-        implicit_wall_sums(sim);
-    /* the walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at
-     * the node, as boundary.c's mDBC; Shepard's where the correction matrix is ill-conditioned */
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         const ghost_span g = ghost_span_of(sim, kw);
@@ -182,6 +177,18 @@ void implicit_geometry(surge_sim *sim)
                 g.normal_weight[e] = (real)cn;
         }
     }
+}
+
+/* Each fluid particle's pair coefficients (fluid and wall entries), inverse moment matrix, kernel sum, nearest wall
+ * face, free-surface flag, div r and grad C */
+static void fluid_geometry(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const real alpha = sim->kernel.alpha, mass = (real)sim->mass;
+    const double inv_lattice = 1.0 / sim->lattice_kernel_sum;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const int first = sim->wall_count, n = sim->count;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         const int i = a - first;
@@ -223,6 +230,16 @@ void implicit_geometry(surge_sim *sim)
         sim->grad_c_x[a] = grad_c_x, sim->grad_c_y[a] = grad_c_y;
         w->fixed[i] = (uint8_t)sim->surface[a];
     }
+}
+
+/* The free-surface layer (on or next to the surface), the surface's normal for the shift, and the kernel sum a
+ * particle near the surface has at rest spacing at its depth */
+static void surface_layer(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const real *restrict moved_x = nl->moved_x, *restrict moved_y = nl->moved_y;
+    const int first = sim->wall_count, n = sim->count;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         const int i = a - first;
@@ -257,4 +274,15 @@ void implicit_geometry(surge_sim *sim)
         const double f = fmin(1.0, rows - row);
         w->expected_ratio[i] = depth2 > 0 ? (1 - f) * sim->row_kernel_ratio[row] + f * sim->row_kernel_ratio[row + 1] : 0;
     }
+}
+
+/* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
+ * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
+void implicit_geometry(surge_sim *sim)
+{
+    if (!implicit_of(sim)->wall_sum_ready || sim->boulders.count > 0)
+        implicit_wall_sums(sim);
+    mirror_weights(sim);
+    fluid_geometry(sim);
+    surface_layer(sim);
 }

@@ -93,40 +93,41 @@ static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim
         }
 }
 
-static int implicit_step(surge_sim *sim)
+/* How far the discs got in a step: the roll-back undoes that much */
+enum { DISCS_UNTOUCHED, DISCS_SAVED, DISCS_ADVANCED };
+
+/* The step's start: its dt, the walls' velocities at its end (backward Euler; the discs' at its start, their fluid
+ * forces come after the step), the walls' normals and depths (the contact rule), the step's geometry, and the
+ * fluid's state saved for the roll-back */
+static double begin_step(surge_sim *sim)
 {
-    const int first = sim->wall_count, n = sim->count, nf = n - first;
-    const double t_n = sim->time_s;
-    const surge_params *prm = &sim->params;
-    if (neighbours_update(sim) != 0 || implicit_reserve_work(sim) != 0) {
-        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
-                                     .time_s = t_n};
-        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
-        return -1;
-    }
-    implicit_work *w = implicit_of(sim);
     const double dt = implicit_dt(sim);
     sim->dt_s = dt;
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
-    boundary_wall_speeds(sim, t_n + dt); /* backward Euler: the walls' velocities at the end of the step (the discs':
-                                          * at its start; their fluid forces come after the step) */
+    boundary_wall_speeds(sim, sim->time_s + dt);
     #pragma omp parallel
     {
         interaction_prepare(sim, 0);
-        boundary_update(sim, 0); /* the walls' normals and depths (the contact rule) */
+        boundary_update(sim, 0);
     }
     implicit_geometry(sim);
     implicit_mirror_velocities(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int a = first; a < n; a++)
+    for (int a = sim->wall_count; a < sim->count; a++)
         fields_save_step_start(sim, a);
+    return dt;
+}
 
-    /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure,
-     * from the guess v_n */
-    const double rho0 = sim->rho0, dt_nu = dt * prm->fluid.viscosity_m2ps;
+/* Step 1's system: the right-hand side v_n + dt (g - grad p_n / rho0), the first guess v_n plus the last step's
+ * change (a slow flow's is much the same from step to step) and the diagonal 1 + dt nu sum_b w_ab */
+static void viscous_system(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
-    double *by_id = implicit_of(sim)->pressure_by_id;
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double rho0 = sim->rho0, dt_nu = dt * sim->params.fluid.viscosity_m2ps;
+    const double *by_id = w->pressure_by_id;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
@@ -149,33 +150,38 @@ static int implicit_step(surge_sim *sim)
         const double sum_w = lanes_total(lane_w);
         w->rhs[i] = sim->vx_n[a] + dt * (sim->gx - w->grad_x[i] / rho0);
         w->rhs[nf + i] = sim->vy_n[a] + dt * (sim->gy - w->grad_y[i] / rho0);
-        /* from v_n plus the last step's change: a slow flow's is much the same from step to step */
         w->x[i] = sim->vx_n[a] + w->dvx_by_id[sim->id[a]], w->x[nf + i] = sim->vy_n[a] + w->dvy_by_id[sim->id[a]];
         w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
     }
-    double residual = 0;
-    int iterations = 0;
+}
+
+/* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure, into
+ * the fluid's velocities; -1 with the health set when the solve fails */
+static int viscous_predict(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const surge_params *prm = &sim->params;
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double dt_nu = dt * prm->fluid.viscosity_m2ps;
+    viscous_system(sim, dt);
     if (dt_nu > 0) {
         /* by multigrid: one hierarchy for both components (the walls mirror each component on its own) */
-        if (implicit_multigrid(sim, true) &&
-            implicit_multigrid_setup(sim, MULTIGRID_VISCOUS, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0))
-            iterations = -2;
-        else {
-            w->vcycle_blocks = implicit_multigrid(sim, true) ? 2 : 0;
-            iterations = implicit_solve(sim, implicit_viscous_operator, 2 * nf, AFFINE, prm->implicit.viscous_tolerance,
-                               prm->implicit.max_iterations, &residual);
-            w->vcycle_blocks = 0;
-            if (implicit_multigrid(sim, true))
-                implicit_multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
-        }
-        w->viscous_iterations = iterations, w->viscous_residual = residual;
-        if (iterations == -2) {
-            boundary_wall_speeds(sim, t_n);
+        const int by_multigrid = implicit_multigrid(sim, true);
+        if (by_multigrid &&
+            implicit_multigrid_setup(sim, MULTIGRID_VISCOUS, "viscous", w->diag, w->fluid_w, -dt_nu, w->wall_w, dt_nu, 0)) {
+            w->viscous_iterations = -2, w->viscous_residual = 0;
             return -1;
         }
+        double residual = 0;
+        w->vcycle_blocks = by_multigrid ? 2 : 0;
+        const int iterations = implicit_solve(sim, implicit_viscous_operator, 2 * nf, AFFINE,
+                                              prm->implicit.viscous_tolerance, prm->implicit.max_iterations, &residual);
+        w->vcycle_blocks = 0;
+        if (by_multigrid)
+            implicit_multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
+        w->viscous_iterations = iterations, w->viscous_residual = residual;
         if (iterations < 0) {
-            fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, t_n);
-            boundary_wall_speeds(sim, t_n);
+            fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, sim->time_s);
             return -1;
         }
     } else /* no viscosity: the operator is the identity */
@@ -186,11 +192,16 @@ static int implicit_step(surge_sim *sim)
         sim->vx[a] = (real)w->x[i], sim->vy[a] = (real)w->x[nf + i];
         w->dvx_by_id[sim->id[a]] = w->x[i] - sim->vx_n[a], w->dvy_by_id[sim->id[a]] = w->x[nf + i] - sim->vy_n[a];
     }
+    return 0;
+}
 
-    /* 2. the correction phi: the walls' Neumann offsets from v* at their ghosts, the source from div v* and the
-     * density */
+/* Step 2's wall conditions: each wall's mirrored velocity for div v* and its Neumann offset on phi */
+static void wall_neumann_offsets(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const double rho0 = sim->rho0, offset_weight = sim->params.implicit.wall_neumann_offset;
     #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int kw = 0; kw < first; kw++) {
+    for (int kw = 0; kw < sim->wall_count; kw++) {
         /* the wall's own velocity: only its normal part matters, and the belt-wall corner's (mirrored through the
          * corner point, its normal slanted) is the fixed upstream wall's, not the belt's */
         const double wall_vx = w->mirror_vx[kw], wall_vy = w->mirror_vy[kw];
@@ -206,7 +217,7 @@ static int implicit_step(surge_sim *sim)
          * particles), and by default everywhere (implicit.wall_neumann_offset 0): the wall's own normal velocity in
          * the divergence, no offset; in between by the immersion (docs/method.md, "Walls": without the offset the
          * first column against a wall sits compressed and below the bulk's pressure) */
-        const double immersed = prm->implicit.wall_neumann_offset * w->immersion[kw];
+        const double immersed = offset_weight * w->immersion[kw];
         const double glen2 = (double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw];
         const double into = ((gvx - wall_vx) * sim->ghost_dx[kw] + (gvy - wall_vy) * sim->ghost_dy[kw]) / glen2;
         const double strain = immersed > 0 ? ghost_normal_strain(sim, kw) : 0.0;
@@ -214,7 +225,16 @@ static int implicit_step(surge_sim *sim)
         w->wall_y[kw] = gvy - ((1.0 - immersed) * into + immersed * strain) * sim->ghost_dy[kw];
         w->neumann_pa[kw] = -immersed * rho0 / dt * (into - 0.5 * strain) * glen2;
     }
-    const double alpha = prm->implicit.density_correction, h = sim->derived.h_m;
+}
+
+/* Step 2's sources: -(rho0/dt) div v* for phi and the rest-density source for psi, the diagonal and phi's first
+ * guess (the last step's: a steady flow's is much the same from step to step) */
+static void projection_sources(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double rho0 = sim->rho0, alpha = sim->params.implicit.density_correction;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
@@ -237,9 +257,19 @@ static int implicit_step(surge_sim *sim)
         w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
         w->rhs[i] = w->fixed[i] ? 0.0 : -rho0 / dt * div_v;
         w->diag[i] = w->fixed[i] || sum_w <= 0 ? 1.0 : sum_w;
-        /* the correction starts from the last step's: a steady flow's is much the same from step to step */
         w->x[i] = w->fixed[i] ? 0.0 : w->phi_by_id[sim->id[a]];
     }
+}
+
+/* 2. The correction phi: -lap phi = -(rho0/dt) div v*, into w->x and phi_by_id; -1 with the health set when the
+ * multigrid cannot be built or the solve fails */
+static int project(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const surge_params *prm = &sim->params;
+    const int first = sim->wall_count, nf = sim->count - first;
+    wall_neumann_offsets(sim, dt);
+    projection_sources(sim, dt);
     implicit_assemble_pressure(sim);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
      * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
@@ -256,21 +286,17 @@ static int implicit_step(surge_sim *sim)
             w->pressure_diag[i] += closed_kappa, w->diag[i] += closed_kappa;
     w->pressure_by_multigrid = implicit_multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
-        implicit_multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1)) {
-        fields_restore_step_start(sim);
-        boundary_wall_speeds(sim, t_n);
+        implicit_multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1))
         return -1;
-    }
     if (prm->implicit.wall_neumann_offset > 0)
         implicit_wall_offsets_to_rhs(sim, w->neumann_pa);
-    iterations = implicit_pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
+    double residual = 0;
+    const int iterations = implicit_pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
     if (w->pressure_by_multigrid)
         implicit_multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
     w->pressure_iterations = iterations, w->pressure_residual = residual;
     if (iterations < 0) {
-        fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, t_n);
-        fields_restore_step_start(sim);
-        boundary_wall_speeds(sim, t_n);
+        fail_solve(sim, "pressure", prm->implicit.max_iterations, residual, sim->time_s);
         return -1;
     }
     if (!free_surface) { /* the uniform part is no flow: the fluid's mean pressure keeps its start value */
@@ -281,57 +307,82 @@ static int implicit_step(surge_sim *sim)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         w->phi_by_id[sim->id[first + i]] = w->x[i];
-    /* 2b. the rest-density correction psi, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2 with the same operator, moves
-     * the particles by -dt^2 grad psi / rho0 and leaves their velocities alone: a spacing error is not a flow, and
-     * in one equation with the divergence its kicks were 0.34 u_max in Poiseuille's start-up (docs/method.md) */
-    if (alpha > 0) {
-        memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
-        memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
-        /* from the last step's psi: a spacing error the last step left is corrected again */
-        #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < nf; i++)
-            w->x[i] = w->fixed[i] ? 0.0 : w->psi_by_id[sim->id[first + i]];
-        const int density_iterations = implicit_pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
-        if (density_iterations < 0) {
-            fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, t_n);
-            fields_restore_step_start(sim);
-            boundary_wall_speeds(sim, t_n);
-            return -1;
-        }
-        w->pressure_iterations += density_iterations;
-        #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < nf; i++)
-            w->psi_by_id[sim->id[first + i]] = w->x[i];
-        implicit_wall_pressures(sim, w->x, NULL);
-        implicit_pressure_gradient(sim, w->x);
-        #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < nf; i++) {
-            /* plus a shift where the kernel sum says compressed, -2 w (rho_k/rho0 - 1) h^2 grad C with grad C =
-             * sum_b V_b grad W_ab (walls by their wetness): zero on a regular lattice and where the spacing is at
-             * rest or wider, it pushes apart particles that have closed on each other, also on the free surface,
-             * where psi is 0 (docs/method.md) */
-            const double compression = fmax(0.0, w->kernel_ratio[i] - 1.0);
-            double sx = 0, sy = 0;
-            if (compression > 0) {
-                for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
-                    sx += w->fluid_gx[e], sy += w->fluid_gy[e];
-                for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-                    const double wet = w->wetness[nl->wall_index[e]];
-                    sx += wet * w->wall_gx[e], sy += wet * w->wall_gy[e];
-                }
+    return 0;
+}
+
+/* The rest-density correction's displacement -dt^2 grad psi / rho0, plus a shift where the kernel sum says
+ * compressed, -2 w (rho_k/rho0 - 1) h^2 grad C with grad C = sum_b V_b grad W_ab (walls by their wetness): zero on a
+ * regular lattice and where the spacing is at rest or wider, it pushes apart particles that have closed on each
+ * other, also on the free surface, where psi is 0 (docs/method.md) */
+static void density_displacements(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    const double rho0 = sim->rho0, h = sim->derived.h_m, anti_clumping = sim->params.implicit.anti_clumping;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const double compression = fmax(0.0, w->kernel_ratio[i] - 1.0);
+        double sx = 0, sy = 0;
+        if (compression > 0) {
+            for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+                sx += w->fluid_gx[e], sy += w->fluid_gy[e];
+            for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+                const double wet = w->wetness[nl->wall_index[e]];
+                sx += wet * w->wall_gx[e], sy += wet * w->wall_gy[e];
             }
-            const double shift = 2.0 * prm->implicit.anti_clumping * compression * h * h;
-            w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i] - shift * sx;
-            w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i] - shift * sy;
         }
-        memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
-    } else {
+        const double shift = 2.0 * anti_clumping * compression * h * h;
+        w->density_dx[i] = -dt * dt / rho0 * w->grad_x[i] - shift * sx;
+        w->density_dy[i] = -dt * dt / rho0 * w->grad_y[i] - shift * sy;
+    }
+}
+
+/* 2b. The rest-density correction psi, -lap psi = alpha rho0 (rho_k/rho0 - 1)/dt^2 with the same operator, moves
+ * the particles by -dt^2 grad psi / rho0 and leaves their velocities alone: a spacing error is not a flow, and in one
+ * equation with the divergence its kicks were 0.34 u_max in Poiseuille's start-up (docs/method.md). phi stays in
+ * w->x; -1 with the health set when the solve fails */
+static int rest_density(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const surge_params *prm = &sim->params;
+    const int first = sim->wall_count, nf = sim->count - first;
+    if (!(prm->implicit.density_correction > 0)) {
         memset(w->density_dx, 0, (size_t)nf * sizeof *w->density_dx);
         memset(w->density_dy, 0, (size_t)nf * sizeof *w->density_dy);
+        return 0;
     }
-    implicit_wall_pressures(sim, w->x, w->neumann_pa);
+    memcpy(w->phi_saved, w->x, (size_t)nf * sizeof *w->x);
+    memcpy(w->rhs, w->density_rhs, (size_t)nf * sizeof *w->x);
+    /* from the last step's psi: a spacing error the last step left is corrected again */
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->x[i] = w->fixed[i] ? 0.0 : w->psi_by_id[sim->id[first + i]];
+    double residual = 0;
+    const int iterations = implicit_pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
+    if (iterations < 0) {
+        fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, sim->time_s);
+        return -1;
+    }
+    w->pressure_iterations += iterations;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->psi_by_id[sim->id[first + i]] = w->x[i];
+    implicit_wall_pressures(sim, w->x, NULL);
+    implicit_pressure_gradient(sim, w->x);
+    density_displacements(sim, dt);
+    memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
+    return 0;
+}
 
-    /* 3. v_n+1 = v* - dt grad phi / rho0, p_n+1 = p_n + phi */
+/* 3. v_n+1 = v* - dt grad phi / rho0 (into w->x), p_n+1 = p_n + phi, the walls' pressure for the outputs */
+static void correct_velocities(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double rho0 = sim->rho0;
+    double *by_id = w->pressure_by_id;
+    implicit_wall_pressures(sim, w->x, w->neumann_pa);
     implicit_pressure_gradient(sim, w->x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
@@ -352,16 +403,21 @@ static int implicit_step(surge_sim *sim)
     for (int kw = 0; kw < first; kw++)
         sim->pressure[kw] = (real)(w->dry[kw] ? 0.0 : ghost_value(sim, kw, w->pressure_n) -
                                    rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
-    const double face_reach_m = sim_contact_reach_m(sim);
-    /* a particle the contact rule on positions (below) left at the reach is in contact: its gap, read back in
-     * single precision, may come out a rounding either side of the reach */
-    const double contact_m = face_reach_m + CONTACT_ROUNDING_DP * prm->numerics.dp_m;
+}
+
+/* The contact rule on velocities: within reach of a wall face, no approach to it (the explicit scheme's contact rule;
+ * docs/method.md); a disc takes the reaction. The fluid's velocities become v_n+1 */
+static void contact_velocities(surge_sim *sim, double dt)
+{
+    const implicit_work *w = implicit_of(sim);
+    const int first = sim->wall_count, nf = sim->count - first;
+    /* a particle the contact rule on positions left at the reach is in contact: its gap, read back in single
+     * precision, may come out a rounding either side of the reach */
+    const double contact_m = sim_contact_reach_m(sim) + CONTACT_ROUNDING_DP * sim->params.numerics.dp_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         double vx1 = w->x[i], vy1 = w->x[nf + i];
-        /* within reach of a wall face: no approach to it (the explicit scheme's contact rule; docs/method.md); a
-         * disc takes the reaction */
         const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
         const int contact = sim->face_gap_m[a] < contact_m && approach_mps < 0;
         if (contact)
@@ -370,7 +426,16 @@ static int implicit_step(surge_sim *sim)
         sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }
-    if (prm->implicit.pair_distance_dp > 0)
+}
+
+/* r_n+1 = r_n + dt v_n+1 + the rest-density, close-pair and shifting displacements, with the contact rule on
+ * positions: a step that would end closer to the nearest wall face than its reach ends at the reach (the explicit
+ * scheme's face repulsion acts over many small steps; one large step needs the constraint itself; docs/method.md) */
+static void move_particles(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const int first = sim->wall_count, n = sim->count, nf = n - first;
+    if (sim->params.implicit.pair_distance_dp > 0)
         implicit_part_close_pairs(sim);
     else {
         memset(w->pair_dx, 0, (size_t)nf * sizeof *w->pair_dx);
@@ -380,41 +445,73 @@ static int implicit_step(surge_sim *sim)
         implicit_disc_forces(sim);
     #pragma omp parallel
     shifting_compute(sim, dt);
+    const double face_reach_m = sim_contact_reach_m(sim), dp = sim->params.numerics.dp_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
         double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first] + w->pair_dx[a - first];
         double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
-        /* the contact rule on positions: a step that would end closer to the nearest wall face than its reach ends
-         * at the reach (the explicit scheme's face repulsion acts over many small steps; one large step needs the
-         * constraint itself; docs/method.md) */
         const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -
                                  dt * sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < prm->numerics.dp_m && gap_after < face_reach_m)
+        if (sim->face_gap_m[a] < dp && gap_after < face_reach_m)
             dx += (face_reach_m - gap_after) * sim->face_nx[a], dy += (face_reach_m - gap_after) * sim->face_ny[a];
         sim->x[a] = sim->x_n[a] + dx;
         sim->y[a] = sim->y_n[a] + dy;
     }
-    if (sim->boulders.count > 0 && boulders_advance_implicit(sim, dt, prm->implicit.added_mass) != 0) {
-        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
-                                     .time_s = t_n + dt};
-        snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
-        fields_restore_step_start(sim);
+}
+
+/* Back to the step's start after a failure: the fluid, the discs as far as they got, time, step and the walls */
+static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs)
+{
+    fields_restore_step_start(sim);
+    if (discs == DISCS_SAVED)
         boulders_restore(sim);
-        boundary_wall_speeds(sim, t_n);
+    else if (discs == DISCS_ADVANCED)
+        boulders_restore_implicit(sim);
+    sim->time_s = t_n;
+    sim->step = step_n;
+    boundary_wall_speeds(sim, t_n);
+}
+
+static int implicit_step(surge_sim *sim)
+{
+    const double t_n = sim->time_s;
+    const int64_t step_n = sim->step;
+    if (neighbours_update(sim) != 0 || implicit_reserve_work(sim) != 0) {
+        sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = step_n + 1,
+                                     .time_s = t_n};
+        snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
         return -1;
     }
-    sim->time_s = t_n + dt;
-    sim->step++;
-    if (health_check(sim) != 0) {
-        fields_restore_step_start(sim);
-        if (sim->boulders.count > 0)
-            boulders_restore_implicit(sim);
-        sim->time_s = t_n;
-        sim->step--;
-        boundary_wall_speeds(sim, t_n);
-        return -1;
+    const double dt = begin_step(sim);
+    int discs = DISCS_UNTOUCHED;
+    int rc = viscous_predict(sim, dt);
+    if (rc == 0)
+        rc = project(sim, dt);
+    if (rc == 0)
+        rc = rest_density(sim, dt);
+    if (rc == 0) {
+        correct_velocities(sim, dt);
+        contact_velocities(sim, dt);
+        move_particles(sim, dt);
+        if (sim->boulders.count > 0) {
+            discs = DISCS_SAVED;
+            if (boulders_advance_implicit(sim, dt, sim->params.implicit.added_mass) != 0) {
+                sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1,
+                                             .step = step_n + 1, .time_s = t_n + dt};
+                snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
+                rc = -1;
+            } else
+                discs = DISCS_ADVANCED;
+        }
     }
-    return 0;
+    if (rc == 0) {
+        sim->time_s = t_n + dt;
+        sim->step = step_n + 1;
+        rc = health_check(sim);
+    }
+    if (rc != 0)
+        roll_back(sim, t_n, step_n, discs);
+    return rc == 0 ? 0 : -1;
 }
 
 static double implicit_contact_reach_dp(const surge_params *p) { return p->implicit.contact_reach_dp; }
