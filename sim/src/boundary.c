@@ -97,11 +97,34 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
                         {{t[9], t[10], t[11]}, {t[12], t[13], t[14]}, {t[15], t[16], t[17]}}};
 }
 
-void boundary_update(surge_sim *sim, int wall_pressure)
+/* Wall particle b's records for the fluid's pair loops (wall_pair_state) and the wall-face search (wall_face_state) */
+static inline void pack_wall_records(surge_sim *sim, int b)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    sim->wall_state[b] = (wall_pair_state){nl->moved_x[b], nl->moved_y[b], sim->rho[b], sim->pressure[b],
+                                           sim->wall_vx[b], sim->wall_vy[b], sim->wall_cont_vx[b],
+                                           sim->wall_cont_vy[b]};
+    const int disc = sim->boulders.count > 0 ? sim->boulders.of_wall[sim->id[b]] : -1;
+    if (disc < 0) {
+        sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], sim->wall_nx[b], sim->wall_ny[b],
+                                               sim->wall_depth_m[b], -1, 0, 0};
+    } else {
+        const double period = sim->grid.period_m;
+        double centre_dx = sim->x[b] - sim->boulders.x[disc];
+        if (period > 0)
+            centre_dx -= period * floor(centre_dx / period + 0.5);
+        sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], 0, 0,
+                                               (real)sim->boulders.radius[disc], (real)disc, (real)centre_dx,
+                                               (real)(sim->y[b] - sim->boulders.y[disc])};
+    }
+}
+
+void boundary_update(surge_sim *sim)
 {
     const neighbour_lists *nl = &sim->neighbours;
     const double rho0 = sim->rho0;
     const real *restrict vx = sim->vx, *restrict vy = sim->vy;
+    const int tait = !sim->scheme->incompressible; /* the walls' pressure from their density (else the scheme's) */
     if (sim->boulders.count > 0) { /* every thread sees the same count: all or none meet the single's barrier */
         #pragma omp single
         boulders_orient(&sim->boulders); /* for boulders_surface_velocity */
@@ -176,25 +199,10 @@ void boundary_update(surge_sim *sim, int wall_pressure)
         }
         sim->wall_cont_vx[b] = (real)cont_vx;
         sim->wall_cont_vy[b] = (real)cont_vy;
-        if (wall_pressure) {
+        if (tait) {
             sim->pressure[b] = tait_pressure(sim->rho[b], (real)rho0, (real)sim->b_pa);
             sim->inv_rho[b] = (real)1 / sim->rho[b];
         }
-        sim->wall_state[b] = (wall_pair_state){nl->moved_x[b], nl->moved_y[b], sim->rho[b], sim->pressure[b],
-                                               sim->wall_vx[b], sim->wall_vy[b], sim->wall_cont_vx[b],
-                                               sim->wall_cont_vy[b]};
-        const int disc = sim->boulders.count > 0 ? sim->boulders.of_wall[sim->id[b]] : -1;
-        if (disc < 0) {
-            sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], sim->wall_nx[b], sim->wall_ny[b],
-                                                   sim->wall_depth_m[b], -1, 0, 0};
-        } else {
-            const double period = sim->grid.period_m;
-            double centre_dx = sim->x[b] - sim->boulders.x[disc];
-            if (period > 0)
-                centre_dx -= period * floor(centre_dx / period + 0.5);
-            sim->face_state[b] = (wall_face_state){nl->moved_x[b], nl->moved_y[b], 0, 0,
-                                                   (real)sim->boulders.radius[disc], (real)disc, (real)centre_dx,
-                                                   (real)(sim->y[b] - sim->boulders.y[disc])};
-        }
+        pack_wall_records(sim, b);
     }
 }

@@ -7,8 +7,9 @@
 #include "pair_terms.h"
 #include "sim_internal.h"
 
-void interaction_prepare(surge_sim *sim, int tait)
+void interaction_prepare(surge_sim *sim)
 {
+    const int tait = !sim->scheme->incompressible; /* the pressure from the density (else the scheme's solve) */
     const neighbour_lists *nl = &sim->neighbours;
     const real rho0 = (real)sim->rho0, b = (real)sim->b_pa;
     /* one loop, one barrier: the walls' displacements (discs), then the fluid's with its state (after the surface

@@ -218,14 +218,13 @@ static inline void neighbours_track_particle(surge_sim *sim, int a)
  * entries does not leave the other waiting; outside a region, all of them. The pass ends with `omp barrier`. Each
  * particle sums its own pairs, so results do not depend on the shares. */
 void neighbours_fluid_share(const surge_sim *sim, int *begin, int *end);
-/* boundary.c: mDBC density and no-slip velocity of wall particles (worksharing); with wall_pressure also their
- * Tait pressure and 1/density (the explicit scheme's pair terms; the implicit scheme solves for its own) */
-void boundary_update(surge_sim *sim, int wall_pressure);
+/* boundary.c: mDBC density and no-slip velocity of wall particles (worksharing); where the scheme is not
+ * incompressible also their Tait pressure and 1/density (an incompressible scheme solves for its own) */
+void boundary_update(surge_sim *sim);
 /* interaction.c (worksharing): before boundary_update, every moving particle's displacement since the build
- * (neighbours_track) and the fluid's pair_state records (which the mDBC ghost nodes read), with tait first
- * the fluid's Tait pressure and 1/density (the explicit scheme; the implicit one solves for its pressure); after it,
- * the fluid's rates */
-void interaction_prepare(surge_sim *sim, int tait);
+ * (neighbours_track) and the fluid's pair_state records (which the mDBC ghost nodes read), where the scheme is not
+ * incompressible first the fluid's Tait pressure and 1/density; after it, the fluid's rates */
+void interaction_prepare(surge_sim *sim);
 void interaction_compute(surge_sim *sim, int corrector);
 /* boundary.c: the moving walls' speeds at time_s (the start ramp), and the particles' kinds that follow them */
 void boundary_wall_speeds(surge_sim *sim, double time_s);

@@ -28,8 +28,8 @@ static void evaluate_rates(surge_sim *sim, int corrector)
 {
     #pragma omp parallel
     {
-        interaction_prepare(sim, 1);
-        boundary_update(sim, 1);
+        interaction_prepare(sim);
+        boundary_update(sim);
         interaction_compute(sim, corrector);
     }
     boulders_fluid_forces(sim, NULL);

@@ -108,8 +108,8 @@ static double begin_step(surge_sim *sim)
     boundary_wall_speeds(sim, sim->time_s + dt);
     #pragma omp parallel
     {
-        interaction_prepare(sim, 0);
-        boundary_update(sim, 0);
+        interaction_prepare(sim);
+        boundary_update(sim);
     }
     implicit_geometry(sim);
     implicit_mirror_velocities(sim);
