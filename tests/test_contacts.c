@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "contact_solver.h"
+#include "boulders/contact_solver.h"
 
 enum { MAX_DISCS = 16 };
 

@@ -7,8 +7,16 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "eos.h"
+#include "physics/eos.h"
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
+#include "health.h"
+#include "neighbours/grid.h"
+#include "neighbours/neighbours.h"
+#include "physics/interaction.h"
+#include "physics/shifting.h"
+#include "scene/scene.h"
 
 static int failures = 0;
 

@@ -3,6 +3,8 @@
 #include <stdio.h>
 
 #include "sim_internal.h"
+#include "scene/scene.h"
+#include "health.h"
 
 /* The first check that particle a fails, with the offending value. */
 static surge_health_check check_particle(const surge_sim *sim, int a, double *value)

@@ -5,8 +5,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "eos.h"
+#include "physics/eos.h"
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
+#include "neighbours/grid.h"
+#include "neighbours/neighbours.h"
+#include "scene/scene.h"
 
 /* sum_b dp^2 W(r_ab) over a square lattice of spacing dp, the particle itself included: the kernel sum of an
  * incompressible fluid on that lattice is rho0 times this (1.001 at C_h 1.5, 1.006 at C_h 1.0), not rho0 */

@@ -1,5 +1,5 @@
 /* The registry of time-stepping schemes: numerics.scheme's value indexes it (params.c lists the names). */
-#include "scheme.h"
+#include "scheme/scheme.h"
 
 static const time_scheme *const schemes[] = {
     [SURGE_SCHEME_EXPLICIT] = &scheme_explicit,

@@ -5,6 +5,12 @@
 
 #include "sim_internal.h"
 #include "scheme/scheme.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
+#include "health.h"
+#include "neighbours/neighbours.h"
+#include "physics/interaction.h"
+#include "physics/shifting.h"
 
 /* dt = C_CFL min(dt_f, dt_cv, dt_nu)  (workshop paper eq. 7), from the largest acceleration squared and viscous
  * speed over the fluid (reduced in explicit_step's predictor region) */

@@ -8,7 +8,7 @@
  * components) holds one copy of the hierarchy per block, built one after another on the same matrix (hypre's
  * coarsening reseeds its random numbers at each build, so the copies are the same), and V-cycles the blocks on
  * their own threads, one copy each: the same arithmetic as one copy block after block. */
-#include "amg.h"
+#include "scheme/implicit/amg.h"
 
 #include <math.h>
 #include <mpi.h>

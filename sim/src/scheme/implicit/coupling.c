@@ -5,7 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
+#include "boulders/boulders.h"
 
 /* Close pairs (implicit.pair_distance_dp, docs/method.md): each fluid particle closer than the distance to another
  * loses half their speed toward each other and moves half the way to the distance apart (the MPS collision model,

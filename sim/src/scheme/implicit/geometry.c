@@ -5,7 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
+#include "boulders/boulders.h"
+#include "neighbours/grid.h"
+#include "physics/interaction.h"
+#include "physics/shifting.h"
 
 /* The velocity each wall's no-slip mirrors about: its own; the belt-wall corner's, the fixed upstream wall's; a disc
  * particle's, the disc's surface's at its ghost's mirror line (as boundary.c) */

@@ -6,9 +6,9 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-#include "amg.h"
-#include "lanes.h"
-#include "pair_terms.h"
+#include "scheme/implicit/amg.h"
+#include "physics/lanes.h"
+#include "physics/pair_terms.h"
 #include "sim_internal.h"
 
 #define DOT_BLOCK 4096        /* dot products: partial sums over fixed blocks, added in order */

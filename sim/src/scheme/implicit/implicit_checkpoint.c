@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
 
 /* The implicit scheme's state beside the particles (checkpoint versions 6 and 7), so that a restarted run repeats the
  * uninterrupted one bit for bit: u32 guesses | phi[f64] by particle id (guesses >= 1) | psi[f64], v*_x - v_x[f64],

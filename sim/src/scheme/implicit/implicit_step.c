@@ -19,7 +19,13 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
+#include "health.h"
+#include "neighbours/neighbours.h"
+#include "physics/interaction.h"
+#include "physics/shifting.h"
 
 /* dt = min(cfl h / u_max, force_cfl sqrt(h / |g|)) from the velocities at the step's start */
 static double implicit_dt(const surge_sim *sim)

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
 
 /* sum_i a_i b_i (b NULL: sum_i a_i) over n, in fixed blocks added in order: the same for any thread count */
 double implicit_dot(const implicit_work *w, const double *a, const double *b, int n)

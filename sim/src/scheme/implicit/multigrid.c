@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
 
 /* Whether this step's pressure (or viscous) solves use the multigrid (implicit.preconditioner) */
 int implicit_multigrid(const surge_sim *sim, bool viscous)

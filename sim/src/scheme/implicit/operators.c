@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
 
 /* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost; x = (vx | vy). */
 void implicit_viscous_operator(surge_sim *sim, const double *x, double *out)

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "implicit.h"
+#include "scheme/implicit/implicit.h"
 
 static int grow(void **array, size_t need, size_t size)
 {

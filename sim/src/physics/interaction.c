@@ -3,9 +3,11 @@
  * shifting need. */
 #include <math.h>
 
-#include "eos.h"
-#include "pair_terms.h"
+#include "physics/eos.h"
+#include "physics/pair_terms.h"
 #include "sim_internal.h"
+#include "neighbours/neighbours.h"
+#include "physics/interaction.h"
 
 void interaction_prepare(surge_sim *sim)
 {

@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "sim_internal.h"
+#include "neighbours/grid.h"
 
 int grid_init(surge_sim *sim, char *err, size_t err_len)
 {

@@ -1,11 +1,10 @@
-/* Boulders: rigid discs made of boundary particles, moved by the fluid (GMD eq. 10-11) and by contacts
- * (contact_solver.h). The solver's part of them; see boulders.c. */
-#ifndef SURGE_BOULDERS_H
-#define SURGE_BOULDERS_H
+/* The boulders' state: rigid discs made of boundary particles (boulders.h has what moves them). */
+#ifndef SURGE_BOULDER_SET_H
+#define SURGE_BOULDER_SET_H
 
 #include <stdint.h>
 
-#include "contact_solver.h"
+#include "boulders/contact_solver.h"
 #include "precision.h"
 
 typedef struct boulder_set {

@@ -10,8 +10,10 @@
 #include <string.h>
 
 #include "surge/boulder_scene.h"
-#include "pair_terms.h"
+#include "physics/pair_terms.h"
 #include "sim_internal.h"
+#include "scene/scene.h"
+#include "boulders/boulders.h"
 
 enum { MAX_PLACEMENT_TRIES = 2000000, MAX_RANDOM_DISCS = 20000 };
 

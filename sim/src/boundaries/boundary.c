@@ -3,8 +3,10 @@
  * wall face, and, for no-slip, the velocity 2 v_wall - v_ghost. */
 #include <math.h>
 
-#include "eos.h"
+#include "physics/eos.h"
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
 
 /* Smooth start of moving walls: v(t) = v_target (1 - cos(pi t / T)) / 2 for t < T. Sets the velocity of every
  * wall particle but the boulders' (theirs follows their disc). */

@@ -9,6 +9,9 @@
 #include <string.h>
 
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "neighbours/grid.h"
+#include "neighbours/neighbours.h"
 
 /* What a pass over fluid particle i's lists costs, in list entries: its fluid and wall entries and a part of its own
  * (the lane totals, the wall-face search, the writes), counted as PARTICLE_COST_ENTRIES entries; cost_before(i) is

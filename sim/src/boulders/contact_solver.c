@@ -1,7 +1,7 @@
 /* Contacts of rigid discs: grid broad phase, projected Gauss-Seidel on impulses with warm starting. See
  * contact_solver.h. Normal n points from body a to body b (a is the wall for disc-wall contacts); the
  * tangent is t = (-n_y, n_x). */
-#include "contact_solver.h"
+#include "boulders/contact_solver.h"
 
 #include <math.h>
 #include <stdint.h>

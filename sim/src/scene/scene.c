@@ -4,8 +4,10 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "eos.h"
+#include "physics/eos.h"
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "scene/scene.h"
 
 /* The hydrostatic head's speed sqrt(g_n H) over the fluid's depth (a closed channel: its height): c0 = 10 times it
  * keeps the hydrostatic density variation rho0 g_n H / (rho0 c0^2) within 1 %. */

@@ -27,6 +27,9 @@
 #include <unistd.h>
 
 #include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "boundaries/boundary.h"
+#include "neighbours/neighbours.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
 #define CHECKPOINT_VERSION 8u

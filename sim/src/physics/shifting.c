@@ -3,8 +3,10 @@
  * shifting"). */
 #include <math.h>
 
-#include "pair_terms.h"
+#include "physics/pair_terms.h"
 #include "sim_internal.h"
+#include "neighbours/neighbours.h"
+#include "physics/shifting.h"
 
 /* The displacement of fluid particle a, from the concentration gradient of the corrector's pass. */
 static void shift_displacement(const surge_sim *sim, int a, double dt, double *sx, double *sy)
