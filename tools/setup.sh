@@ -6,14 +6,13 @@ cd "$(dirname "$0")/.."
 packages="build-essential cmake pkg-config libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core ffmpeg libzmq3-dev libcjson-dev libhypre-dev python3 python3-numpy python3-zmq python3-matplotlib"
 # what installs surgepy, offline: Debian's pip and setuptools (without pip's recommended python3-dev)
 python_build="python3-pip python3-setuptools python3-wheel"
-missing=""
-missing_python_build=""
-for p in $packages; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing="$missing $p"
-done
-for p in $python_build; do
-    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing_python_build="$missing_python_build $p"
-done
+missing_of() {
+    for p in "$@"; do
+        dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || printf ' %s' "$p"
+    done
+}
+missing=$(missing_of $packages)
+missing_python_build=$(missing_of $python_build)
 if [ -n "$missing$missing_python_build" ]; then
     echo "setup: installing$missing$missing_python_build"
     apt-get update -qq
