@@ -4,8 +4,8 @@
     check("toe advances", speed > 0, "speed %g m/s" % speed)   # one line: "NAME: ok", or "NAME: FAILED" and why
     sys.exit(finish())                                          # prints the count; exit status 1 if any failed
 
-ctest runs every test with PYTHONPATH=tools (tests/CMakeLists.txt), so `surgepy` and tools/*.py import as they are;
-by hand: `PYTHONPATH=tools /usr/bin/python3 tests/test_x.py ...` from the repository root.
+The tests import `surgepy` as tools/setup.sh installs it (python/surgepy, editable) and load a tool in tools/ or a
+study's driver by its path (load_module); by hand: `/usr/bin/python3 tests/test_x.py ...`.
 """
 import importlib.util
 import os
@@ -15,7 +15,7 @@ failures = []
 
 
 def load_module(path):
-    """The Python file at path as a module: a study's driver, which lives in its own folder, outside any package."""
+    """The Python file at path as a module: a study's driver or a tool in tools/, which live outside any package."""
     name = os.path.splitext(os.path.basename(path))[0]
     spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)

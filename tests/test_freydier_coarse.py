@@ -17,7 +17,10 @@ import os
 import subprocess
 import sys
 
-import freydier_metrics
+from checks import load_module
+
+freydier_metrics = load_module(os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "tools",
+                                            "freydier_metrics.py"))
 
 BOUNDS = {"zeta_h": 0.25, "zeta_f": 0.20}
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Checks tools/freydier_metrics.py (and the writer in tools/surgepy/vtp.py) on synthetic run folders.
+"""Checks tools/freydier_metrics.py (and the writer in python/surgepy/vtp.py) on synthetic run folders.
 
 Usage: test_freydier_metrics.py OUT_DIR [--keep]
 
@@ -38,10 +38,10 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 TOOLS = os.path.join(HERE, "..", "tools")
 import checks  # noqa: E402
-import freydier_metrics as fm  # noqa: E402
 from surgepy import vtp  # noqa: E402
 
 SCRIPT = os.path.join(TOOLS, "freydier_metrics.py")
+fm = checks.load_module(SCRIPT)
 
 RHO = 1383.0
 NU = 0.0040491684743

@@ -23,8 +23,8 @@ import subprocess
 import sys
 
 SURGE, SOURCE, WORK = sys.argv[1:4]
-from checks import check, finish  # noqa: E402
-import freydier_metrics  # noqa: E402
+from checks import check, finish, load_module  # noqa: E402
+freydier_metrics = load_module(os.path.join(SOURCE, "tools", "freydier_metrics.py"))
 
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)

@@ -151,7 +151,7 @@ no_offset = damaged("no_offset", lambda b: b.replace(b'offset="0"', b'offzet="0"
 non_finite = rewritten("non_finite", density_kgpm3=lambda s: np.where(s["kind"] == 0, np.nan, s["density_kgpm3"]))
 no_fluid = rewritten("no_fluid", kind=lambda s: np.ones_like(s["kind"]))
 
-# ---- 1. tools/surgepy/vtp.py: one error class, naming the file, for every malformed input ----
+# ---- 1. python/surgepy/vtp.py: one error class, naming the file, for every malformed input ----
 for name, d in (("no <Points>", no_points), ("malformed XML", bad_xml), ("no offset attribute", no_offset)):
     try:
         vtp.read_vtp(os.path.join(d, SNAPS[0]))

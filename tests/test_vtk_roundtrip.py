@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Decodes DIR/synthetic.vtp written by tests/test_vtk_output.c with tools/surgepy/vtp.py and checks that
+"""Decodes DIR/synthetic.vtp written by tests/test_vtk_output.c with python/surgepy/vtp.py and checks that
 every value equals the known one exactly.
 
 Usage: test_vtk_roundtrip.py DIR/synthetic.vtp

@@ -13,7 +13,7 @@ For fluid particles in the box [x0, x1] x [y0, y1] (metres; choose it away from 
   nu_eff = -g sin(theta) / (2 b) against the run's nu; and the vertical pressure gradient against hydrostatic
   rho0 g cos(theta). In a uniform film both ratios are 1.
 
-Reads the run's params.ini and .vtp files (tools/surgepy/vtp.py); numpy only.
+Reads the run's params.ini and .vtp files (python/surgepy/vtp.py); numpy only.
 """
 import argparse
 import glob

@@ -14,7 +14,7 @@ and the small still tank (1,472 particles) with fast-all, where the solver is fa
 limit. Each run starts paused with a control socket and is resumed once the subscriber is connected, so all
 rates cover the same span. The configurations are run in turn --repeat times (interleaved, so a slow spell of
 the machine does not fall on one of them only) and the table gives the median of each: solver steps/s, its
-ratio to "alone", states received per second and MB/s. The subscriber is Python (tools/surgepy/client.py) decoding every field with numpy.
+ratio to "alone", states received per second and MB/s. The subscriber is Python (python/surgepy/client.py) decoding every field with numpy.
 """
 import argparse
 import os

@@ -14,7 +14,7 @@ For each --every-th snapshot (and the last), over the fluid more than --ignore-m
   their column's top; 1 when the particles sit as far apart as their densities say (tools/operator_check.py);
 - the toe: the downstream end of the last column whose top exceeds 10 % of h_max;
 - the lowest fluid particle's height above the bed face (negative: inside the wall).
-Reads params.ini and the run's snap_*.vtp (tools/surgepy/vtp.py); numpy only.
+Reads params.ini and the run's snap_*.vtp (python/surgepy/vtp.py); numpy only.
 """
 import argparse
 import glob

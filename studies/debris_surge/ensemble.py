@@ -58,11 +58,11 @@ import sys
 import threading
 import time
 
+from surgepy import cli_checks, study
+from surgepy.run_params import ParamsError, RunParams
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-from surgepy import cli_checks, study  # noqa: E402
-from surgepy.run_params import ParamsError, RunParams  # noqa: E402
 
 TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")

@@ -34,11 +34,11 @@ import time
 
 import numpy as np
 
+from surgepy import cli_checks, study, vtp
+from surgepy.run_params import RunParams
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-from surgepy import cli_checks, study, vtp  # noqa: E402
-from surgepy.run_params import RunParams  # noqa: E402
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",

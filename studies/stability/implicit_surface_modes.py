@@ -20,13 +20,11 @@ mirrors the particles across the surface, the images' pressure negated, so that 
     /usr/bin/python3 studies/stability/implicit_surface_modes.py [--columns 8] [--rows 16] [--ch 1.8]
 """
 import argparse
-import os
 import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "tools"))
-from surgepy import cli_checks  # noqa: E402
+from surgepy import cli_checks
 
 KAPPAS = (0.0, 0.01, 0.05, 0.2, 1.0)
 

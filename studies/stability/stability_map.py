@@ -19,10 +19,10 @@ import subprocess
 import sys
 import time
 
+from surgepy import cli_checks, study, vtp
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
-sys.path.insert(0, os.path.join(ROOT, "tools"))
-from surgepy import cli_checks, study, vtp  # noqa: E402
 
 COLUMNS = ["case", "dp_m", "shifting", "ch", "cfl", "c0_factor", "end_s", "status", "message", "wall_s",
            "time_reached_s", "max_density_deviation", "mean_vx_last_s_mps", "frame"]
