@@ -1,7 +1,7 @@
 #!/usr/bin/python3
-"""Bad inputs to the Python tools (tools/*.py, tools/surgectl, the study drivers in studies/*/): each gets a clear
-error naming what is wrong, exit status 2 (3 for surgectl's unexpected replies), and never a traceback, a hang or a
-number printed from garbage.
+"""Bad inputs to the Python tools (tools/*.py, tools/surgectl, bench/*.py, the study drivers in studies/*/): each
+gets a clear error naming what is wrong, exit status 2 (3 for surgectl's unexpected replies), and never a traceback,
+a hang or a number printed from garbage.
 
 usage: test_tools_inputs.py SURGE SOURCE_DIR WORK_DIR
 
@@ -28,6 +28,8 @@ TOOLS = os.path.join(SOURCE, "tools")
 FC = os.path.join(SOURCE, "studies", "freydier", "freydier_convergence.py")
 SM = os.path.join(SOURCE, "studies", "stability", "stability_map.py")
 PL = os.path.join(SOURCE, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
+RB = os.path.join(SOURCE, "bench", "render_bench.py")
+AB = os.path.join(SOURCE, "bench", "ab_bench.py")
 from checks import check, finish, load_module  # noqa: E402
 from surgepy import vtp  # noqa: E402
 freydier_convergence = load_module(FC)
@@ -362,15 +364,15 @@ expect("stream_bench: surge exits at startup: its message", r, "surge: bad optio
 calls = open(path("surge_calls.txt")).read().count("call") if os.path.exists(path("surge_calls.txt")) else 0
 check("stream_bench: surge exiting at startup stops the benchmark after that one run", calls == 1,
       "%d runs started" % calls)
-expect("render_bench --surge a folder", tool("render_bench.py", "--surge", WORK), "--surge")
+expect("render_bench --surge a folder", tool(RB, "--surge", WORK), "--surge")
 BUILD = os.path.dirname(SURGE)
-expect("ab_bench --base not a commit", tool("ab_bench.py", "--new", BUILD, "--base", "no-such-commit"),
+expect("ab_bench --base not a commit", tool(AB, "--new", BUILD, "--base", "no-such-commit"),
        "--base", "no-such-commit")
-expect("ab_bench --new without surge-bench", tool("ab_bench.py", "--new", WORK), "surge-bench")
-expect("ab_bench --ch 0", tool("ab_bench.py", "--new", BUILD, "--ch", "1.0,0"), "--ch")
-expect("ab_bench --threads x", tool("ab_bench.py", "--new", BUILD, "--threads", "x"), "--threads")
-expect("ab_bench --pairs 0", tool("ab_bench.py", "--pairs", "0"), "--pairs")
-expect("ab_bench --set-b without =", tool("ab_bench.py", "--new", BUILD, "--set-b", "numerics.cfl"), "--set-b")
+expect("ab_bench --new without surge-bench", tool(AB, "--new", WORK), "surge-bench")
+expect("ab_bench --ch 0", tool(AB, "--new", BUILD, "--ch", "1.0,0"), "--ch")
+expect("ab_bench --threads x", tool(AB, "--new", BUILD, "--threads", "x"), "--threads")
+expect("ab_bench --pairs 0", tool(AB, "--pairs", "0"), "--pairs")
+expect("ab_bench --set-b without =", tool(AB, "--new", BUILD, "--set-b", "numerics.cfl"), "--set-b")
 
 
 def bench(*args):

@@ -1,7 +1,7 @@
 # Writes OUTPUT, a C header defining SURGE_BUILD_COMMIT: the source's git commit (`git describe --always --dirty`),
 # with, when the work tree has changes, a short hash of `git diff HEAD` ("-dirty.1a2b3c4d": two builds with different
 # changes are told apart); "unknown" without git or when SOURCE_DIR is not the top of its own work tree (a tree
-# exported into another repository's folder, as tools/ab_bench.py does). Run at every build (CMakeLists.txt,
+# exported into another repository's folder, as bench/ab_bench.py does). Run at every build (CMakeLists.txt,
 # surge_build_commit); the header is rewritten only when its text changes, so only what includes it recompiles.
 set(commit "unknown")
 execute_process(COMMAND git -C "${SOURCE_DIR}" rev-parse --show-toplevel

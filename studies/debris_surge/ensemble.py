@@ -288,7 +288,7 @@ def solid_fraction(folder):
 
 def run_dp(folder):
     """The dp the member ran with, from its params.ini: a dp that does not divide the period is moved by surge
-    (tools/surge.c, fit_dp_to_period), so the folder's name holds the requested dp, not always the one run."""
+    (apps/surge/case_loading.c, fit_dp_to_period), so the folder's name holds the requested dp, not always the one run."""
     try:
         return RunParams(folder).positive("numerics", "dp_m")
     except ParamsError as e:

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """render_bench: the renderer's frames per second, and the solver's slowdown while it renders.
 
-  tools/render_bench.py [--surge build/surge] [--threads 2] [--end-s 0.03] [--repeat 3] [--out runs/render_bench]
+  bench/render_bench.py [--surge build/surge] [--threads 2] [--end-s 0.03] [--repeat 3] [--out runs/render_bench]
 
 1. build/surge-render-bench 1920 1080: frames per second drawing 20,000 and 200,000 particles at 1920 x 1080,
    with and without PNG encoding.

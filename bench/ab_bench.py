@@ -1,11 +1,11 @@
 #!/usr/bin/python3
 """ab_bench: the solver's throughput at an earlier commit (A) against the current build (B), interleaved.
 
-  tools/ab_bench.py [--base f50cf94] [--pairs 3] [--ch 1.0,1.8] [--threads 1,2] [--end-s 0.1] [--new build]
+  bench/ab_bench.py [--base f50cf94] [--pairs 3] [--ch 1.0,1.8] [--threads 1,2] [--end-s 0.1] [--new build]
                     [--set-b NAME=VALUE ...]
 
 A is the commit --base, exported with `git archive` into build/ab/<commit>/ and built there in Release with the
-current tools/bench.c (the public API it uses has not changed since f50cf94, but for the program and machine lines
+current bench/bench.c (the public API it uses has not changed since f50cf94, but for the program and machine lines
 it prints, left out for a base older than 87303e8), so that A and B run the same driver
 on the same case file (this checkout's cases/incline_film.ini). For each configuration (C_h, threads) it runs
 surge-bench A B A B ... --pairs times, one at a time, with OMP_WAIT_POLICY=PASSIVE, and prints each run's
@@ -48,7 +48,9 @@ def build_base(revision):
         subprocess.run(["tar", "-x", "-C", tree], stdin=archive.stdout, check=True)
         if archive.wait() != 0:
             fail("git archive %s failed" % sha)
-    shutil.copyfile(os.path.join(ROOT, "tools", "bench.c"), os.path.join(tree, "tools", "bench.c"))
+    # the base's own place for bench.c: bench/, or tools/ in commits before the benchmarks had their folder
+    bench_folder = "bench" if os.path.isfile(os.path.join(tree, "bench", "bench.c")) else "tools"
+    shutil.copyfile(os.path.join(ROOT, "bench", "bench.c"), os.path.join(tree, bench_folder, "bench.c"))
     # a base older than 87303e8 has no surge_build_description(): bench.c then leaves out its program/machine lines
     with open(os.path.join(tree, "sim", "include", "surge", "platform.h")) as f:
         has_build_info = "surge_build_description" in f.read()

@@ -4,7 +4,7 @@
  *
  * For 20,000 and 200,000 particles (a block of fluid, 5:1 wide, on three wall rows, speeds varying across it)
  * it times drawing a frame (OpenGL on OSMesa plus the overlays) and drawing plus PNG encoding, and prints frames
- * per second for each. The solver's slowdown while rendering is measured by tools/render_bench.py. */
+ * per second for each. The solver's slowdown while rendering is measured by bench/render_bench.py. */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <stdio.h>

@@ -1,7 +1,7 @@
 /* Benchmark: particle-steps per second on the incline-film scene (cases/incline_film.ini), 0.1 s of flow from
  * rest. With no configuration option it runs its sweep, C_h = 1.0 (4 wall layers) and 1.8 (automatic layers) on 1
  * and 2 threads; with --ch, --threads or --layers it runs that one configuration, so that an outside harness
- * (tools/ab_bench.py) can time it. Prints one line per configuration containing "particle-steps/s", the ratio
+ * (bench/ab_bench.py) can time it. Prints one line per configuration containing "particle-steps/s", the ratio
  * of each to the first, and the accuracy reached: the RMS error of the fluid's x velocity against the analytic
  * start-up of the film, relative to the steady surface speed.
  * Usage: surge-bench [CASE] [--end-s T] [--ch C] [--threads N] [--layers L] [-s NAME=VALUE]... */
@@ -176,7 +176,7 @@ int main(int argc, char **argv)
     }
     double first_rate = 0;
     printf("# surge-bench: %s, %.3g s of flow from rest\n", c.case_path, c.end_s);
-#ifndef SURGE_BENCH_WITHOUT_BUILD_INFO /* tools/ab_bench.py builds this file against commits older than 87303e8 */
+#ifndef SURGE_BENCH_WITHOUT_BUILD_INFO /* bench/ab_bench.py builds this file against commits older than 87303e8 */
     char machine[512];
     surge_machine_description(machine, sizeof machine);
     printf("# program: %s\n# machine: %s\n", surge_build_description(), machine);
