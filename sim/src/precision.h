@@ -4,6 +4,8 @@
 #ifndef SURGE_PRECISION_H
 #define SURGE_PRECISION_H
 
+#include <math.h>
+
 #ifdef SURGE_DOUBLE_PAIRS
 typedef double real;
 #define REAL_SQRT sqrt

@@ -146,6 +146,16 @@ int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, cha
 
 bool surge_sim_reports_solves(const surge_sim *sim) { return sim->scheme->reports_solves; }
 
+void surge_sim_check_report(const surge_sim *sim, FILE *out, int verbose)
+{
+    /* list entries per fluid particle: the particles within 2h + the scheme's skin; 12 bytes each, about 200 bytes of
+     * state */
+    const double dp = sim->params.numerics.dp_m, reach = 2.0 * sim->derived.h_m + sim_neighbour_skin_m(sim);
+    const double entries = SURGE_PI * reach * reach / (dp * dp);
+    const double bytes = sim->derived.fluid_count * (12 * entries + 200) + sim->derived.wall_count * (6 * entries + 150);
+    sim->scheme->check_report(sim, out, verbose, entries, bytes);
+}
+
 double surge_sim_expected_speed_mps(const surge_sim *sim) { return scene_expected_speed(&sim->params); }
 
 int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)

@@ -3,6 +3,7 @@
 #define SURGE_SIM_H
 
 #include <stdint.h>
+#include <stdio.h>
 
 #include "surge/params.h"
 #include "surge/snapshot.h"
@@ -89,6 +90,10 @@ typedef struct surge_diagnostics {
 surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
 /* Whether the scheme in use solves linear systems: the diagnostics' iterations and residuals mean something */
 bool surge_sim_reports_solves(const surge_sim *sim);
+
+/* What `surge check` says of the scene for the scheme in use, before it runs: its warnings on steps and resolution,
+ * its time step, memory and cost estimate (verbose: all of it, else only warnings and an estimate past 4 GB) */
+void surge_sim_check_report(const surge_sim *sim, FILE *out, int verbose);
 
 /* 64-bit FNV-1a hash of the fluid's positions, velocities and densities, the boulders' state, step and time:
  * equal hashes mean bit-identical states. */

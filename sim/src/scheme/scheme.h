@@ -34,6 +34,9 @@ typedef struct time_scheme {
      * corrupt block (version: the checkpoint's) */
     int (*checkpoint_write)(FILE *f, const surge_sim *sim);
     int (*checkpoint_read)(FILE *f, surge_sim *sim, uint32_t version);
+    /* What `surge check` says of the scene for this scheme (surge_sim_check_report): list_entries per fluid particle
+     * and bytes of memory estimated from the lists */
+    void (*check_report)(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
     /* Adds what the scheme knows to the diagnostics (NULL: nothing) */
     void (*diagnostics)(const surge_sim *sim, surge_diagnostics *d);
 } time_scheme;

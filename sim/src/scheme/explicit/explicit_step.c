@@ -137,6 +137,8 @@ static int explicit_step(surge_sim *sim)
 }
 
 
+void explicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
+
 static double explicit_contact_reach_dp(const surge_params *p) { return p->walls.face_repulsion_reach_dp; }
 static double explicit_neighbour_skin_h(const surge_params *p) { return p->numerics.neighbour_skin_h; }
 
@@ -154,4 +156,5 @@ const time_scheme scheme_explicit = {
     .neighbour_skin_h = explicit_neighbour_skin_h,
     .lookahead_s = explicit_lookahead_s,
     .step = explicit_step,
+    .check_report = explicit_check_report,
 };

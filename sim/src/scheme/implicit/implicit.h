@@ -180,6 +180,8 @@ int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const 
                              double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed);
 void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
 int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
+/* implicit_report.c */
+void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
 /* coupling.c */
 void implicit_part_close_pairs(surge_sim *sim);
 void implicit_disc_forces(surge_sim *sim);

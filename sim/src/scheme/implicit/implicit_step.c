@@ -555,6 +555,7 @@ const time_scheme scheme_implicit = {
     .create = implicit_create,
     .destroy = implicit_destroy,
     .step = implicit_step,
+    .check_report = implicit_check_report,
     .checkpoint_write = implicit_checkpoint_write,
     .checkpoint_read = implicit_checkpoint_read,
     .diagnostics = implicit_diagnostics,
