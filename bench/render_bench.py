@@ -54,6 +54,7 @@ def main():
         for name in rates:
             folder = os.path.join(args.out, name.replace(" ", "_"))
             shutil.rmtree(folder, ignore_errors=True)
+            os.makedirs(folder)  # the movie's folder must exist
             extra = render + ["--frames", os.path.join(folder, "frames"), "--movie",
                               os.path.join(folder, "movie.mp4")] if name == "rendering" else []
             p = subprocess.run([args.surge, "run", film, "-o", os.path.join(folder, "out"), "--overwrite"] + common + extra,
