@@ -1,6 +1,7 @@
 /* Boulders as data: the grading curve, the graded placement and the disc list's CSV (see surge/boulder_scene.h). */
 #define _DEFAULT_SOURCE /* erand48 */
 #include "surge/boulder_scene.h"
+#include "boulders/placement.h"
 
 #include <ctype.h>
 #include <errno.h>
@@ -215,7 +216,6 @@ double surge_grading_inverse(const surge_grading *g, double d_min, double d_max,
 
 /* ---- graded placement ---- */
 
-static double wrapped_dx(double dx, double period) { return period > 0 ? dx - period * floor(dx / period + 0.5) : dx; }
 
 static double standard_normal(unsigned short rng[3])
 {
@@ -227,6 +227,21 @@ static int compare_descending(const void *a, const void *b)
 {
     const double x = *(const double *)a, y = *(const double *)b;
     return (x < y) - (x > y);
+}
+
+/* The graded placement's region: a disc's centre lies behind the front by a log-normal distance (truncated to the
+ * block) and uniformly over the depth that keeps the gap from the bed and the surface */
+typedef struct front_region {
+    double x0, x1, depth, gap, log_median, sigma;
+} front_region;
+
+static int draw_behind_front(void *context, double r, unsigned short rng[3], double *x, double *y)
+{
+    const front_region *g = context;
+    const double behind_m = exp(g->log_median + g->sigma * standard_normal(rng));
+    *x = g->x1 - behind_m;
+    *y = r + g->gap + (g->depth - 2 * (r + g->gap)) * erand48(rng);
+    return *x < g->x0 + r + g->gap || *x > g->x1 - r - g->gap ? -1 : 0; /* the log-normal truncated to the block */
 }
 
 int surge_boulders_generate(const surge_params *p, surge_disc **out, char *err, size_t err_len)
@@ -292,40 +307,35 @@ int surge_boulders_generate(const surge_params *p, surge_disc **out, char *err, 
         return -1;
     }
     qsort(diameters, (size_t)n, sizeof *diameters, compare_descending);
-    const double log_median = log(p->boulders.front_median_m), sigma = p->boulders.front_sigma;
-    long tries = 0;
-    for (int i = 0; i < n; i++) {
-        const double r = 0.5 * diameters[i];
-        int placed = 0;
-        while (!placed && tries < MAX_PLACEMENT_TRIES) {
-            tries++;
-            const double behind_m = exp(log_median + sigma * standard_normal(rng));
-            const double x = x1 - behind_m, y = r + gap + (depth - 2 * (r + gap)) * erand48(rng);
-            if (x < x0 + r + gap || x > x1 - r - gap)
-                continue; /* the log-normal truncated to the block */
-            placed = 1;
-            for (int j = 0; j < i && placed; j++) {
-                const double dx = wrapped_dx(x - discs[j].x_m, period), dy = y - discs[j].y_m;
-                const double reach = r + discs[j].r_m + gap;
-                placed = dx * dx + dy * dy >= reach * reach;
-            }
-            if (placed)
-                discs[i] = (surge_disc){.x_m = x, .y_m = y, .r_m = r};
-        }
-        if (!placed) {
-            double placed_area = 0;
-            for (int j = 0; j < i; j++)
-                placed_area += pi * discs[j].r_m * discs[j].r_m;
-            snprintf(err, err_len, "boulders: placed %d of %d discs (%.3f of the fluid block's area, %.3f asked) in "
-                     "%d random tries; ask for fewer discs, or spread them further from the front "
-                     "(boulders.front_median_m %g m, front_sigma %g)", i, n, placed_area / block_area,
-                     area / block_area, MAX_PLACEMENT_TRIES, p->boulders.front_median_m, sigma);
-            free(diameters);
-            free(discs);
-            return -1;
-        }
+    double *radii = malloc(3 * sizeof(double) * (size_t)n);
+    if (!radii) {
+        free(diameters);
+        free(discs);
+        snprintf(err, err_len, "out of memory placing boulders");
+        return -1;
     }
+    double *xs = radii + n, *ys = radii + 2 * n;
+    for (int i = 0; i < n; i++)
+        radii[i] = 0.5 * diameters[i];
     free(diameters);
+    const double sigma = p->boulders.front_sigma;
+    front_region region = {x0, x1, depth, gap, log(p->boulders.front_median_m), sigma};
+    const int placed = placement_sequential(radii, n, gap, period, 0, draw_behind_front, &region, rng,
+                                            MAX_PLACEMENT_TRIES, xs, ys);
+    for (int i = 0; i < placed; i++)
+        discs[i] = (surge_disc){.x_m = xs[i], .y_m = ys[i], .r_m = radii[i]};
+    free(radii);
+    if (placed < n) {
+        double placed_area = 0;
+        for (int j = 0; j < placed; j++)
+            placed_area += pi * discs[j].r_m * discs[j].r_m;
+        snprintf(err, err_len, "boulders: placed %d of %d discs (%.3f of the fluid block's area, %.3f asked) in "
+                 "%d random tries; ask for fewer discs, or spread them further from the front "
+                 "(boulders.front_median_m %g m, front_sigma %g)", placed, n, placed_area / block_area,
+                 area / block_area, MAX_PLACEMENT_TRIES, p->boulders.front_median_m, sigma);
+        free(discs);
+        return -1;
+    }
     *out = discs;
     return n;
 }

@@ -14,6 +14,7 @@
 #include "sim_internal.h"
 #include "scene/scene.h"
 #include "boulders/boulders.h"
+#include "boulders/placement.h"
 
 enum { MAX_PLACEMENT_TRIES = 2000000, MAX_RANDOM_DISCS = 20000 };
 
@@ -46,7 +47,6 @@ void boulders_free(boulder_set *b)
     memset(b, 0, sizeof *b);
 }
 
-static double wrap_dx(double dx, double period) { return period > 0 ? dx - period * floor(dx / period + 0.5) : dx; }
 
 /* "x y r [vx vy omega], ..." */
 static int parse_list(boulder_set *b, const char *text, char *err, size_t err_len)
@@ -97,6 +97,23 @@ static int parse_list(boulder_set *b, const char *text, char *err, size_t err_le
             b->vx[i] = v[3], b->vy[i] = v[4], b->omega[i] = v[5];
         cursor += len + (cursor[len] == ',');
     }
+    return 0;
+}
+
+/* The random placement's region: a disc's centre is drawn uniformly where the disc keeps the gap from its edges (in x
+ * only where the region does not span the period) */
+typedef struct random_region {
+    double x0, x1, y0, y1, gap;
+    int spans_period;
+} random_region;
+
+static int draw_uniform(void *context, double r, unsigned short rng[3], double *x, double *y)
+{
+    const random_region *g = context;
+    const double margin_x = g->spans_period ? 0 : r + g->gap;
+    const double lo_x = g->x0 + margin_x, hi_x = g->x1 - margin_x, lo_y = g->y0 + r + g->gap, hi_y = g->y1 - r - g->gap;
+    *x = lo_x + (hi_x - lo_x) * erand48(rng);
+    *y = lo_y + (hi_y - lo_y) * erand48(rng);
     return 0;
 }
 
@@ -166,44 +183,29 @@ static int place_random(boulder_set *b, const surge_params *q, double period, ch
             radii[j - 1] = t;
         }
     const int spans_period = period > 0 && x1 - x0 >= period - 1e-12;
-    long tries = 0;
-    for (int i = 0; i < n; i++) {
-        const double r = radii[i];
-        const double margin_x = spans_period ? 0 : r + gap;
-        const double lo_x = x0 + margin_x, hi_x = x1 - margin_x, lo_y = y0 + r + gap, hi_y = y1 - r - gap;
-        if (hi_x < lo_x || hi_y < lo_y) {
-            snprintf(err, err_len, "boulders: a disc of radius %g m with gap %g m does not fit in the region "
-                     "[%g, %g] x [%g, %g] m", r, gap, x0, x1, y0, y1);
-            free(radii);
-            return -1;
-        }
-        int placed = 0;
-        while (!placed && tries < MAX_PLACEMENT_TRIES) {
-            tries++;
-            const double x = lo_x + (hi_x - lo_x) * erand48(rng), y = lo_y + (hi_y - lo_y) * erand48(rng);
-            placed = 1;
-            for (int j = 0; j < i && placed; j++) {
-                const double dx = wrap_dx(x - b->x[j], period), dy = y - b->y[j], d = r + b->radius[j] + gap;
-                placed = dx * dx + dy * dy >= d * d;
-            }
-            if (placed) {
-                b->x[i] = period > 0 ? x - period * floor(x / period) : x;
-                b->y[i] = y;
-                b->radius[i] = r;
-            }
-        }
-        if (!placed) {
-            double placed_area = 0;
-            for (int j = 0; j < i; j++)
-                placed_area += SURGE_PI * b->radius[j] * b->radius[j];
-            snprintf(err, err_len, "boulders: placed %d of %d discs (solid fraction %.3f of the %.3f asked) in %d "
-                     "random tries; lower boulders.solid_fraction or boulders.min_gap_m", i, n,
-                     placed_area / ((x1 - x0) * (y1 - y0)), q->boulders.solid_fraction, MAX_PLACEMENT_TRIES);
-            free(radii);
-            return -1;
-        }
+    /* the largest disc fits worst: the region must hold it away from its edges by the gap */
+    const double margin_x = spans_period ? 0 : radii[0] + gap;
+    if (x1 - margin_x < x0 + margin_x || y1 - radii[0] - gap < y0 + radii[0] + gap) {
+        snprintf(err, err_len, "boulders: a disc of radius %g m with gap %g m does not fit in the region "
+                 "[%g, %g] x [%g, %g] m", radii[0], gap, x0, x1, y0, y1);
+        free(radii);
+        return -1;
     }
+    random_region region = {x0, x1, y0, y1, gap, spans_period};
+    const int placed = placement_sequential(radii, n, gap, period, 1, draw_uniform, &region, rng, MAX_PLACEMENT_TRIES,
+                                            b->x, b->y);
+    for (int i = 0; i < placed; i++)
+        b->radius[i] = radii[i];
     free(radii);
+    if (placed < n) {
+        double placed_area = 0;
+        for (int j = 0; j < placed; j++)
+            placed_area += SURGE_PI * b->radius[j] * b->radius[j];
+        snprintf(err, err_len, "boulders: placed %d of %d discs (solid fraction %.3f of the %.3f asked) in %d "
+                 "random tries; lower boulders.solid_fraction or boulders.min_gap_m", placed, n,
+                 placed_area / ((x1 - x0) * (y1 - y0)), q->boulders.solid_fraction, MAX_PLACEMENT_TRIES);
+        return -1;
+    }
     return 0;
 }
 
@@ -269,7 +271,7 @@ int boulders_define(surge_sim *sim, char *err, size_t err_len)
     const double margin = p->contacts.margin_dp * dp;
     for (int i = 0; i < b->count; i++) {
         for (int j = 0; j < i; j++) {
-            const double dx = wrap_dx(b->x[i] - b->x[j], period), dy = b->y[i] - b->y[j];
+            const double dx = placement_wrap_dx(b->x[i] - b->x[j], period), dy = b->y[i] - b->y[j];
             const double reach = b->radius[i] + b->radius[j] + margin;
             if (dx * dx + dy * dy < reach * reach * (1 - 1e-12)) {
                 snprintf(err, err_len, "boulders %d and %d %s: centres %.4g m apart, radii%s add up to %.4g m", j + 1,
@@ -360,7 +362,7 @@ int boulders_cover(const surge_sim *sim, double x, double y)
     const double period = sim->params.domain.periodic_x ? sim->params.domain.length_m : 0;
     const double clearance = 0.25 * sim->params.numerics.dp_m;
     for (int i = 0; i < b->count; i++) {
-        const double dx = wrap_dx(x - b->x[i], period), dy = y - b->y[i], d = b->radius[i] + clearance;
+        const double dx = placement_wrap_dx(x - b->x[i], period), dy = y - b->y[i], d = b->radius[i] + clearance;
         if (dx * dx + dy * dy < d * d)
             return 1;
     }
