@@ -16,6 +16,7 @@
 #include "neighbours/neighbours.h"
 #include "physics/interaction.h"
 #include "physics/shifting.h"
+#include "scene/scales.h"
 #include "scene/scene.h"
 
 static int failures = 0;

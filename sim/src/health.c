@@ -3,7 +3,7 @@
 #include <stdio.h>
 
 #include "sim_internal.h"
-#include "scene/scene.h"
+#include "scene/scales.h"
 #include "health.h"
 
 /* The first check that particle a fails, with the offending value. */

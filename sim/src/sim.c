@@ -7,6 +7,7 @@
 
 #include "physics/eos.h"
 #include "sim_internal.h"
+#include "scene/scales.h"
 #include "boulders/boulders.h"
 #include "boundaries/boundary.h"
 #include "neighbours/grid.h"

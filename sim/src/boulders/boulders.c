@@ -12,7 +12,7 @@
 #include "surge/boulder_scene.h"
 #include "physics/pair_terms.h"
 #include "sim_internal.h"
-#include "scene/scene.h"
+#include "scene/scales.h"
 #include "boulders/boulders.h"
 #include "boulders/placement.h"
 
