@@ -218,6 +218,178 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
     return 0;
 }
 
+/* The header: magic, version, the parameters (with the live overrides) and the scene they build; NULL with err set */
+static surge_sim *read_header(FILE *f, const char *path, const char *const *overrides, int override_count,
+                              uint32_t *version, char *err, size_t err_len)
+{
+    char magic[8];
+    uint32_t real_size = 0;
+    uint64_t plen = 0;
+    if (read_all(f, magic, 8) || memcmp(magic, CHECKPOINT_MAGIC, 8) || read_all(f, version, 4) ||
+        read_all(f, &real_size, 4) || read_all(f, &plen, 8)) {
+        snprintf(err, err_len, "%s: not a surge checkpoint", path);
+        return NULL;
+    }
+    if (*version < 1 || *version > CHECKPOINT_VERSION || real_size != sizeof(real)) {
+        snprintf(err, err_len, "%s: checkpoint version %u with %u-byte reals; this build reads version %u with "
+                 "%zu-byte reals", path, *version, real_size, CHECKPOINT_VERSION, sizeof(real));
+        return NULL;
+    }
+    char *text = NULL;
+    if (plen > (1u << 20) || !(text = malloc(plen + 1)) || read_all(f, text, plen)) {
+        snprintf(err, err_len, "%s: truncated or corrupt parameter block", path);
+        free(text);
+        return NULL;
+    }
+    text[plen] = '\0';
+    surge_params params = surge_default_params();
+    char msg[512];
+    surge_sim *sim = NULL;
+    if (surge_params_load_text(&params, text, path, msg, sizeof msg) != 0)
+        snprintf(err, err_len, "%s: bad parameters in checkpoint: %s", path, msg);
+    else {
+        int overridden = 1;
+        for (int i = 0; i < override_count && overridden; i++)
+            overridden = surge_params_override(&params, overrides[i], true, err, err_len) == 0;
+        if (overridden)
+            sim = surge_sim_create(&params, err, err_len);
+    }
+    free(text);
+    return sim;
+}
+
+/* Step, time and the particle counts, as the checkpoint holds them */
+typedef struct checkpoint_clock {
+    int64_t step;
+    double time_s, dt_s, first_dt_s;
+    int32_t count, wall_count;
+    uint32_t lists_built;
+    uint64_t hash;
+} checkpoint_clock;
+
+/* The state after the header, up to the state hash; -1 with err set */
+static int read_state(FILE *f, surge_sim *sim, const char *path, uint32_t version, checkpoint_clock *c, char *err,
+                      size_t err_len)
+{
+    if (read_all(f, &c->step, 8) || read_all(f, &c->time_s, 8) || read_all(f, &c->dt_s, 8) ||
+        read_all(f, &c->first_dt_s, 8) || read_all(f, &c->count, 4) || read_all(f, &c->wall_count, 4) ||
+        c->count != sim->count || c->wall_count != sim->wall_count) {
+        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe", path);
+        return -1;
+    }
+    const size_t w = (size_t)c->wall_count, nf = (size_t)(c->count - c->wall_count);
+    if (fields_read(f, sim)) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        return -1;
+    }
+    neighbour_lists *nl = &sim->neighbours;
+    if (version >= 3 && (read_all(f, &c->lists_built, 4) || read_all(f, nl->x_build + w, nf * sizeof(double)) ||
+                         read_all(f, nl->y_build + w, nf * sizeof(double)))) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        return -1;
+    }
+    if (version < 3) { /* no lists saved: built at the first step */
+        memcpy(nl->x_build + w, sim->x + w, nf * sizeof(double));
+        memcpy(nl->y_build + w, sim->y + w, nf * sizeof(double));
+    }
+    if (version == 1 && sim->boulders.count > 0) {
+        snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
+        return -1;
+    }
+    if (read_boulders(f, &sim->boulders, version)) {
+        snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
+        return -1;
+    }
+    if (version >= 3 && read_wall_build_positions(f, sim)) {
+        snprintf(err, err_len, "%s: truncated or corrupt wall build positions", path);
+        return -1;
+    }
+    if (sim->scheme->checkpoint_read && sim->scheme->checkpoint_read(f, sim, version)) {
+        snprintf(err, err_len, "%s: truncated or corrupt %s-scheme state", path, sim->scheme->name);
+        return -1;
+    }
+    if (read_all(f, &c->hash, 8)) {
+        snprintf(err, err_len, "%s: truncated checkpoint", path);
+        return -1;
+    }
+    return 0;
+}
+
+/* The end: (version 4) the checksum of every byte before it, then nothing; -1 with err set */
+static int read_end(FILE *f, const char *path, uint32_t version, char *err, size_t err_len)
+{
+    if (version < 4) {
+        if (fgetc(f) == EOF)
+            return 0;
+        snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
+        return -1;
+    }
+    const long length = ftell(f);
+    uint64_t stored = 0, computed = 0;
+    if (length < 0 || read_all(f, &stored, 8)) {
+        snprintf(err, err_len, "%s: truncated checkpoint (no checksum)", path);
+        return -1;
+    }
+    if (fgetc(f) != EOF) {
+        snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
+        return -1;
+    }
+    if (file_checksum(f, length, &computed) != 0 || computed != stored) {
+        snprintf(err, err_len, "%s: checksum mismatch: the checkpoint was changed or damaged after it was "
+                 "written (its parameters, time step or state)", path);
+        return -1;
+    }
+    return 0;
+}
+
+/* What the checksum cannot vouch for by itself: a clock that makes sense, fluid ids that are a permutation, the state
+ * hash, build positions within reach of their particles; -1 with err set */
+static int validate_state(surge_sim *sim, const char *path, const checkpoint_clock *c, char *err, size_t err_len)
+{
+    /* a run past its first step has a first time step (the dt-collapse check divides by it) */
+    if (!(isfinite(c->time_s) && c->time_s >= 0 && isfinite(c->dt_s) && c->dt_s >= 0 && isfinite(c->first_dt_s) &&
+          c->first_dt_s >= 0 && c->step >= 0) ||
+        (c->step > 0 && !(c->first_dt_s > 0 && c->dt_s > 0))) {
+        snprintf(err, err_len, "%s: corrupt step, time or time step (outside the state hash)", path);
+        return -1;
+    }
+    sim->step = c->step;
+    sim->time_s = c->time_s;
+    sim->dt_s = c->dt_s;
+    sim->first_dt_s = c->first_dt_s;
+    const int32_t count = c->count, wall_count = c->wall_count;
+    uint8_t *seen = calloc((size_t)(count - wall_count) + 1, 1); /* the fluid ids must be a permutation */
+    if (!seen) {
+        snprintf(err, err_len, "%s: out of memory", path);
+        return -1;
+    }
+    for (int32_t i = wall_count; i < count; i++) {
+        const int32_t id = sim->id[i];
+        if (id < wall_count || id >= count || seen[id - wall_count]++) {
+            snprintf(err, err_len, "%s: corrupt particle ids (id %d out of range or repeated)", path, (int)id);
+            free(seen);
+            return -1;
+        }
+    }
+    free(seen);
+    if (surge_sim_state_hash(sim) != c->hash) {
+        snprintf(err, err_len, "%s: state hash mismatch (corrupt checkpoint)", path);
+        return -1;
+    }
+    /* the build positions are outside the hash: each within reach of its particle (a step past skin/2 at most) */
+    const neighbour_lists *nl = &sim->neighbours;
+    const double allowed_m = nl->skin_m + 2.0 * sim->derived.h_m;
+    for (int32_t a = wall_count; a < count; a++) {
+        const double dx = sim->x[a] - nl->x_build[a], dy = sim->y[a] - nl->y_build[a];
+        if (!(dx * dx + dy * dy <= allowed_m * allowed_m)) {
+            snprintf(err, err_len, "%s: corrupt neighbour-list build position of particle %d (%g m from it)", path,
+                     (int)sim->id[a], sqrt(dx * dx + dy * dy));
+            return -1;
+        }
+    }
+    return 0;
+}
+
 surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overrides, int override_count,
                                      char *err, size_t err_len)
 {
@@ -226,154 +398,23 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         snprintf(err, err_len, "cannot open checkpoint '%s': %s", path, strerror(errno));
         return NULL;
     }
-    surge_sim *sim = NULL;
-    char *text = NULL;
-    char magic[8];
-    uint32_t version = 0, real_size = 0;
-    uint64_t plen = 0;
-    if (read_all(f, magic, 8) || memcmp(magic, CHECKPOINT_MAGIC, 8) || read_all(f, &version, 4) ||
-        read_all(f, &real_size, 4) || read_all(f, &plen, 8)) {
-        snprintf(err, err_len, "%s: not a surge checkpoint", path);
-        goto done;
+    uint32_t version = 0;
+    checkpoint_clock clock = {0};
+    surge_sim *sim = read_header(f, path, overrides, override_count, &version, err, err_len);
+    if (sim && (read_state(f, sim, path, version, &clock, err, err_len) != 0 ||
+                read_end(f, path, version, err, err_len) != 0 || validate_state(sim, path, &clock, err, err_len) != 0)) {
+        surge_sim_destroy(sim);
+        sim = NULL;
     }
-    if (version < 1 || version > CHECKPOINT_VERSION || real_size != sizeof(real)) {
-        snprintf(err, err_len, "%s: checkpoint version %u with %u-byte reals; this build reads version %u with "
-                 "%zu-byte reals", path, version, real_size, CHECKPOINT_VERSION, sizeof(real));
-        goto done;
-    }
-    if (plen > (1u << 20) || !(text = malloc(plen + 1)) || read_all(f, text, plen)) {
-        snprintf(err, err_len, "%s: truncated or corrupt parameter block", path);
-        goto done;
-    }
-    text[plen] = '\0';
-    surge_params params = surge_default_params();
-    char msg[512];
-    if (surge_params_load_text(&params, text, path, msg, sizeof msg) != 0) {
-        snprintf(err, err_len, "%s: bad parameters in checkpoint: %s", path, msg);
-        goto done;
-    }
-    for (int i = 0; i < override_count; i++)
-        if (surge_params_override(&params, overrides[i], true, err, err_len) != 0)
-            goto done;
-    sim = surge_sim_create(&params, err, err_len);
-    if (!sim)
-        goto done;
-    int32_t count = 0, wall_count = 0;
-    int64_t step = 0;
-    double t = 0, dt = 0, first_dt = 0;
-    if (read_all(f, &step, 8) || read_all(f, &t, 8) || read_all(f, &dt, 8) || read_all(f, &first_dt, 8) ||
-        read_all(f, &count, 4) || read_all(f, &wall_count, 4) || count != sim->count ||
-        wall_count != sim->wall_count) {
-        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe", path);
-        goto fail;
-    }
-    const size_t w = (size_t)wall_count, nf = (size_t)(count - wall_count);
-    uint64_t hash = 0;
-    if (fields_read(f, sim)) {
-        snprintf(err, err_len, "%s: truncated checkpoint", path);
-        goto fail;
-    }
-    uint32_t lists_built = 0;
-    neighbour_lists *nl = &sim->neighbours;
-    if (version >= 3 && (read_all(f, &lists_built, 4) || read_all(f, nl->x_build + w, nf * sizeof(double)) ||
-                         read_all(f, nl->y_build + w, nf * sizeof(double)))) {
-        snprintf(err, err_len, "%s: truncated checkpoint", path);
-        goto fail;
-    }
-    if (version < 3) { /* no lists saved: built at the first step */
-        memcpy(nl->x_build + w, sim->x + w, nf * sizeof(double));
-        memcpy(nl->y_build + w, sim->y + w, nf * sizeof(double));
-    }
-    if (version == 1 && sim->boulders.count > 0) {
-        snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
-        goto fail;
-    }
-    if (read_boulders(f, &sim->boulders, version)) {
-        snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
-        goto fail;
-    }
-    if (version >= 3 && read_wall_build_positions(f, sim)) {
-        snprintf(err, err_len, "%s: truncated or corrupt wall build positions", path);
-        goto fail;
-    }
-    if (sim->scheme->checkpoint_read && sim->scheme->checkpoint_read(f, sim, version)) {
-        snprintf(err, err_len, "%s: truncated or corrupt %s-scheme state", path, sim->scheme->name);
-        goto fail;
-    }
-    if (read_all(f, &hash, 8)) {
-        snprintf(err, err_len, "%s: truncated checkpoint", path);
-        goto fail;
-    }
-    if (version >= 4) {
-        const long length = ftell(f);
-        uint64_t stored = 0, computed = 0;
-        if (length < 0 || read_all(f, &stored, 8)) {
-            snprintf(err, err_len, "%s: truncated checkpoint (no checksum)", path);
-            goto fail;
-        }
-        if (fgetc(f) != EOF) {
-            snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
-            goto fail;
-        }
-        if (file_checksum(f, length, &computed) != 0 || computed != stored) {
-            snprintf(err, err_len, "%s: checksum mismatch: the checkpoint was changed or damaged after it was "
-                     "written (its parameters, time step or state)", path);
-            goto fail;
-        }
-    } else if (fgetc(f) != EOF) {
-        snprintf(err, err_len, "%s: bytes after the end of the checkpoint", path);
-        goto fail;
-    }
-    /* a run past its first step has a first time step (the dt-collapse check divides by it) */
-    if (!(isfinite(t) && t >= 0 && isfinite(dt) && dt >= 0 && isfinite(first_dt) && first_dt >= 0 && step >= 0) ||
-        (step > 0 && !(first_dt > 0 && dt > 0))) {
-        snprintf(err, err_len, "%s: corrupt step, time or time step (outside the state hash)", path);
-        goto fail;
-    }
-    sim->step = step;
-    sim->time_s = t;
-    sim->dt_s = dt;
-    sim->first_dt_s = first_dt;
-    uint8_t *seen = calloc((size_t)(count - wall_count) + 1, 1); /* the fluid ids must be a permutation */
-    if (!seen) {
-        snprintf(err, err_len, "%s: out of memory", path);
-        goto fail;
-    }
-    for (size_t i = w; i < (size_t)count; i++) {
-        const int32_t id = sim->id[i];
-        if (id < wall_count || id >= count || seen[id - wall_count]++) {
-            snprintf(err, err_len, "%s: corrupt particle ids (id %d out of range or repeated)", path, (int)id);
-            free(seen);
-            goto fail;
-        }
-    }
-    free(seen);
-    if (surge_sim_state_hash(sim) != hash) {
-        snprintf(err, err_len, "%s: state hash mismatch (corrupt checkpoint)", path);
-        goto fail;
-    }
-    /* the build positions are outside the hash: each within reach of its particle (a step past skin/2 at most) */
-    const double allowed_m = nl->skin_m + 2.0 * sim->derived.h_m;
-    for (size_t a = w; a < (size_t)count; a++) {
-        const double dx = sim->x[a] - nl->x_build[a], dy = sim->y[a] - nl->y_build[a];
-        if (!(dx * dx + dy * dy <= allowed_m * allowed_m)) {
-            snprintf(err, err_len, "%s: corrupt neighbour-list build position of particle %d (%g m from it)", path,
-                     (int)sim->id[a], sqrt(dx * dx + dy * dy));
-            goto fail;
-        }
-    }
-    if (lists_built && neighbours_adopt_build_positions(sim) != 0) {
+    if (sim && clock.lists_built && neighbours_adopt_build_positions(sim) != 0) {
         snprintf(err, err_len, "%s: out of memory for the neighbour lists", path);
-        goto fail;
+        surge_sim_destroy(sim);
+        sim = NULL;
     }
-    boundary_wall_speeds(sim, t);
-    boulders_place_particles(sim);
-    goto done;
-fail:
-    surge_sim_destroy(sim);
-    sim = NULL;
-done:
-    free(text);
+    if (sim) {
+        boundary_wall_speeds(sim, clock.time_s);
+        boulders_place_particles(sim);
+    }
     fclose(f);
     return sim;
 }
