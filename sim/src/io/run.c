@@ -281,131 +281,169 @@ static int write_initial_discs(const surge_sim *sim, const run_outputs *o, char 
     return rc;
 }
 
-surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
+/* The run's files: params.ini, run.pvd (boulders.pvd), diagnostics.csv (flow.csv), and for a new run the initial
+ * rows and snapshot; -1 with err set (what was opened is closed by the caller) */
+static int open_outputs(surge_sim *sim, const surge_run_options *opt, run_outputs *o, char *err, size_t err_len)
 {
-    run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1,
-                     .last_checkpoint_step = -1};
-    surge_run_result result = SURGE_RUN_IO_ERROR;
     char path[4096];
-    if (surge_make_folders(opt->output_dir, "the output", err, err_len) != 0 || write_params(sim, &o, opt->threads, err, err_len) != 0)
-        return SURGE_RUN_IO_ERROR;
-    join(path, sizeof path, o.dir, "run.pvd");
+    if (surge_make_folders(opt->output_dir, "the output", err, err_len) != 0 ||
+        write_params(sim, o, opt->threads, err, err_len) != 0)
+        return -1;
     /* a restart keeps the earlier run's entries up to and including its final snapshot (this state) */
-    o.pvd = surge_pvd_open(path, opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0, err, err_len);
-    if (!o.pvd)
-        return SURGE_RUN_IO_ERROR;
+    const double keep_until_s = opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0;
+    join(path, sizeof path, o->dir, "run.pvd");
+    if (!(o->pvd = surge_pvd_open(path, keep_until_s, err, err_len)))
+        return -1;
     if (surge_sim_derived(sim)->boulder_count > 0) {
-        join(path, sizeof path, o.dir, "boulders.pvd");
-        o.boulder_pvd = surge_pvd_open(path, opt->restarted ? nextafter(surge_sim_time(sim), INFINITY) : -1.0, err,
-                                       err_len);
-        if (!o.boulder_pvd) {
-            surge_pvd_close(o.pvd);
-            return SURGE_RUN_IO_ERROR;
-        }
+        join(path, sizeof path, o->dir, "boulders.pvd");
+        if (!(o->boulder_pvd = surge_pvd_open(path, keep_until_s, err, err_len)))
+            return -1;
     }
-    const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
-    o.csv = open_series(&o, "diagnostics.csv", surge_sim_reports_solves(sim)
-                        ? "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
-                          "mean_vx_mps,bottom_wall_speed_mps,pressure_iterations,pressure_residual,"
-                          "viscous_iterations,viscous_residual"
-                        : "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
-                          "mean_vx_mps,bottom_wall_speed_mps", sim, opt->restarted, err, err_len);
-    if (!o.csv)
-        goto done;
+    const surge_params *p = surge_sim_params(sim);
+    o->csv = open_series(o, "diagnostics.csv", surge_sim_reports_solves(sim)
+                         ? "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
+                           "mean_vx_mps,bottom_wall_speed_mps,pressure_iterations,pressure_residual,"
+                           "viscous_iterations,viscous_residual"
+                         : "time_s,step,dt_s,kinetic_energy_jpm,max_speed_mps,max_density_deviation,fluid_volume_m2,"
+                           "mean_vx_mps,bottom_wall_speed_mps", sim, opt->restarted, err, err_len);
+    if (!o->csv)
+        return -1;
     if (p->output.flow_interval_s > 0 &&
-        !(o.flow_csv = open_series(&o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
-                                   "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted,"
-                                   "boulders_ahead_of_front", sim,
-                                   opt->restarted, err, err_len)))
-        goto done;
+        !(o->flow_csv = open_series(o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
+                                    "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted,"
+                                    "boulders_ahead_of_front", sim, opt->restarted, err, err_len)))
+        return -1;
     if (!opt->restarted &&
-        (write_diagnostics(sim, &o, err, err_len) != 0 || write_snapshot(sim, &o, NULL, 1, err, err_len) != 0 ||
-         (o.flow_csv && write_flow(sim, &o, err, err_len) != 0) ||
-         (surge_sim_derived(sim)->boulder_count > 0 && write_initial_discs(sim, &o, err, err_len) != 0)))
-        goto done;
-    output_schedule snapshots = schedule_from(surge_sim_time(sim), p->output.snapshot_interval_s);
-    output_schedule diagnostics = schedule_from(surge_sim_time(sim), p->output.diagnostics_interval_s);
-    output_schedule checkpoints = schedule_from(surge_sim_time(sim), p->output.checkpoint_interval_s);
-    output_schedule flows = schedule_from(surge_sim_time(sim), p->output.flow_interval_s);
-    const double start_wall = surge_wall_clock_s(), start_time = surge_sim_time(sim);
-    const int64_t start_step = surge_sim_step_count(sim);
-    double next_progress = start_wall + p->output.progress_interval_s;
-    double held_s = 0;
+        (write_diagnostics(sim, o, err, err_len) != 0 || write_snapshot(sim, o, NULL, 1, err, err_len) != 0 ||
+         (o->flow_csv && write_flow(sim, o, err, err_len) != 0) ||
+         (surge_sim_derived(sim)->boulder_count > 0 && write_initial_discs(sim, o, err, err_len) != 0)))
+        return -1;
+    return 0;
+}
 
-    int requests = call_boundary(opt, sim, &held_s);
+/* Where a run's loop stands: the outputs' schedules and the progress line's clock */
+typedef struct run_clock {
+    output_schedule snapshots, diagnostics, checkpoints, flows;
+    double start_wall, start_time, next_progress, held_s;
+    int64_t start_step;
+} run_clock;
+
+/* The outputs due after a step; -1 with err set when one cannot be written (*fatal: skip the final outputs too) */
+static int write_due_outputs(surge_sim *sim, run_outputs *o, run_clock *c, int *fatal, char *err, size_t err_len)
+{
+    const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
+    const double t = surge_sim_time(sim);
+    *fatal = 0;
+    if (output_due(&c->diagnostics, t, p->output.diagnostics_interval_s, 1) &&
+        write_diagnostics(sim, o, err, err_len) != 0)
+        return -1; /* the final snapshot and checkpoint are still tried */
+    *fatal = 1;
+    if (output_due(&c->snapshots, t, p->output.snapshot_interval_s, 0) && write_snapshot(sim, o, NULL, 1, err, err_len) != 0)
+        return -1;
+    if (o->flow_csv && output_due(&c->flows, t, p->output.flow_interval_s, 0) && write_flow(sim, o, err, err_len) != 0)
+        return -1;
+    if (output_due(&c->checkpoints, t, p->output.checkpoint_interval_s, 0) && write_checkpoint(sim, o, err, err_len) != 0)
+        return -1;
+    *fatal = 0;
+    if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= c->next_progress) {
+        print_progress(sim, c->start_wall, c->held_s, c->start_step, c->start_time);
+        c->next_progress = surge_wall_clock_s() + p->output.progress_interval_s;
+    }
+    return 0;
+}
+
+/* Steps to the end time, a stop or a failure, serving the step-boundary callback's requests; *fatal: an output failed
+ * and the final outputs are skipped */
+static surge_run_result step_until_done(surge_sim *sim, const surge_run_options *opt, run_outputs *o, run_clock *c,
+                                        int *fatal, char *err, size_t err_len)
+{
+    const surge_params *p = surge_sim_params(sim);
+    *fatal = 1;
+    int requests = call_boundary(opt, sim, &c->held_s);
     for (;;) {
         /* a change made at the step of the checkpoint on disk goes into it: the journal lists the change at this
          * step, and a restart from this checkpoint keeps the journal up to it */
-        if (surge_sim_step_count(sim) == o.last_checkpoint_step &&
-            surge_params_live_differ(&o.checkpoint_params, surge_sim_params(sim)))
+        if (surge_sim_step_count(sim) == o->last_checkpoint_step &&
+            surge_params_live_differ(&o->checkpoint_params, surge_sim_params(sim)))
             requests |= SURGE_REQUEST_CHECKPOINT;
-        if (requests & SURGE_REQUEST_SNAPSHOT && surge_sim_step_count(sim) != o.last_snapshot_step &&
-            write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
-            goto done;
-        if (requests & SURGE_REQUEST_CHECKPOINT && write_checkpoint(sim, &o, err, err_len) != 0)
-            goto done;
-        if (requests & SURGE_REQUEST_STOP) {
-            result = SURGE_RUN_STOPPED;
-            break;
-        }
+        if (requests & SURGE_REQUEST_SNAPSHOT && surge_sim_step_count(sim) != o->last_snapshot_step &&
+            write_snapshot(sim, o, NULL, 1, err, err_len) != 0)
+            return SURGE_RUN_IO_ERROR;
+        if (requests & SURGE_REQUEST_CHECKPOINT && write_checkpoint(sim, o, err, err_len) != 0)
+            return SURGE_RUN_IO_ERROR;
+        *fatal = 0;
+        if (requests & SURGE_REQUEST_STOP)
+            return SURGE_RUN_STOPPED;
         if (requests & SURGE_REQUEST_AGAIN) {
-            requests = call_boundary(opt, sim, &held_s);
+            requests = call_boundary(opt, sim, &c->held_s);
+            *fatal = 1;
             continue;
         }
-        if (surge_sim_time(sim) >= p->time.end_s) {
-            result = SURGE_RUN_FINISHED;
-            break;
-        }
-        if (opt->stop && *opt->stop) {
-            result = SURGE_RUN_INTERRUPTED;
-            break;
-        }
+        if (surge_sim_time(sim) >= p->time.end_s)
+            return SURGE_RUN_FINISHED;
+        if (opt->stop && *opt->stop)
+            return SURGE_RUN_INTERRUPTED;
         if (surge_sim_step(sim) != 0) {
-            result = SURGE_RUN_UNHEALTHY;
             snprintf(err, err_len, "%s", surge_sim_health(sim)->message);
-            break;
+            return SURGE_RUN_UNHEALTHY;
         }
-        const double t = surge_sim_time(sim);
-        if (output_due(&diagnostics, t, p->output.diagnostics_interval_s, 1) && write_diagnostics(sim, &o, err, err_len) != 0) {
-            result = SURGE_RUN_IO_ERROR; /* the final snapshot and checkpoint below are still tried */
-            break;
-        }
-        if (output_due(&snapshots, t, p->output.snapshot_interval_s, 0) && write_snapshot(sim, &o, NULL, 1, err, err_len) != 0)
-            goto done;
-        if (o.flow_csv && output_due(&flows, t, p->output.flow_interval_s, 0) && write_flow(sim, &o, err, err_len) != 0)
-            goto done;
-        if (output_due(&checkpoints, t, p->output.checkpoint_interval_s, 0) && write_checkpoint(sim, &o, err, err_len) != 0)
-            goto done;
-        if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= next_progress) {
-            print_progress(sim, start_wall, held_s, start_step, start_time);
-            next_progress = surge_wall_clock_s() + p->output.progress_interval_s;
-        }
-        requests = call_boundary(opt, sim, &held_s);
+        if (write_due_outputs(sim, o, c, fatal, err, err_len) != 0)
+            return SURGE_RUN_IO_ERROR;
+        requests = call_boundary(opt, sim, &c->held_s);
+        *fatal = 1;
     }
-    /* the final state (the last good one after a health failure) always reaches disk */
+}
+
+/* The final state (the last good one after a health failure) always reaches disk: a snapshot and a checkpoint */
+static surge_run_result write_final(surge_sim *sim, run_outputs *o, surge_run_result result, char *err, size_t err_len)
+{
     char final_err[512];
     const char *final_name = result == SURGE_RUN_UNHEALTHY ? "last_good.vtp" : NULL;
-    const int snapshot_due = result == SURGE_RUN_UNHEALTHY || surge_sim_step_count(sim) != o.last_snapshot_step;
+    const int snapshot_due = result == SURGE_RUN_UNHEALTHY || surge_sim_step_count(sim) != o->last_snapshot_step;
     if ((snapshot_due &&
-         write_snapshot(sim, &o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0) ||
-        write_checkpoint(sim, &o, final_err, sizeof final_err) != 0) {
+         write_snapshot(sim, o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0) ||
+        write_checkpoint(sim, o, final_err, sizeof final_err) != 0) {
         if (result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) /* the first error is the one to name */
             snprintf(err, err_len, "%s", final_err);
         result = result == SURGE_RUN_UNHEALTHY ? result : SURGE_RUN_IO_ERROR;
     }
-    if (p->output.progress_interval_s > 0)
-        print_progress(sim, start_wall, held_s, start_step, start_time);
-done:
-    if (o.csv && fclose(o.csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
+    return result;
+}
+
+/* Closes the run's files; a diagnostics or flow table that cannot be completed is an output error */
+static surge_run_result close_outputs(run_outputs *o, surge_run_result result, char *err, size_t err_len)
+{
+    if (o->csv && fclose(o->csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
         snprintf(err, err_len, "cannot write diagnostics.csv: %s", strerror(errno));
         result = SURGE_RUN_IO_ERROR;
     }
-    if (o.flow_csv && fclose(o.flow_csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
+    if (o->flow_csv && fclose(o->flow_csv) != 0 && result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) {
         snprintf(err, err_len, "cannot write flow.csv: %s", strerror(errno));
         result = SURGE_RUN_IO_ERROR;
     }
-    surge_pvd_close(o.pvd);
-    surge_pvd_close(o.boulder_pvd);
-    surge_snapshot_free(&o.snap);
+    surge_pvd_close(o->pvd);
+    surge_pvd_close(o->boulder_pvd);
+    surge_snapshot_free(&o->snap);
     return result;
+}
+
+surge_run_result surge_run(surge_sim *sim, const surge_run_options *opt, char *err, size_t err_len)
+{
+    run_outputs o = {.dir = opt->output_dir, .last_snapshot_step = opt->restarted ? surge_sim_step_count(sim) : -1,
+                     .last_checkpoint_step = -1};
+    if (open_outputs(sim, opt, &o, err, err_len) != 0)
+        return close_outputs(&o, SURGE_RUN_IO_ERROR, err, err_len);
+    const surge_params *p = surge_sim_params(sim); /* live values may change between steps */
+    const double now = surge_sim_time(sim), start_wall = surge_wall_clock_s();
+    run_clock clock = {schedule_from(now, p->output.snapshot_interval_s), schedule_from(now, p->output.diagnostics_interval_s),
+                       schedule_from(now, p->output.checkpoint_interval_s), schedule_from(now, p->output.flow_interval_s),
+                       start_wall, now, start_wall + p->output.progress_interval_s, 0, surge_sim_step_count(sim)};
+    int fatal = 0;
+    surge_run_result result = step_until_done(sim, opt, &o, &clock, &fatal, err, err_len);
+    if (!fatal) {
+        result = write_final(sim, &o, result, err, err_len);
+        if (p->output.progress_interval_s > 0)
+            print_progress(sim, clock.start_wall, clock.held_s, clock.start_step, clock.start_time);
+    }
+    return close_outputs(&o, result, err, err_len);
 }
