@@ -786,7 +786,8 @@ bool surge_implicit_uses_amg(const surge_params *p, int fluid_count, bool viscou
             fluid_count >= (viscous ? SURGE_AMG_MIN_FLUID_PARTICLES_VISCOUS : SURGE_AMG_MIN_FLUID_PARTICLES));
 }
 
-int surge_params_validate(const surge_params *p, char *err, size_t err_len)
+/* The output and rendering settings that depend on each other */
+static int validate_outputs(const surge_params *p, char *err, size_t err_len)
 {
     if (p->output.flow_interval_s > 0 && p->output.flow_column_m < 0.5 * p->numerics.dp_m) {
         fail(err, err_len, "output.flow_column_m (%g m) must be at least half of numerics.dp_m (%g m): a column "
@@ -803,9 +804,14 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
              p->render.color_min);
         return -1;
     }
+    return 0;
+}
+
+/* The fluid block inside the domain, and a periodic domain that holds whole particle spacings */
+static int validate_fluid(const surge_params *p, char *err, size_t err_len)
+{
     const double dp = p->numerics.dp_m, L = p->domain.length_m, H = p->domain.height_m;
     const double support = 2.0 * p->numerics.ch * sqrt(2.0) * dp;
-    const int layers = surge_params_wall_layers(p);
     if (p->fluid.x1_m <= p->fluid.x0_m) {
         fail(err, err_len, "fluid.x1_m (%g) must be greater than fluid.x0_m (%g)", p->fluid.x1_m, p->fluid.x0_m);
         return -1;
@@ -835,6 +841,15 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
              "it is %.6g of them; dp = %.6g m gives %.0f", L, dp, L / dp, L / whole, whole);
         return -1;
     }
+    return 0;
+}
+
+/* The walls the domain allows and the kernel needs, and sizes refused before anything is allocated */
+static int validate_walls_and_size(const surge_params *p, char *err, size_t err_len)
+{
+    const double dp = p->numerics.dp_m, L = p->domain.length_m;
+    const double support = 2.0 * p->numerics.ch * sqrt(2.0) * dp;
+    const int layers = surge_params_wall_layers(p);
     if (p->domain.periodic_x && (p->walls.left || p->walls.right)) {
         fail(err, err_len, "walls.left/walls.right need a non-periodic domain (domain.periodic_x = false)");
         return -1;
@@ -889,6 +904,14 @@ int surge_params_validate(const surge_params *p, char *err, size_t err_len)
         return -1;
     }
     return 0;
+}
+
+int surge_params_validate(const surge_params *p, char *err, size_t err_len)
+{
+    return validate_outputs(p, err, err_len) != 0 || validate_fluid(p, err, err_len) != 0 ||
+                   validate_walls_and_size(p, err, err_len) != 0
+               ? -1
+               : 0;
 }
 
 void surge_params_write(const surge_params *p, FILE *out)
