@@ -3,6 +3,7 @@
 #ifndef SURGE_BOULDERS_H
 #define SURGE_BOULDERS_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "boulders/boulder_set.h"
@@ -26,14 +27,26 @@ void boulders_orient(const boulder_set *b);
 /* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target), at the orientation of
  * the last boulders_orient. */
 void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy);
-void boulders_predict(surge_sim *sim, double half_dt_s);      /* saves the step start, moves to the half step */
-int boulders_correct(surge_sim *sim, double dt_s);            /* full step from the start, with contacts */
+/* Disc i's state at the step's start: kept, and taken back */
+void boulders_save_step_start(boulder_set *b, int i);
+void boulders_restore_step_start(boulder_set *b, int i);
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
-/* the implicit scheme's full step from the fluid forces, with added_mass (implicit.added_mass) */
-int boulders_advance_implicit(surge_sim *sim, double dt_s, double added_mass);
-void boulders_restore_implicit(surge_sim *sim);               /* roll-back of boulders_advance_implicit */
 /* each disc's wetted fraction: the mean over its outer ring of wetness (per wall particle, 0 dry to 1 wet) */
 void boulders_wetted_fraction(surge_sim *sim, const real *wetness);
+/* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
+ * alpha; the disc particles follow. -1 when the contact solver runs out of memory. */
+int boulders_advance_with_contacts(surge_sim *sim, double dt_s);
+/* A disc's acceleration without the fluid: gravity on its mass; the driving force of a channel on its volume */
+void boulders_own_acceleration(const surge_sim *sim, double *gx, double *gy);
+/* The particles of ring k (0: the outer one) of a disc of radius r_m */
+int boulders_ring_particles(double r_m, double dp_m, int ring);
 void boulders_free(boulder_set *b);
+
+/* Offset of the disc particle with id from its disc's centre at orientation (cos, sin) = (c, s). */
+static inline void boulders_rotated_offset(const boulder_set *b, int id, double c, double s, double *rx, double *ry)
+{
+    *rx = c * b->local_x[id] - s * b->local_y[id];
+    *ry = s * b->local_x[id] + c * b->local_y[id];
+}
 
 #endif

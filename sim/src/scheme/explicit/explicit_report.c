@@ -3,7 +3,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "sim_internal.h"
+#include "scheme/explicit/explicit.h"
 
 /* The explicit scheme's longest step, and the wall time a simulated second takes at the measured throughput. */
 void explicit_check_report(const surge_sim *sim, FILE *out, int verbose, double entries, double bytes)

@@ -3,7 +3,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "sim_internal.h"
+#include "scheme/explicit/explicit.h"
 #include "scheme/scheme.h"
 #include "boulders/boulders.h"
 #include "boundaries/boundary.h"
@@ -84,12 +84,12 @@ static int explicit_step(surge_sim *sim)
     const double half = 0.5 * dt;
 
     if (boulders)
-        boulders_predict(sim, half);
+        explicit_discs_predict(sim, half);
 
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
     evaluate_rates(sim, 1);
-    if (boulders && boulders_correct(sim, dt) != 0) {
+    if (boulders && explicit_discs_correct(sim, dt) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n + dt};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
@@ -136,8 +136,6 @@ static int explicit_step(surge_sim *sim)
     return 0;
 }
 
-
-void explicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
 
 static double explicit_contact_reach_dp(const surge_params *p) { return p->walls.face_repulsion_reach_dp; }
 static double explicit_neighbour_skin_h(const surge_params *p) { return p->numerics.neighbour_skin_h; }

@@ -182,6 +182,10 @@ void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
 int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
 /* implicit_report.c */
 void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
+/* implicit_discs.c: the discs' step from the fluid's forces with added_mass (implicit.added_mass; -1 when the contact
+ * solver runs out of memory), and its roll-back */
+int implicit_discs_advance(surge_sim *sim, double dt_s, double added_mass);
+void implicit_discs_restore(surge_sim *sim);
 /* coupling.c */
 void implicit_part_close_pairs(surge_sim *sim);
 void implicit_disc_forces(surge_sim *sim);

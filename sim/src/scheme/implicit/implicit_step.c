@@ -47,7 +47,7 @@ static double implicit_dt(const surge_sim *sim)
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
     double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
     /* the discs' coupling: a disc's drag stiffness k (its last step's) against its mass and added mass
-     * (boulders_advance_implicit; docs/method.md) */
+     * (implicit_discs_advance; docs/method.md) */
     for (int i = 0; i < b->count && p->implicit.disc_coupling > 0; i++)
         if (b->drag_stiffness[i] > 0) {
             const double added = p->implicit.added_mass * sim->rho0 * SURGE_PI * b->radius[i] * b->radius[i] * b->wetted[i];
@@ -472,7 +472,7 @@ static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs)
     if (discs == DISCS_SAVED)
         boulders_restore(sim);
     else if (discs == DISCS_ADVANCED)
-        boulders_restore_implicit(sim);
+        implicit_discs_restore(sim);
     sim->time_s = t_n;
     sim->step = step_n;
     boundary_wall_speeds(sim, t_n);
@@ -501,7 +501,7 @@ static int implicit_step(surge_sim *sim)
         move_particles(sim, dt);
         if (sim->boulders.count > 0) {
             discs = DISCS_SAVED;
-            if (boulders_advance_implicit(sim, dt, sim->params.implicit.added_mass) != 0) {
+            if (implicit_discs_advance(sim, dt, sim->params.implicit.added_mass) != 0) {
                 sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1,
                                              .step = step_n + 1, .time_s = t_n + dt};
                 snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");

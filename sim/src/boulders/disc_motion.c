@@ -1,0 +1,168 @@
+/* How discs move: their particles follow them rigidly (eq. 11: u_k = V + Omega x (r_k - R0), the ghost nodes
+ * mirrored across the circle), their state at a step's start is kept and taken back, and a step moves them through
+ * the contact solver's sub-steps. The schemes decide the accelerations (scheme/explicit/explicit_discs.c,
+ * scheme/implicit/implicit_discs.c). */
+#include <math.h>
+#include <string.h>
+
+#include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "scene/scales.h"
+
+/* The offset of the disc particle with id from its disc's centre at the given angle */
+static inline void disc_offset(const boulder_set *b, int id, double angle, double *rx, double *ry)
+{
+    boulders_rotated_offset(b, id, cos(angle), sin(angle), rx, ry);
+}
+
+void boulders_orient(const boulder_set *b)
+{
+    for (int i = 0; i < b->count; i++) {
+        b->cos_angle[i] = cos(b->angle[i]);
+        b->sin_angle[i] = sin(b->angle[i]);
+    }
+}
+
+/* The mDBC ghost offset of a disc particle at offset (rx, ry): mirrored across the disc's surface. */
+static inline void ghost_offset(const boulder_set *b, int i, double rx, double ry, real *gdx, real *gdy)
+{
+    const double rho = sqrt(rx * rx + ry * ry), to_ghost = 2 * (b->radius[i] - rho) / rho;
+    *gdx = (real)(rx * to_ghost);
+    *gdy = (real)(ry * to_ghost);
+}
+
+void boulders_place_particles(surge_sim *sim)
+{
+    const boulder_set *b = &sim->boulders;
+    if (b->count == 0)
+        return;
+    const double period = sim->grid.period_m;
+    boulders_orient(b);
+    #pragma omp parallel for schedule(static)
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        double rx, ry;
+        boulders_rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
+        double x = b->x[i] + rx;
+        if (period > 0) {
+            /* the periodic image nearest the particle's neighbour-list build position, so that the lists' images
+             * hold (neighbours.c); before the lists exist, wrapped into the period */
+            const double *x_build = sim->neighbours.x_build;
+            x -= x_build ? period * round((x - x_build[k]) / period) : period * floor(x / period);
+            if (!x_build && x >= period)
+                x = 0;
+        }
+        sim->x[k] = x;
+        sim->y[k] = b->y[i] + ry;
+        sim->vx[k] = (real)(b->vx[i] - b->omega[i] * ry);
+        sim->vy[k] = (real)(b->vy[i] + b->omega[i] * rx);
+        ghost_offset(b, i, rx, ry, &sim->ghost_dx[k], &sim->ghost_dy[k]);
+    }
+}
+
+void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy)
+{
+    const boulder_set *b = &sim->boulders;
+    const int id = sim->id[k], i = b->of_wall[id];
+    double rx, ry;
+    disc_offset(b, id, angle, &rx, &ry);
+    ghost_offset(b, i, rx, ry, gdx, gdy);
+}
+
+void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *vy)
+{
+    const boulder_set *b = &sim->boulders;
+    const int id = sim->id[k], i = b->of_wall[id];
+    double rx, ry;
+    boulders_rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
+    const double to_surface = b->radius[i] / sqrt(rx * rx + ry * ry);
+    *vx = b->vx[i] - b->omega[i] * ry * to_surface;
+    *vy = b->vy[i] + b->omega[i] * rx * to_surface;
+}
+
+/* disc i's state at the step's start: kept, and taken back */
+void boulders_save_step_start(boulder_set *b, int i)
+{
+    b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
+    b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+}
+
+void boulders_restore_step_start(boulder_set *b, int i)
+{
+    b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
+    b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+}
+
+void boulders_restore(surge_sim *sim)
+{
+    boulder_set *b = &sim->boulders;
+    for (int i = 0; i < b->count; i++)
+        boulders_restore_step_start(b, i);
+    boulders_place_particles(sim);
+}
+
+/* The walls discs can touch: the bed (moving with the belt), the lid, the box sides and the upstream wall; planes
+ * stand half the contact margin in front of the wall faces (the discs' contact radii carry the other half). The
+ * upstream wall is a slab as thick as its particle layers, its front, back and top half the margin out: a disc
+ * that went round the periodic channel meets its back face, not its particles (the 60-disc surge of
+ * docs/validation/debris_surge.md). The disc catcher is a line at the end of the period, x = length (= 0), from the
+ * bed to the domain's top: a disc that rolled off the front stops there, short of the wall's back. */
+#define CONTACT_WALLS_MAX 8
+static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_MAX])
+{
+    const surge_params *p = &sim->params;
+    const double half_margin = 0.5 * p->contacts.margin_dp * p->numerics.dp_m;
+    int n = 0;
+    if (p->walls.bottom)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, 1, half_margin, 0, 0, 0, 0, sim->wall_speed[WALL_BOTTOM], 0};
+    if (p->walls.top)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 0, -1, -p->domain.height_m + half_margin, 0, 0, 0, 0,
+                                    sim->wall_speed[WALL_TOP], 0};
+    if (p->walls.left)
+        walls[n++] = (contact_wall){CONTACT_PLANE, 1, 0, half_margin, 0, 0, 0, 0, 0, 0};
+    if (p->walls.right)
+        walls[n++] = (contact_wall){CONTACT_PLANE, -1, 0, -p->domain.length_m + half_margin, 0, 0, 0, 0, 0, 0};
+    if (p->walls.upstream) {
+        const double front_m = p->walls.upstream_x_m + half_margin;
+        const double back_m = scene_upstream_back_m(p) - half_margin;
+        const double top_m = p->walls.upstream_height_m + half_margin;
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, front_m, 0, front_m, top_m, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, 0, back_m, top_m, 0, 0};
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, back_m, top_m, front_m, top_m, 0, 0};
+    }
+    if (p->walls.disc_catcher) {
+        const double end_m = p->domain.length_m;
+        walls[n++] = (contact_wall){CONTACT_SEGMENT, 0, 0, 0, end_m, 0, end_m, p->domain.height_m, 0, 0};
+    }
+    return n;
+}
+
+/* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
+ * alpha; the disc particles follow. -1 when the contact solver runs out of memory. */
+int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
+{
+    boulder_set *b = &sim->boulders;
+    const surge_params *p = &sim->params;
+    contact_wall walls[CONTACT_WALLS_MAX];
+    const int wall_count = contact_walls(sim, walls);
+    contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
+                           b->inv_inertia, b->spin_damping};
+    const contact_settings settings = {p->contacts.friction, p->contacts.restitution, p->contacts.restitution_min_mps,
+                                       p->contacts.substeps, p->contacts.iterations, p->contacts.erp,
+                                       sim->grid.period_m};
+    if (contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay, b->alpha) != 0)
+        return -1;
+    boulders_place_particles(sim);
+    return 0;
+}
+
+/* A disc's acceleration without the fluid: gravity on its mass; the driving force of a channel (a pressure
+ * gradient) on its volume */
+void boulders_own_acceleration(const surge_sim *sim, double *gx, double *gy)
+{
+    const surge_params *p = &sim->params;
+    *gx = sim->gx - p->body.force_x_mps2 + p->body.force_x_mps2 / p->boulders.density_ratio;
+    *gy = sim->gy;
+}

@@ -1,0 +1,118 @@
+/* The fluid's forces and torques on the discs (eq. 10), and how much of each disc the fluid wets. */
+#include <math.h>
+#include <string.h>
+
+#include "sim_internal.h"
+#include "boulders/boulders.h"
+#include "physics/pair_terms.h"
+
+/* eq. 10: the force on each disc particle is minus the pair forces it exerts on its fluid neighbours
+ * (the terms of interaction.c's wall loop), so momentum is exchanged exactly.
+ * The viscous pair force (Lo & Shao) is the Laplacian form: it carries the traction mu (grad v) n, not
+ * mu (grad v + grad v^T) n. On a no-slip rigid surface the missing part is -mu omega x n: no net force on a
+ * closed surface, but a torque -mu omega (r . n) per unit area of wetted surface, -2 mu A omega on a wholly
+ * wetted disc of area A (half the torque on a spinning disc). It is added here over the outer ring, each
+ * particle weighted by how wetted its ghost node is.
+ * A uniform pressure exerts no force on a closed surface, but the discrete sum of (p_a + p_k) grad W around a disc
+ * is not zero on an irregular arrangement: reference_pa[disc] is subtracted from the pressures, where given (the
+ * implicit scheme's pressure in a closed domain carries an arbitrary constant). */
+void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
+{
+    boulder_set *b = &sim->boulders;
+    if (b->count == 0)
+        return;
+    const neighbour_lists *nl = &sim->neighbours;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h;
+    const real mass = (real)sim->mass, eta2 = (real)sim->eta2, support2 = sim->kernel.support2;
+    const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
+    const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
+    const pair_state *restrict st = sim->pair_state;
+    real *restrict fx = sim->ax, *restrict fy = sim->ay; /* wall entries are free scratch */
+    #pragma omp parallel for schedule(static)
+    for (int k = 0; k < sim->wall_count; k++) {
+        fx[k] = fy[k] = 0;
+        if (b->of_wall[sim->id[k]] < 0)
+            continue;
+        const real mxk = nl->moved_x[k], myk = nl->moved_y[k], rhok = rho[k], pk = pres[k], inv_rhok = inv_rho[k];
+        const real wall_vx = sim->wall_vx[k], wall_vy = sim->wall_vy[k];
+        const real reference = reference_pa ? (real)reference_pa[b->of_wall[sim->id[k]]] : 0;
+        const int32_t *restrict index = nl->wall_fluid_index;
+        const real *restrict dx0 = nl->wall_fluid_dx0, *restrict dy0 = nl->wall_fluid_dy0;
+        /* one partial sum per lane over the padded list, fluid records transposed (as in interaction.c) */
+        real sum_x[PAIR_LANES] = {0}, sum_y[PAIR_LANES] = {0}, sum_viscous[PAIR_LANES] = {0};
+        for (int64_t e0 = nl->wall_fluid_first[k]; e0 < nl->wall_fluid_first[k + 1]; e0 += PAIR_LANES) {
+            lanes_vector field[PAIR_LANES];
+            lanes_gather_records(st, index + e0, field); /* field[q][l]: lane l's fluid neighbour's q-th field (pair_state) */
+            #pragma omp simd simdlen(PAIR_LANES)
+            for (int l = 0; l < PAIR_LANES; l++) {
+                const int64_t e = e0 + l;
+                /* r_a - r_k, as the fluid's wall loop has it (interaction.c) */
+                const real dx = -(dx0[e] + (mxk - field[0][l])), dy = -(dy0[e] + (myk - field[1][l]));
+                const real r2 = dx * dx + dy * dy;
+                const real f = r2 < support2 ? kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)) : 0;
+                /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop); none beyond 2h */
+                const real pressure_coef = pair_pressure_coef(mass, field[6][l] - reference, pk - reference, field[5][l],
+                                                              inv_rhok);
+                const real inv_denominator = pair_viscous_denominator(field[4][l], rhok, r2, eta2);
+                const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
+                sum_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, field[2][l] - wall_vx);
+                sum_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, field[3][l] - wall_vy);
+                sum_viscous[l] += viscous_coef;
+            }
+        }
+        const real zero[PAIR_LANES] = {0};
+        const real *const lanes[8] = {sum_x, sum_y, sum_viscous, zero, zero, zero, zero, zero};
+        real total[8];
+        lanes_totals(lanes, total);
+        fx[k] = -mass * total[0];
+        fy[k] = -mass * total[1];
+        b->spin_coupling[k] = total[2];
+    }
+    for (int i = 0; i < b->count; i++) {
+        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = b->drag_stiffness[i] = 0;
+        b->omega_forces[i] = b->omega[i];
+    }
+    const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
+    boulders_orient(b);
+    for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i < 0)
+            continue;
+        double rx, ry;
+        boulders_rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
+        b->fx[i] += fx[k];
+        b->fy[i] += fy[k];
+        b->torque[i] += rx * fy[k] - ry * fx[k];
+        /* stiffness: the no-slip velocity 2 v_surface - v_ghost moves by 2 R per unit omega */
+        const double lever = sqrt(rx * rx + ry * ry);
+        b->spin_damping[i] -= 2 * sim->mass * b->radius[i] * lever * b->spin_coupling[k];
+        b->drag_stiffness[i] -= 2 * sim->mass * b->spin_coupling[k];
+        if (lever > b->radius[i] - dp) { /* outer ring; r . n = radius */
+            const double a = b->radius[i], arc = 2 * SURGE_PI * a / boulders_ring_particles(a, dp, 0);
+            const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
+            b->torque[i] -= mu * b->omega[i] * a * arc * wetted;
+            b->spin_damping[i] += mu * a * arc * wetted;
+        }
+    }
+    for (int i = 0; i < b->count; i++)
+        b->spin_damping[i] *= b->inv_inertia[i];
+    /* the reaction to the face repulsion of fluid particles too close to a disc (interaction.c); radial, no torque */
+    for (int a = sim->wall_count; a < sim->count; a++)
+        if (sim->face_disc[a] >= 0) {
+            b->fx[sim->face_disc[a]] -= sim->mass * sim->face_push_x[a];
+            b->fy[sim->face_disc[a]] -= sim->mass * sim->face_push_y[a];
+        }
+}
+
+void boulders_wetted_fraction(surge_sim *sim, const real *wetness)
+{
+    boulder_set *b = &sim->boulders;
+    const double dp = sim->params.numerics.dp_m;
+    for (int i = 0; i < b->count; i++)
+        b->wetted[i] = 0;
+    for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
+        const int id = sim->id[k], i = b->of_wall[id];
+        if (i >= 0 && hypot(b->local_x[id], b->local_y[id]) > b->radius[i] - dp) /* the outer ring */
+            b->wetted[i] += wetness[k] / boulders_ring_particles(b->radius[i], dp, 0);
+    }
+}
