@@ -47,16 +47,16 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
             for (int l = 0; l < PAIR_LANES; l++) {
                 const int64_t e = e0 + l;
                 /* r_a - r_k, as the fluid's wall loop has it (interaction.c) */
-                const real dx = -(dx0[e] + (mxk - field[0][l])), dy = -(dy0[e] + (myk - field[1][l]));
+                const real dx = -(dx0[e] + (mxk - field[PAIR_MOVED_X][l])), dy = -(dy0[e] + (myk - field[PAIR_MOVED_Y][l]));
                 const real r2 = dx * dx + dy * dy;
                 const real f = r2 < support2 ? kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2)) : 0;
                 /* the terms of the fluid particle a's acceleration by k (interaction.c's wall loop); none beyond 2h */
-                const real pressure_coef = pair_pressure_coef(mass, field[6][l] - reference, pk - reference, field[5][l],
+                const real pressure_coef = pair_pressure_coef(mass, field[PAIR_PRESSURE][l] - reference, pk - reference, field[PAIR_INV_RHO][l],
                                                               inv_rhok);
-                const real inv_denominator = pair_viscous_denominator(field[4][l], rhok, r2, eta2);
+                const real inv_denominator = pair_viscous_denominator(field[PAIR_RHO][l], rhok, r2, eta2);
                 const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-                sum_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, field[2][l] - wall_vx);
-                sum_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, field[3][l] - wall_vy);
+                sum_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, field[PAIR_VX][l] - wall_vx);
+                sum_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, field[PAIR_VY][l] - wall_vy);
                 sum_viscous[l] += viscous_coef;
             }
         }

@@ -70,8 +70,8 @@ static ghost_sums ghost_node_sums(const surge_sim *sim, const int32_t *restrict 
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
-            const real moved_x = field[0][l], moved_y = field[1][l], vx = field[2][l], vy = field[3][l];
-            const real rho = field[4][l];
+            const real moved_x = field[PAIR_MOVED_X][l], moved_y = field[PAIR_MOVED_Y][l], vx = field[PAIR_VX][l], vy = field[PAIR_VY][l];
+            const real rho = field[PAIR_RHO][l];
             const real dx = dx0[e] + (gx - moved_x), dy = dy0[e] + (gy - moved_y);
             const real r2 = dx * dx + dy * dy;
             const real r = REAL_SQRT(r2);

@@ -113,9 +113,9 @@ static inline __attribute__((always_inline)) void fluid_pairs(const surge_sim *s
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
             const int b = index[e];
-            const real nb_vx = field[2][l], nb_vy = field[3][l], nb_rho = field[4][l], nb_inv_rho = field[5][l];
-            const real nb_pressure = field[6][l], nb_surface = field[7][l];
-            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]); /* r_ab */
+            const real nb_vx = field[PAIR_VX][l], nb_vy = field[PAIR_VY][l], nb_rho = field[PAIR_RHO][l], nb_inv_rho = field[PAIR_INV_RHO][l];
+            const real nb_pressure = field[PAIR_PRESSURE][l], nb_surface = field[PAIR_SURFACE][l];
+            const real dx = dx0[e] + (mxa - field[PAIR_MOVED_X][l]), dy = dy0[e] + (mya - field[PAIR_MOVED_Y][l]); /* r_ab */
             const real r2 = dx * dx + dy * dy;
             const int inside = r2 < support2 && r2 > 0;
             const real r = REAL_SQRT(r2);
@@ -186,9 +186,9 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
-            const real rho_b = field[2][l], pressure_b = field[3][l];
+            const real rho_b = field[WALL_PAIR_RHO][l], pressure_b = field[WALL_PAIR_PRESSURE][l];
             const real inv_rho_b = (real)1 / rho_b; /* the bits of inv_rho[b] (boundary_update) */
-            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]);
+            const real dx = dx0[e] + (mxa - field[WALL_PAIR_MOVED_X][l]), dy = dy0[e] + (mya - field[WALL_PAIR_MOVED_Y][l]);
             const real r2 = dx * dx + dy * dy;
             const int inside = r2 < support2;
             const real r = REAL_SQRT(r2);
@@ -197,10 +197,10 @@ static inline __attribute__((always_inline)) void wall_pairs(const surge_sim *si
             const real pressure_coef = pair_pressure_coef(mass, pa, pressure_b, inv_rhoa, inv_rho_b);
             const real inv_denominator = pair_viscous_denominator(rhoa, rho_b, r2, eta2);
             const real viscous_coef = pair_viscous_coef(mass, four_nu, f, r2, inv_denominator);
-            const real nsx = vxa - field[4][l], nsy = vya - field[5][l];
+            const real nsx = vxa - field[WALL_PAIR_NOSLIP_VX][l], nsy = vya - field[WALL_PAIR_NOSLIP_VY][l];
             acc_x[l] += pair_acceleration(pressure_coef, f, dx, viscous_coef, nsx);
             acc_y[l] += pair_acceleration(pressure_coef, f, dy, viscous_coef, nsy);
-            const real wdx = vxa - field[6][l], wdy = vya - field[7][l];
+            const real wdx = vxa - field[WALL_PAIR_CONT_VX][l], wdy = vya - field[WALL_PAIR_CONT_VY][l];
             m_xx[l] += pair_moment(vf, dx, dx), m_xy[l] += pair_moment(vf, dx, dy), m_yy[l] += pair_moment(vf, dy, dy);
             g_xx[l] += pair_moment(vf, wdx, dx), g_xy[l] += pair_moment(vf, wdx, dy);
             g_yx[l] += pair_moment(vf, wdy, dx), g_yy[l] += pair_moment(vf, wdy, dy);
@@ -287,12 +287,12 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
         #pragma omp simd simdlen(PAIR_LANES)
         for (int l = 0; l < PAIR_LANES; l++) {
             const int64_t e = e0 + l;
-            const real dx = dx0[e] + (mxa - field[0][l]), dy = dy0[e] + (mya - field[1][l]);
+            const real dx = dx0[e] + (mxa - field[FACE_MOVED_X][l]), dy = dy0[e] + (mya - field[FACE_MOVED_Y][l]);
             const real r2 = dx * dx + dy * dy;
-            const int inside = r2 < support2, disc = field[5][l] >= 0;
-            const real along = dx * field[2][l] + dy * field[3][l];
-            const real cx = dx + field[6][l], cy = dy + field[7][l];
-            const real gap = disc ? REAL_SQRT(cx * cx + cy * cy) - field[4][l] : along - field[4][l];
+            const int inside = r2 < support2, disc = field[FACE_DISC][l] >= 0;
+            const real along = dx * field[FACE_NX][l] + dy * field[FACE_NY][l];
+            const real cx = dx + field[FACE_CENTRE_DX][l], cy = dy + field[FACE_CENTRE_DY][l];
+            const real gap = disc ? REAL_SQRT(cx * cx + cy * cy) - field[FACE_REACH][l] : along - field[FACE_REACH][l];
             const int candidate = inside & (disc | ((along > -half_dp) & (r2 - along * along < half_dp * half_dp)));
             const int better = candidate & (gap < best_gap[l]);
             best_gap[l] = better ? gap : best_gap[l];
