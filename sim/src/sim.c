@@ -233,12 +233,9 @@ uint64_t surge_sim_state_hash(const surge_sim *sim)
     const boulder_set *b = &sim->boulders;
     const size_t nb = (size_t)b->count * sizeof(double);
     if (b->count > 0) {
-        h = fields_fnv1a(h, b->x, nb);
-        h = fields_fnv1a(h, b->y, nb);
-        h = fields_fnv1a(h, b->angle, nb);
-        h = fields_fnv1a(h, b->vx, nb);
-        h = fields_fnv1a(h, b->vy, nb);
-        h = fields_fnv1a(h, b->omega, nb);
+#define HASH_DISC(name, meaning) h = fields_fnv1a(h, b->name, nb);
+        SURGE_DISC_STEP_FIELDS(HASH_DISC)
+#undef HASH_DISC
     }
     return h;
 }

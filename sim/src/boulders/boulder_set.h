@@ -7,28 +7,62 @@
 #include "boulders/contact_solver.h"
 #include "precision.h"
 
+/* The discs' arrays, each declared once here: the struct's members, their allocation and release, the step-start
+ * copies and roll-back, the state hash and the checkpoint follow these lists (boulders.c, disc_motion.c, sim.c,
+ * checkpoint.c). */
+
+/* The discs' state, F(name, meaning): hashed and checkpointed in this order, each with a copy name_n at the start of
+ * the step (the roll-back restores it) */
+#define SURGE_DISC_STEP_FIELDS(F)                                                                                     \
+    F(x, "centre of mass (m), wrapped into the period")                                                              \
+    F(y, "centre of mass (m)")                                                                                        \
+    F(angle, "orientation (rad)")                                                                                     \
+    F(vx, "velocity (m/s)")                                                                                           \
+    F(vy, "velocity (m/s)")                                                                                           \
+    F(omega, "angular velocity (rad/s)")
+
+/* Every other per-disc array, F(name, meaning) */
+#define SURGE_DISC_FIELDS(F)                                                                                          \
+    F(radius, "radius (m)")                                                                                           \
+    F(mass, "mass per metre of width (kg/m)")                                                                        \
+    F(inv_mass, "1 / mass")                                                                                           \
+    F(inv_inertia, "1 / moment of inertia per metre of width")                                                       \
+    F(contact_radius, "radius + contacts.margin_dp dp / 2: where the contact solver sees the disc's surface")        \
+    F(fx, "the fluid's force on the disc (eq. 10)")                                                                  \
+    F(fy, "")                                                                                                         \
+    F(torque, "and its torque")                                                                                       \
+    F(ax, "scratch: accelerations for the contact solver")                                                           \
+    F(ay, "")                                                                                                         \
+    F(alpha, "")                                                                                                      \
+    F(spin_damping, "-d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit")                \
+    F(drag_stiffness, "-d(force)/d(velocity) (kg/(m s)) with the fluid held still: the viscous drag's")             \
+    F(omega_forces, "the omega the last fluid forces were computed with")                                            \
+    F(angle_build, "orientation at the last neighbour-list build (where the ghosts' lists were made)")              \
+    F(wetted, "the fraction of the disc's surface the fluid wets (boulders_wetted_fraction)")                       \
+    F(step_ax, "implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt")                   \
+    F(step_ay, "")                                                                                                    \
+    F(step_ax_n, "and over the one before (a rolled-back step restores them)")                                      \
+    F(step_ay_n, "")                                                                                                  \
+    F(cos_angle, "scratch: cos and sin of angle as of the last boulders_orient (one per disc: its particles share")  \
+    F(sin_angle, "them)")
+
+/* The per-wall-particle arrays, F(name, type, meaning) */
+#define SURGE_WALL_DISC_FIELDS(F)                                                                                     \
+    F(spin_coupling, real, "by wall index: sum over fluid neighbours of the viscous pair coefficient")              \
+    F(of_wall, int32_t, "by wall particle id: the disc it belongs to (-1: a fixed wall)")                           \
+    F(local_x, double, "by wall particle id: its offset from the disc's centre at angle 0 (m)")                     \
+    F(local_y, double, "")
+
+#define DISC_MEMBER(name, meaning) double *name;
+#define DISC_COPY_MEMBER(name, meaning) double *name##_n;
+#define WALL_DISC_MEMBER(name, type, meaning) type *name;
+
 typedef struct boulder_set {
     int count;
-    /* state: centre of mass (x wrapped into the period), orientation, velocities */
-    double *x, *y, *angle, *vx, *vy, *omega;
-    double *x_n, *y_n, *angle_n, *vx_n, *vy_n, *omega_n; /* at the start of the step */
-    double *radius, *mass, *inv_mass, *inv_inertia;       /* per metre of width */
-    double *contact_radius;  /* radius + contacts.margin_dp dp / 2: where the contact solver sees the disc's surface */
-    double *fx, *fy, *torque;                             /* fluid force and torque on each disc (eq. 10) */
-    double *ax, *ay, *alpha;                              /* scratch: accelerations for the contact solver */
-    double *spin_damping;   /* -d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit */
-    double *drag_stiffness; /* -d(force)/d(velocity) (kg/(m s)) with the fluid held still: the viscous drag's */
-    double *omega_forces;   /* the omega the last fluid forces were computed with */
-    double *angle_build;    /* orientation at the last neighbour-list build (where the ghosts' lists were made) */
-    double *wetted;         /* the fraction of the disc's surface the fluid wets (boulders_wetted_fraction) */
-    double *step_ax, *step_ay; /* implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt */
-    double *step_ax_n, *step_ay_n; /* and over the one before (a rolled-back step restores them) */
-    double *cos_angle, *sin_angle; /* scratch: cos and sin of angle as of the last boulders_orient (one per disc, not
-                                    * one per particle: a disc's particles share them) */
-    real *spin_coupling;    /* by wall index: sum over fluid neighbours of the viscous pair coefficient */
-    /* by wall particle id: the disc it belongs to (-1: a fixed wall) and its offset from the centre at angle 0 */
-    int32_t *of_wall;
-    double *local_x, *local_y;
+    SURGE_DISC_STEP_FIELDS(DISC_MEMBER)
+    SURGE_DISC_STEP_FIELDS(DISC_COPY_MEMBER)
+    SURGE_DISC_FIELDS(DISC_MEMBER)
+    SURGE_WALL_DISC_FIELDS(WALL_DISC_MEMBER)
     contact_solver *contacts;
 } boulder_set;
 

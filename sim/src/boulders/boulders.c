@@ -22,31 +22,40 @@ static int allocate_discs(boulder_set *b, int n)
 {
     b->count = n;
     int ok = 1;
-#define ALLOC(ptr) ok &= ((ptr) = calloc((size_t)(n > 0 ? n : 1), sizeof *(ptr))) != NULL
-    ALLOC(b->x); ALLOC(b->y); ALLOC(b->angle); ALLOC(b->vx); ALLOC(b->vy); ALLOC(b->omega);
-    ALLOC(b->x_n); ALLOC(b->y_n); ALLOC(b->angle_n); ALLOC(b->vx_n); ALLOC(b->vy_n); ALLOC(b->omega_n);
-    ALLOC(b->radius); ALLOC(b->mass); ALLOC(b->inv_mass); ALLOC(b->inv_inertia);
-    ALLOC(b->fx); ALLOC(b->fy); ALLOC(b->torque); ALLOC(b->ax); ALLOC(b->ay); ALLOC(b->alpha);
-    ALLOC(b->spin_damping); ALLOC(b->omega_forces); ALLOC(b->angle_build); ALLOC(b->contact_radius);
-    ALLOC(b->wetted); ALLOC(b->step_ax); ALLOC(b->step_ay); ALLOC(b->step_ax_n); ALLOC(b->step_ay_n);
-    ALLOC(b->drag_stiffness); ALLOC(b->cos_angle); ALLOC(b->sin_angle);
-#undef ALLOC
+#define ALLOC_DISC(name, meaning) ok &= (b->name = calloc((size_t)(n > 0 ? n : 1), sizeof(double))) != NULL;
+#define ALLOC_DISC_COPY(name, meaning) ok &= (b->name##_n = calloc((size_t)(n > 0 ? n : 1), sizeof(double))) != NULL;
+    SURGE_DISC_STEP_FIELDS(ALLOC_DISC)
+    SURGE_DISC_STEP_FIELDS(ALLOC_DISC_COPY)
+    SURGE_DISC_FIELDS(ALLOC_DISC)
+#undef ALLOC_DISC
+#undef ALLOC_DISC_COPY
+    return ok ? 0 : -1;
+}
+
+int boulders_allocate_wall_fields(boulder_set *b, int wall_count)
+{
+    int ok = 1;
+#define ALLOC_WALL(name, type, meaning) ok &= (b->name = calloc((size_t)(wall_count > 0 ? wall_count : 1), sizeof(type))) != NULL;
+    SURGE_WALL_DISC_FIELDS(ALLOC_WALL)
+#undef ALLOC_WALL
     return ok ? 0 : -1;
 }
 
 void boulders_free(boulder_set *b)
 {
-    void *arrays[] = {b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->x_n, b->y_n, b->angle_n, b->vx_n, b->vy_n,
-                      b->omega_n, b->radius, b->mass, b->inv_mass, b->inv_inertia, b->fx, b->fy, b->torque, b->ax,
-                      b->ay, b->alpha, b->spin_damping, b->omega_forces, b->spin_coupling, b->of_wall,
-                      b->local_x, b->local_y, b->angle_build, b->contact_radius, b->wetted, b->step_ax,
-                      b->step_ay, b->step_ax_n, b->step_ay_n, b->drag_stiffness, b->cos_angle, b->sin_angle};
-    for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
-        free(arrays[i]);
+#define FREE_DISC(name, meaning) free(b->name);
+#define FREE_DISC_COPY(name, meaning) free(b->name##_n);
+#define FREE_WALL(name, type, meaning) free(b->name);
+    SURGE_DISC_STEP_FIELDS(FREE_DISC)
+    SURGE_DISC_STEP_FIELDS(FREE_DISC_COPY)
+    SURGE_DISC_FIELDS(FREE_DISC)
+    SURGE_WALL_DISC_FIELDS(FREE_WALL)
+#undef FREE_DISC
+#undef FREE_DISC_COPY
+#undef FREE_WALL
     contact_solver_destroy(b->contacts);
     memset(b, 0, sizeof *b);
 }
-
 
 /* "x y r [vx vy omega], ..." */
 static int parse_list(boulder_set *b, const char *text, char *err, size_t err_len)

@@ -40,6 +40,8 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s);
 void boulders_own_acceleration(const surge_sim *sim, double *gx, double *gy);
 /* The particles of ring k (0: the outer one) of a disc of radius r_m */
 int boulders_ring_particles(double r_m, double dp_m, int ring);
+/* The per-wall-particle arrays (SURGE_WALL_DISC_FIELDS) for wall_count wall particles; -1 when out of memory */
+int boulders_allocate_wall_fields(boulder_set *b, int wall_count);
 void boulders_free(boulder_set *b);
 
 /* Offset of the disc particle with id from its disc's centre at orientation (cos, sin) = (c, s). */

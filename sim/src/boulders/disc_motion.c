@@ -85,14 +85,16 @@ void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *
 /* disc i's state at the step's start: kept, and taken back */
 void boulders_save_step_start(boulder_set *b, int i)
 {
-    b->x_n[i] = b->x[i], b->y_n[i] = b->y[i], b->angle_n[i] = b->angle[i];
-    b->vx_n[i] = b->vx[i], b->vy_n[i] = b->vy[i], b->omega_n[i] = b->omega[i];
+#define SAVE_DISC(name, meaning) b->name##_n[i] = b->name[i];
+    SURGE_DISC_STEP_FIELDS(SAVE_DISC)
+#undef SAVE_DISC
 }
 
 void boulders_restore_step_start(boulder_set *b, int i)
 {
-    b->x[i] = b->x_n[i], b->y[i] = b->y_n[i], b->angle[i] = b->angle_n[i];
-    b->vx[i] = b->vx_n[i], b->vy[i] = b->vy_n[i], b->omega[i] = b->omega_n[i];
+#define RESTORE_DISC(name, meaning) b->name[i] = b->name##_n[i];
+    SURGE_DISC_STEP_FIELDS(RESTORE_DISC)
+#undef RESTORE_DISC
 }
 
 void boulders_restore(surge_sim *sim)

@@ -113,8 +113,11 @@ static int write_boulders(FILE *f, const boulder_set *b)
     int rc = -1;
     if (keys && lambda_n && lambda_t) {
         contact_solver_cache_get(b->contacts, keys, lambda_n, lambda_t);
-        rc = write_all(f, b->x, n) | write_all(f, b->y, n) | write_all(f, b->angle, n) | write_all(f, b->vx, n) |
-             write_all(f, b->vy, n) | write_all(f, b->omega, n) | write_all(f, b->angle_build, n) |
+        rc = 0;
+#define WRITE_DISC(name, meaning) rc |= write_all(f, b->name, n);
+        SURGE_DISC_STEP_FIELDS(WRITE_DISC)
+#undef WRITE_DISC
+        rc |= write_all(f, b->angle_build, n) |
              write_all(f, &contacts, 4) |
              write_all(f, keys, (size_t)contacts * 8) | write_all(f, lambda_n, (size_t)contacts * 8) |
              write_all(f, lambda_t, (size_t)contacts * 8);
@@ -132,9 +135,11 @@ static int read_boulders(FILE *f, boulder_set *b, uint32_t version)
     if (b->count == 0)
         return 0;
     int32_t contacts = 0;
-    if (read_all(f, b->x, n) || read_all(f, b->y, n) || read_all(f, b->angle, n) || read_all(f, b->vx, n) ||
-        read_all(f, b->vy, n) || read_all(f, b->omega, n))
+#define READ_DISC(name, meaning)                                                                                      \
+    if (read_all(f, b->name, n))                                                                                      \
         return -1;
+    SURGE_DISC_STEP_FIELDS(READ_DISC)
+#undef READ_DISC
     if (version < 4)
         memcpy(b->angle_build, b->angle, n);
     else if (read_all(f, b->angle_build, n))

@@ -166,10 +166,8 @@ static int wall_capacity(const surge_params *p)
 static int allocate_state(surge_sim *s, int n)
 {
     s->count = n;
-    int ok = fields_allocate(s) == 0;
+    int ok = fields_allocate(s) == 0 && boulders_allocate_wall_fields(&s->boulders, s->wall_count) == 0;
 #define ALLOC(ptr, len) ok &= ((ptr) = calloc((size_t)(len) > 0 ? (size_t)(len) : 1, sizeof *(ptr))) != NULL
-    ALLOC(s->boulders.of_wall, s->wall_count); ALLOC(s->boulders.local_x, s->wall_count);
-    ALLOC(s->boulders.local_y, s->wall_count); ALLOC(s->boulders.spin_coupling, s->wall_count);
     ALLOC(s->sort_key, 2 * n); ALLOC(s->sort_scratch_i, n); ALLOC(s->sort_scratch_d, n);
 #undef ALLOC
     return ok ? 0 : -1;
