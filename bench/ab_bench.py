@@ -79,7 +79,7 @@ def run_bench(bench, case, ch, threads, end_s, settings=()):
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--base", default="f50cf94", help="commit A (default f50cf94, main before issue #23)")
+    parser.add_argument("--base", default="f50cf94", help="commit A (default f50cf94)")
     parser.add_argument("--new", type=cli_checks.folder, default=os.path.join(ROOT, "build"),
                         help="build folder of B (default build/)")
     parser.add_argument("--pairs", type=cli_checks.positive_int, default=3)

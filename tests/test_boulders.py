@@ -313,7 +313,7 @@ def group_scene():
           near.returncode == 2 and "closer than contacts.margin_dp" in near.stderr, near.stderr)
     # a disc come round the periodic channel meets the back of the upstream wall (its contact slab: front, back
     # and top), not the wall's particles: thrown at it from behind at 3 m/s, it stops a margin short of the back face
-    # (the wall has as many layers again behind its front ones, with their face upstream: sim/src/scene.c)
+    # (the wall has as many layers again behind its front ones, with their face upstream: sim/src/scene/scene.c)
     behind, r, cmd_b = thrown_disc("scene_behind_wall", "0.3,0.35,0.25,3,0,0", 0.4)
     layers = re.search(r"^layers = (\d+)", open(os.path.join(behind, "params.ini")).read(), re.M) \
         if r.returncode == 0 else None

@@ -1,4 +1,4 @@
-/* The contact solver alone (sim/src/contact_solver.c), no fluid: a disc at rest on a plane stays at rest; a
+/* The contact solver alone (sim/src/boulders/contact_solver.c), no fluid: a disc at rest on a plane stays at rest; a
  * stack settles without drift or penetration; a disc on an incline sticks or slides (rotation locked) and rolls
  * or slips (free) as Coulomb friction says; a disc set on a moving belt ends rolling at a third of its speed; a
  * bouncing disc keeps e^2 of its height; a head-on elastic collision swaps velocities across the periodic

@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The implicit scheme with hypre's multigrid gives the same state whatever the thread count. With two threads the
-viscous solve V-cycles its two velocity components at once, on two copies of its hierarchy (sim/src/amg.c); with one
+viscous solve V-cycles its two velocity components at once, on two copies of its hierarchy (sim/src/scheme/implicit/amg.c); with one
 thread one copy serves both in turn. The copies must be the same hierarchy, so the two runs must end in the same
 state hash (the Freydier ID1 front at dp = 2 mm, C_h 1.8, 0.2 s, the multigrid forced for both solves).
 Usage: test_implicit_threads.py SURGE ROOT OUTDIR"""

@@ -2,7 +2,7 @@
 """structure_check: the shape of the code, checked: no circle of calls among the solver library's files, and no
 function longer than a reader can hold.
 
-  tools/structure_check.py --library build/libsurge_sim.a --sources sim stream render tools/surge.c \\
+  tools/structure_check.py --library build/libsurge_sim.a --sources sim stream render apps \\
       [--allow tests/structure_allow.txt] [--graph-dot graph.dot] [--root .] [--max-lines 100]
 
 1. Calls between files. The library's member objects are read with `nm -P` (binutils): each undefined symbol of a

@@ -265,7 +265,7 @@ PARKED_FILES = ("checkpoint.bin", "progress.json", "params.ini", "diagnostics.cs
 
 
 def checkpoint_time(path):
-    """(step, simulated time in s) recorded in a checkpoint's header (layout in sim/src/checkpoint.c); ValueError
+    """(step, simulated time in s) recorded in a checkpoint's header (layout in sim/src/io/checkpoint.c); ValueError
     naming the file when it is not a surge checkpoint."""
     with open(path, "rb") as f:
         head = f.read(24)

@@ -17,7 +17,7 @@ Both raise VtpError (a ValueError), its message naming the file and what is wron
 or is malformed, or lacks a required array.
 
 write_vtp(path, points, point_data, time_s, step)
-    Writes a snapshot in the format of surge_vtp_write (sim/src/vtk_output.c), byte for byte for
+    Writes a snapshot in the format of surge_vtp_write (sim/src/io/vtk_output.c), byte for byte for
     the same values: VTK XML PolyData, little endian, header_type UInt64, raw appended data, field
     data time_s (Float64) and step (Int64), point data velocity_mps (Float32 x3), density_kgpm3,
     pressure_pa (Float32), kind (UInt8), id (Int32), Float64 points and Int64 verts (one vertex
@@ -204,7 +204,7 @@ def read_pvd(path):
 
 
 # ------------------------------------------------------------------------------------------------
-# Writers (same bytes as sim/src/vtk_output.c)
+# Writers (same bytes as sim/src/io/vtk_output.c)
 # ------------------------------------------------------------------------------------------------
 
 # The C writer's point data arrays, in its order: (name, VTK type, number of components).

@@ -46,7 +46,7 @@ def fail(message):
 
 
 PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked")
-CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene.c)
+CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene/scene.c)
 
 
 def run_name(case, dp, ch, shifting, shape, continuity, scheme):

@@ -2,7 +2,7 @@
 """The implicit step's growth factor on a frozen lattice under a free surface (docs/validation/stability.md,
 "Short steps in a thin fluid").
 
-With the particles held still, one step of the implicit scheme (sim/src/step_implicit.c) is a linear map of the
+With the particles held still, one step of the implicit scheme (sim/src/scheme/implicit/) is a linear map of the
 velocities and the pressure. This script builds that map as matrices, the same pair terms as the C code, on a
 lattice slab periodic in x with a free surface at its top and bottom (one row of surface particles each, held at
 p = 0), and prints its spectral radius, the factor by which its fastest mode grows a step:
@@ -30,7 +30,7 @@ KAPPAS = (0.0, 0.01, 0.05, 0.2, 1.0)
 
 
 def wendland_factor(r, h):
-    """F with grad_a W_ab = F r_ab (sim/src/kernel.h)"""
+    """F with grad_a W_ab = F r_ab (sim/src/physics/kernel.h)"""
     alpha = 7.0 / (4.0 * np.pi * h * h)
     q = r / h
     return np.where(q < 2, -5.0 * alpha / h ** 2 * (1 - q / 2) ** 3, 0.0)

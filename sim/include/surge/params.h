@@ -16,7 +16,7 @@ typedef enum surge_shifting_form {
 
 typedef enum surge_scheme {
     SURGE_SCHEME_EXPLICIT = 0, /* weakly-compressible SPH, symplectic, time step at the speed of sound */
-    SURGE_SCHEME_IMPLICIT = 1, /* incompressible projection with implicit viscosity (step_implicit.c) */
+    SURGE_SCHEME_IMPLICIT = 1, /* incompressible projection with implicit viscosity (sim/src/scheme/implicit/) */
 } surge_scheme;
 
 typedef enum surge_preconditioner {

@@ -12,7 +12,8 @@ int neighbours_update(surge_sim *sim);
 /* Sorts by the build positions as they are and builds the lists (restarts: the same lists as the saved run). */
 int neighbours_adopt_build_positions(surge_sim *sim);
 /* Worksharing functions: their loops are `omp for`, to be called by every thread of a parallel region (one force
- * evaluation shares one region: step_explicit.c); called outside one, they run on the calling thread alone. */
+ * evaluation shares one region: scheme/explicit/explicit_step.c); called outside one, they run on the calling thread
+ * alone. */
 /* Every particle's displacement since the build: before each force evaluation (positions changed). */
 void neighbours_track(surge_sim *sim);
 /* The fluid particles [begin, end) that the calling thread of a parallel region takes in a pass over the fluid's lists:

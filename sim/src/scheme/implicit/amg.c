@@ -1,5 +1,5 @@
 /* hypre's BoomerAMG on one rank, as the preconditioner of the implicit scheme's own BiCGSTAB: one V-cycle per
- * application on a sparse stand-in of the operator (step_implicit.c). BoomerAMG's settings are those hypre
+ * application on a sparse stand-in of the operator (sim/src/scheme/implicit/). BoomerAMG's settings are those hypre
  * recommends for 2D problems on one rank with cheap setup: HMIS coarsening, extended+i interpolation with at most
  * 4 entries a row, strength threshold 0.5, one level of aggressive coarsening, hybrid forward Gauss-Seidel
  * smoothing (the hypre reference manual, "BoomerAMG"; on the Freydier front threshold 0.25, no aggressive level,
