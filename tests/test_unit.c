@@ -374,6 +374,19 @@ static int test_set_param(void)
                  (rc == 0) + fabs(surge_sim_params(sim)->body.slope_deg - 30), 0);
     rc = surge_sim_set_param(sim, "fluid.nosuch", "1", err, sizeof err);
     expect_below("set_param: unknown key refused", rc == 0, 0);
+    /* a viscosity inside its range that would hold the step under the collapse limit (h^2 / nu) is refused before
+     * it applies, naming why; one that keeps the step above it is taken */
+    surge_sim_set_param(sim, "body.slope_deg", "0", err, sizeof err);
+    expect_below("set_param: a first step (rc)", surge_sim_step(sim) != 0, 0);
+    const double nu = surge_sim_params(sim)->fluid.viscosity_m2ps;
+    rc = surge_sim_set_param(sim, "fluid.viscosity_m2ps", "99", err, sizeof err);
+    printf("set_param: viscosity 99 refused with: %s\n", err);
+    expect_below("set_param: a viscosity that collapses the time step refused (rc == 0 is a failure)", rc == 0, 0);
+    expect_below("set_param: ... and the viscosity unchanged", fabs(surge_sim_params(sim)->fluid.viscosity_m2ps - nu), 0);
+    expect_below("set_param: ... and the message names the collapse", strstr(err, "collapsed time step") == NULL, 0);
+    rc = surge_sim_set_param(sim, "fluid.viscosity_m2ps", "0.05", err, sizeof err);
+    expect_below("set_param: a tenfold viscosity accepted (rc)", rc != 0, 0);
+    expect_below("set_param: ... and the next step healthy (rc)", surge_sim_step(sim) != 0, 0);
     surge_sim_destroy(sim);
     return failures;
 }

@@ -140,6 +140,15 @@ int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, cha
     if (surge_param_set(&candidate, info, value, err, err_len) != 0 ||
         surge_params_validate(&candidate, err, err_len) != 0)
         return -1;
+    /* a change that holds every later step below the collapse limit would stop the run at the next step */
+    const double bound_s = sim->scheme->step_bound_s(sim, &candidate);
+    const double collapse_s = candidate.health.min_dt_ratio * sim->first_dt_s;
+    if (sim->first_dt_s > 0 && candidate.numerics.dt_fixed_s == 0 && !(bound_s >= collapse_s)) {
+        snprintf(err, err_len, "%s = %s would hold the time step to at most %.3g s, below health.min_dt_ratio (%g) "
+                 "times the first step (%.3g s): the run would stop on a collapsed time step", name, value, bound_s,
+                 candidate.health.min_dt_ratio, sim->first_dt_s);
+        return -1;
+    }
     sim->params = candidate;
     update_body_force(sim);
     return 0;

@@ -25,6 +25,9 @@ typedef struct time_scheme {
     double (*neighbour_skin_h)(const surge_params *p);
     /* How far ahead of a step's start its force evaluations reach (s), for the neighbour lists' rebuild test */
     double (*lookahead_s)(const surge_sim *sim);
+    /* The longest step the scheme takes under parameters p whatever the flow (s): the bounds that follow from the
+     * parameters alone (a live change that lowers it past the health check's collapse limit is refused) */
+    double (*step_bound_s)(const surge_sim *sim, const surge_params *p);
     /* The scheme's own state beside the particles, after the scene is built (NULL: none); -1 with err set */
     int (*create)(surge_sim *sim, char *err, size_t err_len);
     void (*destroy)(surge_sim *sim);

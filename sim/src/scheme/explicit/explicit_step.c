@@ -148,11 +148,24 @@ static double explicit_lookahead_s(const surge_sim *sim)
                                              : p->numerics.cfl * sim->derived.h_m / sim->derived.c0_mps);
 }
 
+/* dt <= C_CFL min(h / c0, h^2 / nu) (workshop paper eq. 7, the viscous limit where numerics.viscous_dt_limit is set) */
+static double explicit_step_bound_s(const surge_sim *sim, const surge_params *p)
+{
+    if (p->numerics.dt_fixed_s > 0)
+        return p->numerics.dt_fixed_s;
+    const double h = sim->derived.h_m;
+    double dt = h / sim->derived.c0_mps;
+    if (p->numerics.viscous_dt_limit && p->fluid.viscosity_m2ps > 0)
+        dt = fmin(dt, h * h / p->fluid.viscosity_m2ps);
+    return p->numerics.cfl * dt;
+}
+
 const time_scheme scheme_explicit = {
     .name = "explicit",
     .contact_reach_dp = explicit_contact_reach_dp,
     .neighbour_skin_h = explicit_neighbour_skin_h,
     .lookahead_s = explicit_lookahead_s,
+    .step_bound_s = explicit_step_bound_s,
     .step = explicit_step,
     .check_report = explicit_check_report,
 };

@@ -538,6 +538,16 @@ static double implicit_lookahead_s(const surge_sim *sim)
     return 0.0;
 }
 
+/* The body-force limit at rest (the advective one only shortens it) */
+static double implicit_step_bound_s(const surge_sim *sim, const surge_params *p)
+{
+    if (p->numerics.dt_fixed_s > 0)
+        return p->numerics.dt_fixed_s;
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    const double gx = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2, gy = p->body.gravity_mps2 * cos(theta);
+    return surge_implicit_dt_s(p, sim->derived.h_m, sqrt(gx * gx + gy * gy), 0.0);
+}
+
 static void implicit_diagnostics(const surge_sim *sim, surge_diagnostics *d)
 {
     const implicit_work *w = implicit_of(sim);
@@ -552,6 +562,7 @@ const time_scheme scheme_implicit = {
     .contact_reach_dp = implicit_contact_reach_dp,
     .neighbour_skin_h = implicit_neighbour_skin_h,
     .lookahead_s = implicit_lookahead_s,
+    .step_bound_s = implicit_step_bound_s,
     .create = implicit_create,
     .destroy = implicit_destroy,
     .step = implicit_step,
