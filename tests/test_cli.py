@@ -326,15 +326,19 @@ def group_inputs():
             return 127, ""
     status, described = git("describe", "--always", "--dirty", "--abbrev=12")
     commit = described if status == 0 and described else "unknown"
-    program = re.search(r"^program: (surge (\S+), .+, vectors .+)$", r.stdout, re.M)
+    program = re.search(r"^program: (surge (\d+\.\d+\.\d+)(?:\+(\S+))?, .+, vectors .+)$", r.stdout, re.M)
     machine = re.search(r"^machine: (.+)$", r.stdout, re.M)
     params_text = open(params_path).read() if os.path.isfile(params_path) else ""
-    # the commit named is the checkout's, or (a build older than the last commit) another commit of this repository
-    built = program.group(2) if program else ""
-    known = built == commit or (built not in ("", "unknown") and
-                                git("cat-file", "-e", built.split("-dirty")[0] + "^{commit}")[0] == 0)
+    # the version is the build's (CMakeLists.txt's project()); the commit named after it is the checkout's, or (a build
+    # older than the last commit) another commit of this repository, and none without git
+    with open(os.path.join(SOURCE, "CMakeLists.txt")) as f:
+        project_version = re.search(r"project\(surge VERSION (\S+)", f.read()).group(1)
+    built = (program.group(3) or "unknown") if program else ""
+    known = program is not None and program.group(2) == project_version and (
+        built == commit or (built not in ("", "unknown") and
+                            git("cat-file", "-e", built.split("-dirty")[0] + "^{commit}")[0] == 0))
     report("version_names_commit_compiler_vectors_machine", exited(r, 0) and program is not None and
-           machine is not None and known, r, "git describe: %s" % commit)
+           machine is not None and known, r, "git describe: %s, version %s" % (commit, project_version))
     expect_error("version_takes_no_arguments", ["version", "extra"], ["version takes no arguments"])
     expect_error("params_takes_no_arguments", ["params", "extra"], ["params takes no arguments"])
     report("params_ini_names_program_and_machine", program is not None and machine is not None and

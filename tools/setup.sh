@@ -13,12 +13,30 @@ missing_of() {
 }
 missing=$(missing_of $packages)
 missing_python_build=$(missing_of $python_build)
+# apt-get install with its arguments, saying every 10 s how far it got; its whole log on failure
+apt_install() {
+    log=$(mktemp)
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q -o Dpkg::Use-Pty=0 "$@" >"$log" 2>&1 &
+    pid=$!
+    while kill -0 "$pid" 2>/dev/null; do
+        sleep 10
+        echo "setup: $(grep -c '^Get:' "$log") packages downloaded, $(grep -c '^Setting up' "$log") set up"
+    done
+    if ! wait "$pid"; then
+        cat "$log" >&2
+        rm -f "$log"
+        echo "setup: apt-get install failed (its log is above)" >&2
+        exit 1
+    fi
+    echo "setup: $(grep -c '^Setting up' "$log") packages set up"
+    rm -f "$log"
+}
 if [ -n "$missing$missing_python_build" ]; then
-    echo "setup: installing$missing$missing_python_build"
+    echo "setup: installing$missing$missing_python_build and what they need (on a bare machine a download of a few" \
+         "hundred MB and a few minutes)"
     apt-get update -qq
-    [ -z "$missing" ] || DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $missing >/dev/null
-    [ -z "$missing_python_build" ] || DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
-        $missing_python_build >/dev/null
+    [ -z "$missing" ] || apt_install $missing
+    [ -z "$missing_python_build" ] || apt_install --no-install-recommends $missing_python_build
 fi
 # surgepy, editable: this tree's python/ goes on Debian's python3 path (a .pth file and surgepy's dist-info in its
 # site-packages, /usr/local/lib/python3.*/dist-packages as root), so tools, studies and tests import this tree's

@@ -117,7 +117,7 @@ int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *
 
 const char *surge_build_description(void)
 {
-    return "surge " SURGE_BUILD_COMMIT ", " SURGE_COMPILER ", vectors " SURGE_VECTORS;
+    return "surge " SURGE_VERSION SURGE_BUILD_SUFFIX ", " SURGE_COMPILER ", vectors " SURGE_VECTORS;
 }
 
 /* The value of "key<spaces>: value" in line, or NULL */
