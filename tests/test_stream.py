@@ -5,7 +5,7 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
   SCHEME          explicit (the default) or implicit: every run takes -s numerics.scheme=SCHEME; the implicit
                   scheme with a fixed 1 ms step, so that the still tank's 0.15 s hold the steps the groups count,
                   and nu = 0.1 m^2/s (nu dt / dp^2 = 1: at the tank's own 0.001 the 1 ms step would be far below
-                  the scheme's stable range, docs/validation/stability.md, "Twenty-second session").
+                  the scheme's stable range, docs/validation/stability.md, "Short steps in a thin fluid").
   GROUP state     a subscriber's states (full and a field subset) match the same run's snapshots bit for bit;
                   headers follow the minimum contract; the bodies topic is well formed; stats end with "final".
   GROUP control   pause holds the step, step N runs N steps, a parameter set mid-run shows in the published

@@ -182,7 +182,7 @@ check("a running run is parked as interrupted with its piece's time up to the ch
       progress["status"] == "interrupted" and abs(progress["wall_s"] - 42.5) < 1e-6
       and "piece_started_unix" not in progress, str(progress))
 
-# the frozen-lattice analysis of the implicit step (docs/validation/stability.md, "Twenty-third session"): the
+# the frozen-lattice analysis of the implicit step (docs/validation/stability.md, "Short steps in a thin fluid"): the
 # scheme's operators grow 1.39 a step without viscosity, the adjoint pairings and the air images do not (or barely)
 IM = os.path.join(source, "studies", "stability", "implicit_surface_modes.py")
 r = subprocess.run([sys.executable, IM], capture_output=True, text=True, timeout=300)

@@ -6,9 +6,9 @@ says more.
 
   studies/debris_surge/ensemble.py run [--counts 0,50,100,154] [--phis F,...] [--seeds 5] [--dp 0.05] [--end-s 75]
         [--threads 1] [--jobs 1] [--member K] [--budget-s S] [--runs-dir runs/debris_surge] [--set NAME=VALUE ...]
-        [--continue-stopped] [--parked-dir docs/validation/parked/debris_surge]
+        [--continue-stopped] [--parked-dir studies/debris_surge/parked]
   studies/debris_surge/ensemble.py park|unpark [--runs-dir runs/debris_surge]
-        [--parked-dir docs/validation/parked/debris_surge]
+        [--parked-dir studies/debris_surge/parked]
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
   studies/debris_surge/ensemble.py plot --csv FILE [--csv FILE ...] --png FILE
@@ -32,7 +32,7 @@ ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for 
 park / unpark: a member longer than a session is carried in the committed tree, since nothing else survives from
 one session to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
 boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
-for 60 discs at dp = 0.04 m, measured 2026-11-28) into docs/validation/parked/debris_surge/; `unpark` in a fresh
+for 60 discs at dp = 0.04 m, measured 2026-11-28) into studies/debris_surge/parked/; `unpark` in a fresh
 checkout puts them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes
 deletes its parked copy. Resume with the surge that started the member: its progress.json lists the programs that
 ran it (`surge version`: commit, compiler, vector extensions), and a member continued under another says so.
@@ -66,7 +66,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 TOOL = "ensemble"
 CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
-PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked", "debris_surge")
+PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
@@ -475,14 +475,14 @@ def main():
                                 "--set parameters (live ones only, e.g. health.max_density_deviation=0.2)")
             p.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR,
                            help="where a member that finishes deletes its parked copy (default "
-                                "docs/validation/parked/debris_surge)")
+                                "studies/debris_surge/parked)")
     for name in ("park", "unpark"):
         p = sub.add_parser(name, help="carry unfinished members to the next checkout" if name == "park" else
                            "restore parked members into --runs-dir")
         p.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "debris_surge"),
                        help="the members' folders (default runs/debris_surge)")
         p.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR,
-                       help="the parked members (default docs/validation/parked/debris_surge, committed)")
+                       help="the parked members (default studies/debris_surge/parked, committed)")
     c = sub.add_parser("collect", help="the members' statistics: table and box plots")
     c.add_argument("--runs-dir", default=os.path.join(ROOT, "runs", "debris_surge"),
                    help="the members' folders (default runs/debris_surge)")

@@ -7,15 +7,15 @@ error against wall time (one point per run).
         [--shifting lind] [--shape block] [--continuity renormalised|plain] [--scheme explicit|implicit]
         [--end-s 40] [--threads 2]
         [--budget-s SECONDS]
-        [--runs-dir runs/convergence] [--csv docs/validation/freydier_convergence.csv]
+        [--runs-dir runs/convergence] [--csv studies/freydier/data/freydier_convergence.csv]
   studies/freydier/freydier_convergence.py chart [--csv ...] [--png docs/validation/freydier_accuracy_vs_cost.png]
   studies/freydier/freydier_convergence.py park|unpark [--runs-dir runs/convergence]
-        [--parked-dir docs/validation/parked]
+        [--parked-dir studies/freydier/parked]
 
 A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
 its wall time adds up across the pieces (progress.json in its folder). runs/ is not committed, so a run that must
 outlive the checkout is parked: `park` copies each interrupted run's checkpoint, small files and initial snapshot
-(compressed) into docs/validation/parked/, which is committed; `unpark` in a fresh checkout puts them back, and
+(compressed) into studies/freydier/parked/, which is committed; `unpark` in a fresh checkout puts them back, and
 `run` with the same options continues. A finished run's parked copy is deleted by `run`.
 
 The `corner` column names the solver's belt-upstream-wall corner (docs/method.md): rows written before it existed
@@ -45,7 +45,7 @@ def fail(message):
     study.fail("freydier_convergence", message)
 
 
-PARKED_DIR = os.path.join(ROOT, "docs", "validation", "parked")
+PARKED_DIR = os.path.join(ROOT, "studies", "freydier", "parked")
 CORNER = "split"  # the belt-upstream-wall corner of the current solver (sim/src/scene/scene.c)
 
 
@@ -216,7 +216,7 @@ def main():
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "convergence"))
-    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "studies", "freydier", "data", "freydier_convergence.csv"))
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     run.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR)
     for command in ("park", "unpark"):
@@ -224,7 +224,7 @@ def main():
         parking.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "convergence"))
         parking.add_argument("--parked-dir", type=cli_checks.folder, default=PARKED_DIR)
     chart = sub.add_parser("chart")
-    chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "freydier_convergence.csv"))
+    chart.add_argument("--csv", default=os.path.join(ROOT, "studies", "freydier", "data", "freydier_convergence.csv"))
     chart.add_argument("--png", type=cli_checks.png_file,
                        default=os.path.join(ROOT, "docs", "validation", "freydier_accuracy_vs_cost.png"))
     args = parser.parse_args()

@@ -5,7 +5,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 
   studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
-        [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv docs/validation/poiseuille_loaded.csv]
+        [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
@@ -23,7 +23,7 @@ the channel with the local Einstein-Brady viscosity mu(y) = mu0 (1 + 2 phi(y)), 
 at height y (their chords over L), u(y) from the shear stress rho F (y0 - y) with y0 where u(0) = u(B) = 0, u_max
 its mean within 1 cm of the centre line, mu_eq from eq. 19 (clear fluid: 1.00037, from the band's mean). It counts
 the discs' absence within r of the plates (where the shear is largest) and is valid where Einstein-Brady is (phi
-up to about 0.1). One row per phi in docs/validation/poiseuille_loaded_reference.csv.
+up to about 0.1). One row per phi in studies/poiseuille_loaded/data/poiseuille_loaded_reference.csv.
 """
 import argparse
 import csv
@@ -47,7 +47,7 @@ WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
 DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
-REFERENCE_CSV = os.path.join(ROOT, "docs", "validation", "poiseuille_loaded_reference.csv")
+REFERENCE_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded_reference.csv")
 
 
 def fail(message):
@@ -404,7 +404,7 @@ def main():
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
-    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
@@ -415,7 +415,7 @@ def main():
     ref.add_argument("--csv", default=REFERENCE_CSV)
     ref.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     rep = sub.add_parser("report")
-    rep.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "poiseuille_loaded.csv"))
+    rep.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     rep.add_argument("--png", type=cli_checks.png_file, default=None)
     rep.add_argument("--dp", type=cli_checks.positive, default=None, help="fit only the runs at this dp")
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")

@@ -5,7 +5,7 @@ not, and for every cell a frame of the particles near the upstream wall and the 
 
   studies/stability/stability_map.py run [--case id1] [--dp 0.002] [--shifting none,velocity,lind] [--ch 1.3,1.8]
         [--cfl 0.2,0.5] [--c0-factor 10,5] [--end-s 3] [--threads 2]
-        [--runs-dir runs/stability] [--csv docs/validation/stability_map.csv] [--frames docs/validation/stability]
+        [--runs-dir runs/stability] [--csv studies/stability/data/stability_map.csv] [--frames docs/validation/stability]
   studies/stability/stability_map.py chart [--csv ...] [--png docs/validation/stability_map.png]
 
 One CSV row per cell (appended; cells already in the CSV are skipped): the parameters, status (healthy or the
@@ -177,11 +177,11 @@ def main():
     run.add_argument("--end-s", type=cli_checks.positive, default=3.0)
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "stability"))
-    run.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
+    run.add_argument("--csv", default=os.path.join(ROOT, "studies", "stability", "data", "stability_map.csv"))
     run.add_argument("--frames", type=cli_checks.folder, default=os.path.join(ROOT, "docs", "validation", "stability"))
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     chart = sub.add_parser("chart")
-    chart.add_argument("--csv", default=os.path.join(ROOT, "docs", "validation", "stability_map.csv"))
+    chart.add_argument("--csv", default=os.path.join(ROOT, "studies", "stability", "data", "stability_map.csv"))
     chart.add_argument("--png", type=cli_checks.png_file,
                        default=os.path.join(ROOT, "docs", "validation", "stability_map.png"))
     args = parser.parse_args()
