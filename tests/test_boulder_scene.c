@@ -1,4 +1,4 @@
-/* The debris surge's boulders as data, without a simulation (surge/boulder_scene.h; issue #25):
+/* The debris surge's boulders as data, without a simulation (surge/boulder_scene.h):
  *   grading    sizes drawn from the built-in curve stay in bounds and follow the truncated curve (Kolmogorov-Smirnov
  *              distance below its 5 % critical value at a fixed seed); bad curve files are refused with file:line
  *   placement  graded discs never overlap, stay inside the block with the gap, lie log-normally behind the front,

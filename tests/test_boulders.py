@@ -282,7 +282,7 @@ def group_inputs():
 
 os.makedirs(WORK, exist_ok=True)
 def group_scene():
-    """The debris surge with graded boulders (issue #25): the run writes its discs to boulders.csv, and a case that
+    """The debris surge with graded boulders: the run writes its discs to boulders.csv, and a case that
     loads that file (placement = file) is the same run, state hash for state hash."""
     args = ["debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s", "time.end_s=0.01", "-s", "boulders.density_ratio=0.9"]
     graded, p, cmd = surge("scene_graded", ["run"] + args + ["-s", "boulders.placement=graded",

@@ -295,7 +295,7 @@ def group_inputs():
     # (0.0611 m is 30.55 spacings: 31 would move dp by 1.5 %)
     cross_field("periodic_length_not_dp_multiple", "demo.ini", {"domain.length_m": "0.0611", "fluid.x1_m": "0.05"},
                 ["domain.length_m", "0.0611", "whole number", "dp", "30.55 of them", "31"])
-    # the debris surge's case with only dp changed never fails its check (issue #25): a dp that does not divide its
+    # the debris surge's case with only dp changed never fails its check: a dp that does not divide its
     # 33 m period is fitted, the wall layers and c0 follow dp, and discs are refused only below 3 dp across
     debris = os.path.join(SOURCE, "cases", "debris_surge.ini")
     discs = ["-s", "boulders.placement=graded", "-s", "boulders.count=28", "-s", "boulders.seed=1"]
@@ -458,7 +458,7 @@ def group_inputs():
             raw[-8:] = struct.pack("<Q", fnv(bytes(raw[:-8])))
             return bytes(raw)
 
-        # edits outside the state hash: the parameters, the first time step, bytes appended (issue #24, D7)
+        # edits outside the state hash: the parameters, the first time step, bytes appended
         text = bytes(data[24:24 + plen])
         edited = text.replace(b"viscosity_m2ps = ", b"viscosity_m2ps = 9", 1)
         corrupt = bytearray(data[:16]) + struct.pack("<Q", len(edited)) + edited + data[24 + plen:]
@@ -511,7 +511,7 @@ def group_inputs():
                  ["run", poiseuille, "-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-o", regular],
                  [regular], code=3)
 
-    # --- earlier outputs are never lost without --overwrite (issue #24) ---------------------------------
+    # --- earlier outputs are never lost without --overwrite ---------------------------------
     quick = ["-s", "time.end_s=0.002", "-s", "output.progress_interval_s=0", "-s", "output.snapshot_interval_s=0.001"]
     kept = os.path.join(WORK, "kept_run")
     r = surge("run", poiseuille, *quick, "-o", kept)
@@ -553,7 +553,7 @@ def group_inputs():
     report("outputs_movie_folder_nothing_run", not os.path.exists(os.path.join(WORK, "mv_run", "params.ini")), None,
            "the run started before the movie's folder was checked")
 
-    # --- resolution and cost in surge check (issue #24) --------------------------------------------------
+    # --- resolution and cost in surge check --------------------------------------------------
     r = surge("check", os.path.join(cases_dir, "demo.ini"), "-s", "numerics.dp_m=0.004")
     report("check_warns_few_particles_in_depth", exited(r, 0) and "4.5 particles" in r.stdout and
            "dp <= 0.0012 m gives 15" in r.stdout and "estimated memory" in r.stdout and
@@ -599,7 +599,7 @@ def group_inputs():
     report("check_quiet_when_resolved", exited(r, 0) and "warning" not in r.stdout + r.stderr and
            "note" not in r.stdout + r.stderr, r)
 
-    # --- who may steer a run (issue #24): a control socket other machines can reach is refused, any transport
+    # --- who may steer a run: a control socket other machines can reach is refused, any transport
     for n, endpoint in enumerate(("tcp://0.0.0.0:5999", "tcp://*:5999", "norm://127.0.0.1:5999",
                                   "epgm://eth0;239.192.1.1:5999")):
         expect_error("cli_control_not_local_%d_%s" % (n, endpoint.split(":")[0]),
@@ -622,7 +622,7 @@ def group_inputs():
     for name in shipped:
         r = surge("check", os.path.join(cases_dir, name))
         report("check_shipped_%s" % name[:-4], exited(r, 0) and "ok" in r.stdout, r)
-        # changing dp alone never breaks a shipped scene (issue #24): half and twice its spacing
+        # changing dp alone never breaks a shipped scene: half and twice its spacing
         with open(os.path.join(cases_dir, name)) as f:
             found = re.search(r"^\s*dp_m\s*=\s*([0-9.eE+-]+)", f.read(), re.M)
         dp = float(found.group(1)) if found else None
@@ -872,7 +872,7 @@ def group_restart():
     report("sigint_says_how_to_continue", "--restart " + checkpoint in r_int.stderr, r_int,
            "needs the --restart command")
 
-    # OpenMP threads wait passively unless the user set a policy (issue #24): the running process's environment
+    # OpenMP threads wait passively unless the user set a policy: the running process's environment
     for given, wanted in ((None, "PASSIVE"), ("ACTIVE", "ACTIVE")):
         env = {k: v for k, v in ENV.items() if k != "OMP_WAIT_POLICY"}
         if given:

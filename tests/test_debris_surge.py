@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The debris-surge ensemble end to end (studies/debris_surge/ensemble.py; issue #25), small and coarse: the fluid
+"""The debris-surge ensemble end to end (studies/debris_surge/ensemble.py), small and coarse: the fluid
 alone, 6 graded discs, and graded discs covering phi = 0.04 of the fluid block (--phis), on the belt at dp = 0.066 m
 for 1.5 s of flow.
 

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""The implicit scheme carries a Freydier front (issue #26): ID1 at dp = 1 mm, C_h 1.3, from the lubrication
+"""The implicit scheme carries a Freydier front: ID1 at dp = 1 mm, C_h 1.3, from the lubrication
 profile, 2.5 s of flow. Without the kernel-sum free-surface test (implicit.surface_kernel_margin = 1 turns it off)
 this run stopped at 1.77 s on the density check at the front's foot (2026-11-26); with it the same front ran 10.2 s,
 and with the compressed particles' shift (implicit.anti_clumping) as well, 40 s (docs/validation/stability.md).

@@ -208,7 +208,7 @@ static void group_colours(const char *work)
     surge_colormap_rgb(SURGE_COLORMAP_CIVIDIS, s.vx_mps[k] + 0.5, 0.5, 1.5, expected);
     check("colours: vx_rel on cividis subtracts the belt speed", near_rgb(pixel(&im2, cx, cy), expected, 1), "");
 
-    /* a fluid at rest, automatic range: the speed bar starts at 0 (it read -0.5..0.5; issue #24) */
+    /* a fluid at rest, automatic range: the speed bar starts at 0 (it read -0.5..0.5) */
     p.render.field = SURGE_FIELD_SPEED;
     p.render.color_min = p.render.color_max = 0;
     for (int32_t i = 0; i < s.count; i++)
@@ -224,7 +224,7 @@ static void group_colours(const char *work)
     surge_snapshot_free(&s);
 }
 
-/* Automatic colour ranges and frame heights (issue #24, pictures): round ranges that grow but never shrink while a run
+/* Automatic colour ranges and frame heights (pictures): round ranges that grow but never shrink while a run
  * renders, and a frame fitted to a long thin scene. */
 static void group_ranges(const char *work)
 {

@@ -228,7 +228,7 @@ def group_offline():
                             " render.frame_interval_s = 0.1"])
     check("offline: the same with spaces around the name, as -s allows them", code10 == 0 and
           "rendered 3 snapshots" in stderr10, stderr10[-300:])
-    # one colour range for the whole movie, from all its frames, unless the user sets one (issue #24)
+    # one colour range for the whole movie, from all its frames, unless the user sets one
     check("offline: an automatic colour range is the range over all frames", "over all 5 frames" in stderr3,
           stderr3[-300:])
 
@@ -342,7 +342,7 @@ def group_inputs():
           bool(snapshots) and code == 2 and snapshots[-1] in stderr and "truncated or has the wrong size" in stderr,
           "exit %d: %s" % (code, stderr.strip()[-300:]))
 
-    # run.pvd naming a folder instead of a snapshot (it sent the reader to malloc 2^63 bytes; issue #24, D8)
+    # run.pvd naming a folder instead of a snapshot (it sent the reader to malloc 2^63 bytes)
     if snapshots:
         os.remove(path)
         os.makedirs(path)

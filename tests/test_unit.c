@@ -464,7 +464,7 @@ static surge_params small_bed_params(void)
     return p;
 }
 
-/* The wall treatment's contact and shift rules (docs/method.md, Walls; issue #22): a fluid particle put 0.1 dp above
+/* The wall treatment's contact and shift rules (docs/method.md, Walls): a fluid particle put 0.1 dp above
  * the bed face and thrown at it at 0.5 m/s leaves the step with no velocity toward the face, and a shift that would
  * carry it further in stops at the repulsion's reach. Without the rules (reach 0) the same particle keeps
  * approaching. */
@@ -555,7 +555,7 @@ static int test_wall_contact_rules(void)
     return failures;
 }
 
-/* The same rules at a disc's face (issue #22: no fluid into a boulder either): a fluid particle put 0.1 dp outside a
+/* The same rules at a disc's face (no fluid into a boulder either): a fluid particle put 0.1 dp outside a
  * disc and thrown at its centre at 0.5 m/s leaves the step with no velocity toward the disc's face, still outside
  * it, and the disc takes the push's reaction. */
 static int test_disc_contact_rules(void)
@@ -1036,7 +1036,7 @@ static void tank_faces(const surge_sim *sim, double *x0, double *y0)
         *x0 = fmin(*x0, sim->x[k] - 0.5 * dp), *y0 = fmin(*y0, sim->y[k] - 0.5 * dp);
 }
 
-/* The projection (issue #26): a velocity field with a known divergence, v = curl(s) + (0, A y), in the open tank
+/* The projection: a velocity field with a known divergence, v = curl(s) + (0, A y), in the open tank
  * (walls at x = 0, L and y = 0, the free surface at y = H), with s = S sin(pi x / L) sin(pi y / (2H)), whose curl is
  * divergence-free and has no velocity through the walls, and (0, A y), whose divergence is A and which the walls
  * also let be. The projection with phi = 0 on the free surface and no flux through the walls takes away the
@@ -1095,7 +1095,7 @@ static int test_implicit_projection(void)
     return failures;
 }
 
-/* The rest-density solve (issue #26): the tank's fluid squeezed to 0.95 of its spacing in depth (its kernel sum 5 %
+/* The rest-density solve: the tank's fluid squeezed to 0.95 of its spacing in depth (its kernel sum 5 %
  * above the lattice's; squeezed sideways too it would leave a void along the side walls), at rest and without
  * gravity, must come back to the rest density and to its depth; the solve moves the particles and leaves the
  * velocity alone. */

@@ -613,7 +613,7 @@ const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const
     draw_length_scale(c);
     draw_drivers(c, p);
     char label[160];
-    /* the time, and what drives the flow: the slope and the belt (issue #24) */
+    /* the time, and what drives the flow: the slope and the belt */
     int used = snprintf(label, sizeof label, "t = %.3f s", s->time_s);
     if (p->body.slope_deg != 0 && used > 0 && used < (int)sizeof label)
         used += snprintf(label + used, sizeof label - (size_t)used, "   slope %.3g deg", p->body.slope_deg);

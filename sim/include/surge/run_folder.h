@@ -1,5 +1,5 @@
-/* What belongs to a run in a folder, so that a new run never overwrites a finished one without being asked
- * (issue #24): the files surge run writes into its output folder, and the frames a renderer writes. */
+/* What belongs to a run in a folder, so that a new run never overwrites a finished one without being asked: the
+ * files surge run writes into its output folder, and the frames a renderer writes. */
 #ifndef SURGE_RUN_FOLDER_H
 #define SURGE_RUN_FOLDER_H
 
