@@ -134,7 +134,15 @@ int close_live_links(live_links *l, const surge_sim *sim)
         fprintf(stderr, "surge: published %llu states (%llu superseded by newer ones before sending), %llu messages, "
                         "%.1f MB\n", (unsigned long long)r.frames_posted, (unsigned long long)r.frames_superseded,
                 (unsigned long long)r.messages_sent, 1e-6 * (double)r.bytes_sent);
+        if (r.peers_over_limit > 0)
+            fprintf(stderr, "surge: closed %ld subscriber connection%s over the limit of peers at once\n",
+                    r.peers_over_limit, r.peers_over_limit == 1 ? "" : "s");
     }
+    long over_limit = 0, idle = 0;
+    surge_control_peer_counts(l->control, &over_limit, &idle);
+    if (over_limit + idle > 0)
+        fprintf(stderr, "surge: closed %ld control connection%s over the limit of peers at once and %ld idle\n",
+                over_limit, over_limit == 1 ? "" : "s", idle);
     surge_control_close(l->control);
     surge_replay_free(l->replay);
     surge_journal_close(l->journal);
