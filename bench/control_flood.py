@@ -28,12 +28,14 @@ KINDS = [
     ("get", b'{"cmd": "get", "key": "fluid.viscosity_m2ps"}'),
     ("list", b'{"cmd": "list"}'),
     ("bad JSON", b'{"cmd": "status", '),
+    ("junk 6 kB", bytes((i * 7919) % 251 for i in range(6000))),
     ("junk 60 kB", bytes((i * 7919) % 251 for i in range(60000))),
 ]
 
 
 def flood(endpoint, request, seconds, replies):
-    """One client: IN_FLIGHT requests outstanding, a new one sent for each reply, until seconds have passed."""
+    """One client: IN_FLIGHT requests outstanding, a new one sent for each reply (IN_FLIGHT more after 0.1 s
+    without one), until seconds have passed."""
     ctx = zmq.Context()
     s = ctx.socket(zmq.DEALER)
     s.setsockopt(zmq.LINGER, 0)
@@ -46,6 +48,12 @@ def flood(endpoint, request, seconds, replies):
             s.recv()
             received += 1
             s.send(request, zmq.DONTWAIT)
+        else:  # no reply (a request over the size limit closes the connection): send again
+            for _ in range(IN_FLIGHT):
+                try:
+                    s.send(request, zmq.DONTWAIT)
+                except zmq.Again:
+                    break
     with replies.get_lock():
         replies.value += received
     s.close()

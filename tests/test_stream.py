@@ -344,6 +344,7 @@ def group_control():
 # ---------------------------------------------------------------------------------------------------------------
 BAD_REQUESTS = [  # (request bytes, words the error must contain)
     (b"not json", "not valid JSON"),
+    (b'{"cmd": "status", "pad": "' + b"x" * 10000 + b'"}', "request too long (10028 bytes; at most 8192)"),
     (b"", "not valid JSON"),
     (b"[1, 2]", "JSON object"),
     (b'"status"', "JSON object"),
@@ -392,6 +393,16 @@ def group_inputs():
             wrong.append("%r -> %s" % (request, reply))
     check("inputs: every malformed request gets its error reply (%d kinds)" % len(BAD_REQUESTS), not wrong,
           "\n".join(wrong))
+
+    # list's reply is kept between requests: it must follow a change of a parameter
+    first = ctl.request({"cmd": "list"})
+    ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": 0.0025})
+    second = ctl.request({"cmd": "list"})
+
+    def viscosity(reply):
+        return [p["value"] for p in reply.get("params", []) if p["key"] == "fluid.viscosity_m2ps"]
+    check("inputs: list shows a parameter's new value after a set", viscosity(first) != [0.0025]
+          and viscosity(second) == [0.0025], "%s then %s" % (viscosity(first), viscosity(second)))
 
     dealer = ctx.socket(zmq.DEALER)
     dealer.setsockopt(zmq.LINGER, 0)

@@ -48,7 +48,7 @@ struct surge_control {
 
 surge_control_def surge_default_control_def(void)
 {
-    surge_control_def d = {.endpoint = "tcp://127.0.0.1:5556", .start_paused = 0, .max_request_bytes = 65536,
+    surge_control_def d = {.endpoint = "tcp://127.0.0.1:5556", .start_paused = 0, .max_request_bytes = 16384,
                            .max_peers = 32, .idle_peer_s = 60};
     return d;
 }
