@@ -272,7 +272,7 @@ def group_control():
     for i in range(COUNT):
         data = random_request(params)
         try:
-            reply = live.control.request(data) if len(data) <= 65536 else live.control.request(b'{"cmd":"status"}')
+            reply = live.control.request(data) if len(data) <= 16384 else live.control.request(b'{"cmd":"status"}')
             replies["ok" if reply.get("ok") else "error"] += 1
             if not reply.get("ok") and not isinstance(reply.get("error"), str):
                 record("request %d" % i, data, " ".join(live.args), "an error reply without its message", str(reply))

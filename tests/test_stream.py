@@ -18,6 +18,9 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   --curve-clients only an allowed client is answered and fed states, an unknown key or a plain
                   client gets nothing; a --control reachable from elsewhere is refused without keys and runs with
                   them; bad key files and option pairs get clear errors.
+  GROUP peers     a burst of 400 connections at once (raw TCP that never greets, and ZeroMQ clients that greet
+                  and then sit idle) against a run limited to 256 open files: the run keeps stepping and writes
+                  every snapshot; its control socket still answers once the idle peers are closed.
   GROUP stalled   a subscriber that never reads (its subscription shown live first) does not hold the solver
                   back: the run finishes and states were dropped for it (step rates: tools/stream_bench.py).
 
@@ -341,6 +344,7 @@ def group_control():
 # ---------------------------------------------------------------------------------------------------------------
 BAD_REQUESTS = [  # (request bytes, words the error must contain)
     (b"not json", "not valid JSON"),
+    (b'{"cmd": "status", "pad": "' + b"x" * 10000 + b'"}', "request too long (10028 bytes; at most 8192)"),
     (b"", "not valid JSON"),
     (b"[1, 2]", "JSON object"),
     (b'"status"', "JSON object"),
@@ -389,6 +393,16 @@ def group_inputs():
             wrong.append("%r -> %s" % (request, reply))
     check("inputs: every malformed request gets its error reply (%d kinds)" % len(BAD_REQUESTS), not wrong,
           "\n".join(wrong))
+
+    # list's reply is kept between requests: it must follow a change of a parameter
+    first = ctl.request({"cmd": "list"})
+    ctl.request({"cmd": "set", "key": "fluid.viscosity_m2ps", "value": 0.0025})
+    second = ctl.request({"cmd": "list"})
+
+    def viscosity(reply):
+        return [p["value"] for p in reply.get("params", []) if p["key"] == "fluid.viscosity_m2ps"]
+    check("inputs: list shows a parameter's new value after a set", viscosity(first) != [0.0025]
+          and viscosity(second) == [0.0025], "%s then %s" % (viscosity(first), viscosity(second)))
 
     dealer = ctx.socket(zmq.DEALER)
     dealer.setsockopt(zmq.LINGER, 0)
@@ -539,6 +553,82 @@ def group_inputs():
           "exit %s, %d snapshots, resume answered %s: %s" % (proc.returncode, len(snaps), bool(resumed),
                                                              (err_text or "").strip()[-400:]))
 
+# ---------------------------------------------------------------------------------------------------------------
+def group_peers():
+    """400 connections opened at once against a run whose soft and hard limits are 256 open files (sh's ulimit
+    sets both, so the run cannot raise its own): half of them raw TCP that never sends ZeroMQ's greeting, half
+    ZeroMQ DEALER clients that complete it and then send nothing. The run must go on stepping and write its
+    snapshots while they are held (no "Too many open files"), and a client connecting after them must be answered
+    once the idle ones have been closed."""
+    import resource
+    import signal
+    import socket
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    resource.setrlimit(resource.RLIMIT_NOFILE, (max(soft, min(hard, 4096)), hard))  # this script holds 600 fds
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    out = os.path.join(WORK, "peers")
+    shutil.rmtree(out, ignore_errors=True)
+    command = [SURGE, "run", TANK, "-o", out, "--threads", "1", "-s", "time.end_s=100", "-s",
+               "output.snapshot_interval_s=0.01", "-s", "output.progress_interval_s=0", "--control", str(port),
+               "--publish", str(port + 1)] + SCHEME
+    stderr_path = os.path.join(WORK, "peers_stderr.txt")
+    proc = subprocess.Popen(["sh", "-c", 'ulimit -n 256 && exec "$@"', "sh"] + command, stdout=subprocess.DEVNULL,
+                            stderr=open(stderr_path, "w"), env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+
+    def snapshots():
+        return len([f for f in os.listdir(out) if f.startswith("snap_") and f.endswith(".vtp")]) \
+            if os.path.isdir(out) else 0
+
+    started = wait_for(lambda: snapshots() >= 3 or proc.poll() is not None, 60) and proc.poll() is None
+    ctx = zmq.Context()
+    ctx.setsockopt(zmq.MAX_SOCKETS, 1024)
+    raw, dealers = [], []
+    for k in range(200):  # all at once: non-blocking connects, nothing waits for an accept
+        s = socket.socket()
+        s.setblocking(False)
+        s.connect_ex(("127.0.0.1", port if k % 2 == 0 else port + 1))
+        raw.append(s)
+        d = ctx.socket(zmq.DEALER)
+        d.setsockopt(zmq.LINGER, 0)
+        d.setsockopt(zmq.RECONNECT_IVL, 1000)  # a closed peer comes back, once a second
+        d.connect("tcp://127.0.0.1:%d" % port)
+        dealers.append(d)
+    before = snapshots()
+    time.sleep(4.0)  # the flood is held: 2 s of ZeroMQ's greeting timeout, and more
+    during = snapshots() - before
+    alive = proc.poll() is None
+    late = surge_client.Control("tcp://127.0.0.1:%d" % port, 2, ctx)
+    reply = None
+    deadline = time.time() + 40
+    while reply is None and time.time() < deadline and proc.poll() is None:
+        try:
+            reply = late.request({"cmd": "status"})
+        except TimeoutError:
+            late = surge_client.Control("tcp://127.0.0.1:%d" % port, 2, ctx)
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    for s in raw:
+        s.close()
+    for d in dealers:
+        d.close()
+    ctx.destroy(linger=0)
+    err_text = open(stderr_path).read()
+    check("peers: 400 connections at once under a 256-file limit: the run steps on and writes its snapshots "
+          "(%d snapshots while they were held)" % during,
+          started and alive and during >= 5 and "Too many open files" not in err_text
+          and "interrupted; checkpoint written" in err_text,
+          "started %s, alive after the flood %s, exit %s: %s" % (started, alive, proc.returncode, err_text[-600:]))
+    check("peers: a client arriving after the flood is answered once the idle peers are closed",
+          reply is not None and reply.get("ok") is True, "reply %s; %s" % (reply, err_text[-300:]))
+
 
 # ---------------------------------------------------------------------------------------------------------------
 def group_stalled():
@@ -652,7 +742,8 @@ def group_curve():
           "%d %s\n%d %s" % (remote.returncode, remote.stderr[-400:], warned.returncode, warned.stderr[-400:]))
 
 
-groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled}
+groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled,
+          "peers": group_peers}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -6,6 +6,7 @@
 
 #include <zmq.h>
 
+#include "surge/platform.h"
 #include "surge/run.h"
 
 /* Renderer thread: rendered frames also go out on the stream. */
@@ -66,6 +67,11 @@ int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, vola
     }
     if (c->publish[0] || c->control[0])
         l->zmq_context = zmq_ctx_new();
+    /* the outputs must never run short of file descriptors: the run takes all the files it may open, and its
+     * sockets' peers are capped to an eighth of them each (a peer being closed holds its descriptor a moment
+     * longer, so up to twice that), so that at least half stay for everything else */
+    const long files = surge_raise_file_limit();
+    const int peer_cap = files < 0 ? 1000 : (int)(files / 8 < 4 ? 4 : files / 8 > 1000 ? 1000 : files / 8);
     if (c->curve_key_path) {
         if (!(l->curve = surge_curve_server_start(l->zmq_context, c->curve_key_path, c->curve_clients_path, err,
                                                   sizeof err)))
@@ -78,6 +84,7 @@ int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, vola
         def.endpoint = c->control;
         def.curve = l->curve;
         def.start_paused = c->paused;
+        def.max_peers = def.max_peers < peer_cap ? def.max_peers : peer_cap;
         if (!(l->control = surge_control_start(l->zmq_context, &def, l->journal, err, sizeof err)))
             goto fail;
     }
@@ -85,6 +92,7 @@ int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, vola
         surge_publisher_def def = c->publisher;
         def.endpoint = c->publish;
         def.curve = l->curve;
+        def.max_peers = def.max_peers < peer_cap ? def.max_peers : peer_cap;
         if (!(l->publisher = surge_publisher_start(l->zmq_context, &def, err, sizeof err)))
             goto fail;
     }
@@ -126,7 +134,15 @@ int close_live_links(live_links *l, const surge_sim *sim)
         fprintf(stderr, "surge: published %llu states (%llu superseded by newer ones before sending), %llu messages, "
                         "%.1f MB\n", (unsigned long long)r.frames_posted, (unsigned long long)r.frames_superseded,
                 (unsigned long long)r.messages_sent, 1e-6 * (double)r.bytes_sent);
+        if (r.peers_over_limit > 0)
+            fprintf(stderr, "surge: closed %ld subscriber connection%s over the limit of peers at once\n",
+                    r.peers_over_limit, r.peers_over_limit == 1 ? "" : "s");
     }
+    long over_limit = 0, idle = 0;
+    surge_control_peer_counts(l->control, &over_limit, &idle);
+    if (over_limit + idle > 0)
+        fprintf(stderr, "surge: closed %ld control connection%s over the limit of peers at once and %ld idle\n",
+                over_limit, over_limit == 1 ? "" : "s", idle);
     surge_control_close(l->control);
     surge_replay_free(l->replay);
     surge_journal_close(l->journal);

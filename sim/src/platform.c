@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -17,6 +18,30 @@ double surge_wall_clock_s(void)
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+FILE *surge_fopen_waiting(const char *path, const char *mode)
+{
+    for (int attempt = 0;; attempt++) {
+        FILE *f = fopen(path, mode);
+        if (f || (errno != EMFILE && errno != ENFILE) || attempt == 200)
+            return f;
+        const struct timespec wait = {.tv_sec = 0, .tv_nsec = 10000000};
+        nanosleep(&wait, NULL);
+    }
+}
+
+long surge_raise_file_limit(void)
+{
+    struct rlimit limit;
+    if (getrlimit(RLIMIT_NOFILE, &limit) != 0)
+        return -1;
+    if (limit.rlim_cur < limit.rlim_max) {
+        limit.rlim_cur = limit.rlim_max;
+        if (setrlimit(RLIMIT_NOFILE, &limit) != 0)
+            getrlimit(RLIMIT_NOFILE, &limit);
+    }
+    return limit.rlim_cur == RLIM_INFINITY ? -1 : (long)limit.rlim_cur;
 }
 
 int surge_make_folders(const char *path, const char *what, char *err, size_t err_len)

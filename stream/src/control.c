@@ -15,12 +15,22 @@
 #include <time.h>
 #include <zmq.h>
 
+#include "peer_guard.h"
 #include "surge/run.h"
 
-enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10, MAX_REQUESTS_PER_STEP = 8 };
-/* a connection that has not completed ZeroMQ's greeting by then is closed: idle TCP connections cannot pile up
- * and take the file descriptors the run's outputs need (issue #24, D2) */
-enum { HANDSHAKE_MS = 2000 };
+enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED = 10 };
+/* a connection that has not completed ZeroMQ's greeting by then is closed; a peer that stops answering ZeroMQ's
+ * heartbeats is closed; at most RECEIVE_QUEUE requests wait per peer, then ZeroMQ stops reading that peer */
+enum { HANDSHAKE_MS = 2000, HEARTBEAT_MS = 5000, HEARTBEAT_TIMEOUT_MS = 15000, RECEIVE_QUEUE = 16 };
+/* a request longer than this is refused before it is parsed: the longest real one, a text value of
+ * SURGE_TEXT_PARAM_BYTES written as JSON escapes, is well below it */
+enum { LONGEST_REQUEST = 8192 };
+/* Control work at a step boundary is bounded by time: CONTROL_SHARE of the recent step time (at least one
+ * request is answered, so a run with tiny steps still answers); a paused run answers for up to PAUSED_BUDGET_S
+ * at a time. Requests left waiting stay in ZeroMQ's queue, in order, and are answered at the next boundary. */
+#define CONTROL_SHARE 0.05
+#define PAUSED_BUDGET_S 0.02
+#define STEP_TIME_SMOOTHING 0.1
 
 struct surge_control {
     void *socket;
@@ -29,19 +39,25 @@ struct surge_control {
     int64_t pause_at_step; /* "step N" pauses again here; -1: no target */
     double start_wall_s;
     int64_t start_step;
+    double step_s;           /* smoothed time between two boundaries, outside this file's work */
+    double service_end_s;    /* when the last boundary's work ended; < 0 before the first */
+    peer_guard *guard;
+    surge_params list_params; /* the parameters list_text was made from */
+    char *list_text;          /* the "params" array of "list", kept until a parameter changes */
 };
 
 surge_control_def surge_default_control_def(void)
 {
-    surge_control_def d = {.endpoint = "tcp://127.0.0.1:5556", .start_paused = 0, .max_request_bytes = 65536};
+    surge_control_def d = {.endpoint = "tcp://127.0.0.1:5556", .start_paused = 0, .max_request_bytes = 16384,
+                           .max_peers = 32, .idle_peer_s = 60};
     return d;
 }
 
 surge_control *surge_control_start(void *context, const surge_control_def *def, surge_journal *journal, char *err,
                                    size_t err_len)
 {
-    if (def->max_request_bytes < 64) {
-        snprintf(err, err_len, "control: max_request_bytes must be >= 64");
+    if (def->max_request_bytes < 64 || def->max_peers < 1) {
+        snprintf(err, err_len, "control: max_request_bytes must be >= 64 and max_peers >= 1");
         return NULL;
     }
     surge_control *c = calloc(1, sizeof *c);
@@ -51,10 +67,14 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     }
     c->socket = zmq_socket(context, ZMQ_ROUTER);
     const int64_t max_bytes = def->max_request_bytes;
-    const int linger_ms = 200, handshake_ms = HANDSHAKE_MS;
+    const int linger_ms = 200, handshake_ms = HANDSHAKE_MS, heartbeat_ms = HEARTBEAT_MS,
+              heartbeat_timeout_ms = HEARTBEAT_TIMEOUT_MS, receive_queue = RECEIVE_QUEUE;
     if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_RCVHWM, &receive_queue, sizeof receive_queue) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, c->socket, err, err_len) != 0) ||
         zmq_bind(c->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot open the control socket on '%s': %s", def->endpoint,
@@ -64,7 +84,13 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
         free(c);
         return NULL;
     }
+    if (!(c->guard = peer_guard_start(context, c->socket, def->max_peers, def->idle_peer_s, err, err_len))) {
+        zmq_close(c->socket);
+        free(c);
+        return NULL;
+    }
     c->journal = journal;
+    c->service_end_s = -1;
     c->paused = def->start_paused;
     c->pause_at_step = -1;
     c->start_wall_s = -1;
@@ -75,8 +101,15 @@ void surge_control_close(surge_control *c)
 {
     if (!c)
         return;
+    peer_guard_stop(c->guard);
     zmq_close(c->socket);
+    free(c->list_text);
     free(c);
+}
+
+void surge_control_peer_counts(const surge_control *c, long *over_limit, long *idle)
+{
+    peer_guard_counts(c ? c->guard : NULL, over_limit, idle);
 }
 
 /* ---- replies ---- */
@@ -114,7 +147,7 @@ static cJSON *error_reply(const char *format, const char *detail)
 {
     char message[512];
     snprintf(message, sizeof message, format, detail);
-    make_printable_utf8(message); /* never echo a request's bytes as invalid UTF-8 (issue #24, D4) */
+    make_printable_utf8(message); /* never echo a request's bytes as invalid UTF-8 */
     cJSON *r = cJSON_CreateObject();
     cJSON_AddFalseToObject(r, "ok");
     cJSON_AddStringToObject(r, "error", message);
@@ -180,10 +213,10 @@ static const surge_param_info *find_key(const cJSON *request, cJSON **error)
     return info;
 }
 
-static cJSON *command_list(const surge_sim *sim)
+/* The "params" array of "list" as JSON text. */
+static char *list_params_text(const surge_sim *sim)
 {
-    cJSON *r = ok_reply("list", sim);
-    cJSON *list = cJSON_AddArrayToObject(r, "params");
+    cJSON *list = cJSON_CreateArray();
     static const char *const type_names[] = {"real", "int", "bool", "enum", "text"};
     for (int i = 0; i < surge_param_count(); i++) {
         const surge_param_info *info = surge_param_at(i);
@@ -204,6 +237,24 @@ static cJSON *command_list(const surge_sim *sim)
         cJSON_AddStringToObject(o, "doc", info->doc);
         cJSON_AddItemToArray(list, o);
     }
+    char *text = cJSON_PrintUnformatted(list);
+    cJSON_Delete(list);
+    return text;
+}
+
+/* The list is made again only after a parameter changed (by a request, a replayed journal or the run itself). */
+static cJSON *command_list(surge_control *c, const surge_sim *sim)
+{
+    const surge_params *now = surge_sim_params(sim);
+    if (!c->list_text || memcmp(&c->list_params, now, sizeof *now) != 0) {
+        free(c->list_text);
+        c->list_text = list_params_text(sim);
+        memcpy(&c->list_params, now, sizeof *now);
+    }
+    if (!c->list_text)
+        return error_reply("%s", "out of memory");
+    cJSON *r = ok_reply("list", sim);
+    cJSON_AddRawToObject(r, "params", c->list_text);
     return r;
 }
 
@@ -364,7 +415,7 @@ static const command *find_command(const char *name)
 static cJSON *run_command(surge_control *c, const char *name, const cJSON *request, surge_sim *sim, int *requests)
 {
     if (!strcmp(name, "list"))
-        return command_list(sim);
+        return command_list(c, sim);
     if (!strcmp(name, "get"))
         return command_get(request, sim);
     if (!strcmp(name, "set"))
@@ -431,10 +482,10 @@ static cJSON *handle_request(surge_control *c, const char *body, size_t len, sur
 {
     if (memchr(body, '\0', len))
         return error_reply("%s", "request contains a NUL byte; send one JSON object as UTF-8 text");
-    if (strstr(body, "\\u0000")) /* cJSON would cut the string there: "status\u0000junk" ran as status (D3) */
+    if (strstr(body, "\\u0000")) /* cJSON would cut the string there: "status\u0000junk" would run as status */
         return error_reply("%s", "request contains \\u0000 (a NUL character) in a string");
     const char *bad_number = non_json_number(body);
-    if (bad_number) /* cJSON reads 01 as 1 and +1 as 1; JSON has neither (D5) */
+    if (bad_number) /* cJSON reads 01 as 1 and +1 as 1; JSON has neither */
         return error_reply("request holds a number JSON does not allow near '%.20s'", bad_number);
     const char *end = NULL;
     cJSON *request = cJSON_ParseWithOpts(body, &end, 1);
@@ -486,6 +537,10 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
     }
     if (count == 0)
         return 0;
+    int source_fd = -1;
+    if (zmq_msg_get(&frames[count - 1], ZMQ_SRCFD) >= 0) /* the peer's connection, for its idle time */
+        source_fd = zmq_msg_get(&frames[count - 1], ZMQ_SRCFD);
+    peer_guard_touch(c->guard, source_fd);
     const int delimited = count >= 3 && zmq_msg_size(&frames[1]) == 0;
     const int head = delimited ? 2 : 1; /* identity (+ delimiter) */
     cJSON *reply;
@@ -493,7 +548,11 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
         reply = error_reply("%s", "empty request");
     else if (overflow || count != head + 1)
         reply = error_reply("%s", "a request is one frame holding one JSON object");
-    else {
+    else if (zmq_msg_size(&frames[head]) > LONGEST_REQUEST) {
+        char detail[64];
+        snprintf(detail, sizeof detail, "%zu bytes; at most %d", zmq_msg_size(&frames[head]), (int)LONGEST_REQUEST);
+        reply = error_reply("request too long (%s), not read", detail);
+    } else {
         const size_t len = zmq_msg_size(&frames[head]);
         char *body = malloc(len + 1);
         if (!body)
@@ -521,30 +580,42 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
     return 1;
 }
 
+/* Answers requests until the budget from start_s is spent (at least one, if any is waiting). */
+static void serve_for(surge_control *c, surge_sim *sim, int *requests, double start_s, double budget_s)
+{
+    while (serve_one(c, sim, requests) && surge_wall_clock_s() - start_s < budget_s)
+        ;
+}
+
 int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_t *stop_signal)
 {
+    const double start_s = surge_wall_clock_s();
     if (c->start_wall_s < 0) {
-        c->start_wall_s = surge_wall_clock_s();
+        c->start_wall_s = start_s;
         c->start_step = surge_sim_step_count(sim);
+    }
+    if (c->service_end_s >= 0 && !c->paused) {
+        const double step_s = start_s - c->service_end_s;
+        c->step_s = c->step_s > 0 ? c->step_s + STEP_TIME_SMOOTHING * (step_s - c->step_s) : step_s;
     }
     if (c->pause_at_step >= 0 && surge_sim_step_count(sim) >= c->pause_at_step) {
         c->paused = 1;
         c->pause_at_step = -1;
     }
-    /* a bounded budget per step: a flood of requests slows the run by at most this many replies a step, it
-     * never stops it (issue #24, D1); a paused run serves on through the loop below */
+    /* a flood of requests costs the run at most CONTROL_SHARE of its time and never stops it */
     int requests = SURGE_CONTINUE;
-    for (int served = 0; served < MAX_REQUESTS_PER_STEP && serve_one(c, sim, &requests); served++)
-        ;
-    if (!c->paused || (requests & SURGE_REQUEST_STOP) || (stop_signal && *stop_signal))
+    serve_for(c, sim, &requests, start_s, c->paused ? PAUSED_BUDGET_S : CONTROL_SHARE * c->step_s);
+    if (!c->paused || (requests & SURGE_REQUEST_STOP) || (stop_signal && *stop_signal)) {
+        c->service_end_s = surge_wall_clock_s();
         return requests;
+    }
     /* paused: wait a little for the next request, then let the run loop come back (it publishes, checks
      * signals) before any step */
     if (!requests) {
         zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
         if (zmq_poll(&item, 1, PAUSED_POLL_MS) > 0)
-            for (int served = 0; served < MAX_REQUESTS_PER_STEP && serve_one(c, sim, &requests); served++)
-                ;
+            serve_for(c, sim, &requests, surge_wall_clock_s(), PAUSED_BUDGET_S);
     }
+    c->service_end_s = surge_wall_clock_s();
     return requests | (c->paused && !(requests & SURGE_REQUEST_STOP) ? SURGE_REQUEST_AGAIN : 0);
 }

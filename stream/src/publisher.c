@@ -17,6 +17,7 @@
 #include <time.h>
 #include <zmq.h>
 
+#include "peer_guard.h"
 #include "surge/mailbox.h"
 
 #if !defined(__BYTE_ORDER__) || __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__
@@ -87,6 +88,7 @@ struct surge_publisher {
     void *socket;
     surge_mailbox *mailbox;
     pthread_t thread;
+    peer_guard *guard;
     atomic_int wanted;    /* WANT_* of the current subscriptions, written by the publisher thread */
     atomic_int finishing; /* set by the solver thread before the final frame */
     /* solver thread */
@@ -104,7 +106,7 @@ struct surge_publisher {
 surge_publisher_def surge_default_publisher_def(void)
 {
     surge_publisher_def d = {.endpoint = "tcp://127.0.0.1:5555", .every_steps = 1, .max_rate_hz = 30.0,
-                             .send_hwm = 4};
+                             .send_hwm = 4, .max_peers = 64};
     return d;
 }
 
@@ -447,10 +449,13 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     p->last_step = -1;
     pthread_mutex_init(&p->frame.lock, NULL);
     p->socket = zmq_socket(context, ZMQ_XPUB);
-    const int linger_ms = 1000, handshake_ms = 2000; /* idle connections closed after 2 s (control.c) */
+    /* connections that never greet are closed after 2 s, subscribers that stop answering heartbeats after 15 s */
+    const int linger_ms = 1000, handshake_ms = 2000, heartbeat_ms = 5000, heartbeat_timeout_ms = 15000;
     if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
+        zmq_setsockopt(p->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
+        zmq_setsockopt(p->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, p->socket, err, err_len) != 0) ||
         zmq_bind(p->socket, def->endpoint) != 0) {
         snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
@@ -459,10 +464,17 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         free(p);
         return NULL;
     }
+    /* subscribers only listen, so they have no idle limit: the cap alone bounds them */
+    if (!(p->guard = peer_guard_start(context, p->socket, def->max_peers, 0, err, err_len))) {
+        zmq_close(p->socket);
+        free(p);
+        return NULL;
+    }
     p->mailbox = surge_mailbox_create();
     if (!p->mailbox || pthread_create(&p->thread, NULL, publisher_main, p) != 0) {
         snprintf(err, err_len, "cannot start the publisher thread");
         surge_mailbox_destroy(p->mailbox);
+        peer_guard_stop(p->guard);
         zmq_close(p->socket);
         free(p);
         return NULL;
@@ -503,7 +515,10 @@ void surge_publisher_finish(surge_publisher *p, const surge_sim *sim, surge_publ
         report->frames_superseded = surge_mailbox_superseded(p->mailbox);
         report->messages_sent = p->messages_sent;
         report->bytes_sent = p->bytes_sent;
+        long idle;
+        peer_guard_counts(p->guard, &report->peers_over_limit, &idle);
     }
+    peer_guard_stop(p->guard);
     zmq_close(p->socket);
     surge_mailbox_destroy(p->mailbox);
     free(p->frame.png);

@@ -3,6 +3,7 @@
 #define SURGE_PLATFORM_H
 
 #include <stddef.h>
+#include <stdio.h>
 
 /* Seconds on a monotonic clock (for rates and cadences, not dates). */
 double surge_wall_clock_s(void);
@@ -16,6 +17,14 @@ int surge_make_folders(const char *path, const char *what, char *err, size_t err
  * it resumes from. Returns 0, or -1 with err naming the file. */
 int surge_file_keep_lines(const char *path, int (*keep)(const char *line, void *context), void *context, char *err,
                           size_t err_len);
+
+/* fopen that waits out a momentary shortage of file descriptors: while open fails with EMFILE or ENFILE it
+ * retries every 10 ms for up to 2 s (other threads of the process, such as sockets' I/O threads, may hold
+ * descriptors for a moment: a burst of connections that is being turned away). Otherwise as fopen. */
+FILE *surge_fopen_waiting(const char *path, const char *mode);
+
+/* Raises the soft limit on open files to the hard limit; returns the soft limit now in force (-1: unknown). */
+long surge_raise_file_limit(void);
 
 /* The program that is running: "surge COMMIT, COMPILER VERSION, vectors EXTENSIONS" (the source's git commit at the
  * build, with "-dirty.HASH" if it had changes, HASH a short hash of them, "unknown" without git: tools/

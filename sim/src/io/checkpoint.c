@@ -27,6 +27,7 @@
 #include <unistd.h>
 
 #include "sim_internal.h"
+#include "surge/platform.h"
 #include "boulders/boulders.h"
 #include "boundaries/boundary.h"
 #include "neighbours/neighbours.h"
@@ -187,7 +188,7 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
 
     char tmp[4096];
     snprintf(tmp, sizeof tmp, "%s.tmp", path);
-    FILE *f = fopen(tmp, "wb+"); /* read back for the checksum */
+    FILE *f = surge_fopen_waiting(tmp, "wb+"); /* read back for the checksum */
     if (!f) {
         snprintf(err, err_len, "cannot write checkpoint '%s': %s", tmp, strerror(errno));
         free(params_text);

@@ -2,6 +2,7 @@
  * collections. See surge/vtk_output.h. */
 #define _POSIX_C_SOURCE 200809L
 
+#include "surge/platform.h"
 #include "surge/vtk_output.h"
 
 #include <errno.h>
@@ -77,7 +78,7 @@ static int out_open(out_file *o, const char *path, char *err, size_t err_len)
     }
     memcpy(o->tmp_path, path, len);
     memcpy(o->tmp_path + len, ".tmp", sizeof ".tmp");
-    o->file = fopen(o->tmp_path, "wb");
+    o->file = surge_fopen_waiting(o->tmp_path, "wb");
     if (o->file == NULL) {
         set_err(err, err_len, "cannot open '%s' for writing: %s", o->tmp_path, strerror(errno));
         free(o->tmp_path);

@@ -18,6 +18,8 @@ typedef struct surge_control_def {
     int start_paused;      /* wait for "resume" or "step" before the first step */
     int max_request_bytes; /* a larger request drops the client's connection (ZMQ_MAXMSGSIZE) */
     const surge_curve_server *curve; /* CURVE security with an allow-list of clients; NULL: none (loopback only) */
+    int max_peers;         /* connections at once; a new one beyond closes the one quiet longest */
+    double idle_peer_s;    /* a connection that sends no request for this long is closed; <= 0: never */
 } surge_control_def;
 
 surge_control_def surge_default_control_def(void);
@@ -28,11 +30,14 @@ typedef struct surge_control surge_control;
 surge_control *surge_control_start(void *zmq_context, const surge_control_def *def, surge_journal *journal,
                                    char *err, size_t err_len);
 
-/* Solver thread, at a step boundary: answers the pending requests, at most MAX_REQUESTS_PER_STEP (8) of them, so
- * that a flood of requests cannot hold the solver. While paused it waits up to 0.1 s for one
- * and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping (unless stop_signal is set).
+/* Solver thread, at a step boundary: answers pending requests for at most 5 % of the recent step time (at least
+ * one request), so that a flood of requests cannot hold the solver; the rest wait in order for the next boundary.
+ * While paused it answers for up to 20 ms, waits up to 0.1 s for a request, and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping (unless stop_signal is set).
  * Returns SURGE_CONTINUE or SURGE_REQUEST_* flags (surge/run.h). */
 int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_atomic_t *stop_signal);
+
+/* Connections closed so far for going over max_peers, and for idling past idle_peer_s. */
+void surge_control_peer_counts(const surge_control *control, long *over_limit, long *idle);
 
 /* Closes the socket; a client waiting for a reply gets none. */
 void surge_control_close(surge_control *control);

@@ -19,6 +19,7 @@ typedef struct surge_publisher_def {
     double max_rate_hz;   /* and at most this many times per wall-clock second; 0: no limit */
     int send_hwm;         /* messages queued per subscriber before the newest are dropped (ZMQ_SNDHWM) */
     const surge_curve_server *curve; /* CURVE security with an allow-list of subscribers; NULL: none */
+    int max_peers;        /* subscribers connected at once; a new one beyond closes the one connected longest */
 } surge_publisher_def;
 
 surge_publisher_def surge_default_publisher_def(void);
@@ -30,6 +31,7 @@ typedef struct surge_publisher_report {
     uint64_t frames_superseded; /* replaced by a newer one before the publisher took them */
     uint64_t messages_sent;     /* state, bodies and stats messages given to the PUB socket */
     uint64_t bytes_sent;
+    long peers_over_limit;      /* subscribers' connections closed to stay within max_peers */
 } surge_publisher_report;
 
 /* Binds the socket and starts the publisher thread; NULL with the reason in err. */

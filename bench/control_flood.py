@@ -1,0 +1,137 @@
+#!/usr/bin/python3
+"""The solver's step rate while clients flood its control socket (docs/verification.md, "Control floods").
+
+Usage: control_flood.py [SURGE_BINARY] [--seconds S] [--clients N]
+
+Starts `SURGE run cases/still_tank.ini --threads 1 --control tcp://127.0.0.1:PORT` (no other output), measures
+its steps per second with nothing else connected, then with N clients (processes, default 4) each keeping 8
+requests in flight on a DEALER socket, for each kind of request in turn, and the idle rate again at the end. Each
+rate is the step count from two `status` requests S seconds apart (default 4). Traffic goes to 127.0.0.1 only and
+every phase is bounded in time. Prints one row per phase: steps/s, the ratio to the idle rate (the mean of the
+two idle phases) and the replies per second the flooding clients received.
+"""
+import argparse
+import json
+import multiprocessing
+import os
+import socket
+import subprocess
+import sys
+import time
+
+import zmq
+
+SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+IN_FLIGHT = 8
+KINDS = [
+    ("status", b'{"cmd": "status"}'),
+    ("get", b'{"cmd": "get", "key": "fluid.viscosity_m2ps"}'),
+    ("list", b'{"cmd": "list"}'),
+    ("bad JSON", b'{"cmd": "status", '),
+    ("junk 6 kB", bytes((i * 7919) % 251 for i in range(6000))),
+    ("junk 60 kB", bytes((i * 7919) % 251 for i in range(60000))),
+]
+
+
+def flood(endpoint, request, seconds, replies):
+    """One client: IN_FLIGHT requests outstanding, a new one sent for each reply (IN_FLIGHT more after 0.1 s
+    without one), until seconds have passed."""
+    ctx = zmq.Context()
+    s = ctx.socket(zmq.DEALER)
+    s.setsockopt(zmq.LINGER, 0)
+    s.connect(endpoint)
+    for _ in range(IN_FLIGHT):
+        s.send(request)
+    received, end = 0, time.time() + seconds
+    while time.time() < end:
+        if s.poll(100):
+            s.recv()
+            received += 1
+            s.send(request, zmq.DONTWAIT)
+        else:  # no reply (a request over the size limit closes the connection): send again
+            for _ in range(IN_FLIGHT):
+                try:
+                    s.send(request, zmq.DONTWAIT)
+                except zmq.Again:
+                    break
+    with replies.get_lock():
+        replies.value += received
+    s.close()
+    ctx.term()
+
+
+def steps(control):
+    control.send(b'{"cmd": "status"}')
+    if not control.poll(30000):
+        raise SystemExit("no reply to status within 30 s")
+    return json.loads(control.recv())["step"]
+
+
+def measure(control, seconds):
+    a, t0 = steps(control), time.time()
+    time.sleep(seconds)
+    b, t1 = steps(control), time.time()
+    return (b - a) / (t1 - t0)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("surge", nargs="?", default=os.path.join(SOURCE, "build", "surge"))
+    ap.add_argument("--seconds", type=float, default=4.0)
+    ap.add_argument("--clients", type=int, default=4)
+    args = ap.parse_args()
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    endpoint = "tcp://127.0.0.1:%d" % probe.getsockname()[1]
+    probe.close()
+    run = subprocess.Popen([args.surge, "run", os.path.join(SOURCE, "cases", "still_tank.ini"), "--threads", "1",
+                            "-o", "/tmp/surge_control_flood", "--overwrite", "-s", "time.end_s=1e6", "-s",
+                            "output.snapshot_interval_s=0", "-s", "output.checkpoint_interval_s=0", "-s",
+                            "output.diagnostics_interval_s=0", "-s", "output.progress_interval_s=0",
+                            "--control", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                           env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
+    ctx = zmq.Context()
+    control = ctx.socket(zmq.REQ)
+    control.setsockopt(zmq.LINGER, 0)
+    control.connect(endpoint)
+    try:
+        steps(control)
+        time.sleep(1.0)  # the first steps' start-up out of the way
+        rows = [("idle", measure(control, args.seconds), None)]
+        for name, request in KINDS:
+            replies = multiprocessing.Value("q", 0)
+            clients = [multiprocessing.Process(target=flood, args=(endpoint, request, args.seconds + 2, replies))
+                       for _ in range(args.clients)]
+            for c in clients:
+                c.start()
+            time.sleep(0.5)
+            rate = measure(control, args.seconds)
+            for c in clients:
+                c.join(args.seconds + 30)
+                if c.is_alive():
+                    c.kill()
+            rows.append((name, rate, replies.value / (args.seconds + 2)))
+            time.sleep(0.5)
+        rows.append(("idle again", measure(control, args.seconds), None))
+    finally:
+        control.send(b'{"cmd": "stop"}')
+        control.poll(10000)
+        control.close()
+        ctx.term()
+        try:
+            run.wait(30)
+        except subprocess.TimeoutExpired:
+            run.kill()
+    idle = (rows[0][1] + rows[-1][1]) / 2
+    print("%s, %d flooding clients, %d requests in flight each, %.0f s per phase" %
+          (args.surge, args.clients, IN_FLIGHT, args.seconds))
+    print("| requests | steps/s | of idle | replies/s to the flood |")
+    print("|---|---|---|---|")
+    for name, rate, replied in rows:
+        print("| %s | %.0f | %.0f %% | %s |" % (name, rate, 100 * rate / idle,
+                                                "-" if replied is None else "%.0f" % replied))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
