@@ -293,7 +293,7 @@ def group_inputs():
     # a dp that does not divide the period: moved to the nearest that does when that is 1 % or less (0.6011 m is
     # 300.55 spacings of 2 mm: 301 of 1.997 mm, 0.15 %), said, and run at it; refused, named, beyond 1 %
     # (0.0611 m is 30.55 spacings: 31 would move dp by 1.5 %)
-    cross_field("periodic_length_not_dp_multiple", "demo.ini", {"domain.length_m": "0.0611", "fluid.x1_m": "0.05"},
+    cross_field("periodic_length_not_dp_multiple", "belt_front.ini", {"domain.length_m": "0.0611", "fluid.x1_m": "0.05"},
                 ["domain.length_m", "0.0611", "whole number", "dp", "30.55 of them", "31"])
     # the debris surge's case with only dp changed never fails its check: a dp that does not divide its
     # 33 m period is fitted, the wall layers and c0 follow dp, and discs are refused only below 3 dp across
@@ -307,7 +307,7 @@ def group_inputs():
                 failed.append("dp %s%s: %s" % (dp, " with discs" if extra else "", r.stderr.strip()[-300:]))
     report("debris_surge_any_dp_checks", not failed, None, "; ".join(failed))
     fitted_dir = os.path.join(WORK, "dp_fitted")
-    r = surge("run", os.path.join(SOURCE, "cases", "demo.ini"), "-s", "domain.length_m=0.6011", "-s",
+    r = surge("run", os.path.join(SOURCE, "cases", "belt_front.ini"), "-s", "domain.length_m=0.6011", "-s",
               "time.end_s=0.0005", "-o", fitted_dir, "--overwrite")
     params_path = os.path.join(fitted_dir, "params.ini")
     dp_line = re.search(r"^dp_m = (\S+)$", open(params_path).read(), re.M) if os.path.isfile(params_path) else None
@@ -554,7 +554,7 @@ def group_inputs():
            "the run started before the movie's folder was checked")
 
     # --- resolution and cost in surge check --------------------------------------------------
-    r = surge("check", os.path.join(cases_dir, "demo.ini"), "-s", "numerics.dp_m=0.004")
+    r = surge("check", os.path.join(cases_dir, "belt_front.ini"), "-s", "numerics.dp_m=0.004")
     report("check_warns_few_particles_in_depth", exited(r, 0) and "4.5 particles" in r.stdout and
            "dp <= 0.0012 m gives 15" in r.stdout and "estimated memory" in r.stdout and
            "wall time per simulated second" in r.stdout, r)
@@ -778,7 +778,7 @@ def group_blowup():
 def group_restart():
     from surgepy import vtp
 
-    case = os.path.join(SOURCE, "cases", "demo.ini")
+    case = os.path.join(SOURCE, "cases", "belt_front.ini")
     quiet = ["-s", "output.progress_interval_s=0"]
     dir_a, dir_b = os.path.join(WORK, "A"), os.path.join(WORK, "B")
 

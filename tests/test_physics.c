@@ -417,7 +417,7 @@ int main(int argc, char **argv)
     if (!strcmp(name, "preconditioners"))
         return test_preconditioners() ? 1 : 0;
     if (!strcmp(name, "restart"))
-        return test_restart(arg ? arg : ".", positional[2] ? positional[2] : "demo.ini") ? 1 : 0;
+        return test_restart(arg ? arg : ".", positional[2] ? positional[2] : "belt_front.ini") ? 1 : 0;
     fprintf(stderr, "test_physics: unknown test '%s'\n", name);
     return 2;
 }

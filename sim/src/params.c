@@ -11,7 +11,7 @@
 #define OFF(field) offsetof(surge_params, field)
 #define BIG 1e30
 
-/* The defaults describe the demo scene (cases/demo.ini): a valid scene on their own. */
+/* The defaults describe the belt-front scene (cases/belt_front.ini): a valid scene on their own. */
 static const surge_param_info registry[] = {
     /* section, key, type, unit, default, min, max, live, enum names, doc, offset */
     {"domain", "length_m", SURGE_PARAM_REAL, "m", 0.6, 1e-6, 1e4, false, NULL,
