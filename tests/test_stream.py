@@ -23,6 +23,8 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
   GROUP subsets   junk and many valid field-subset subscriptions from one peer (TCP on 127.0.0.1) do not keep a
                   state/x_m,y_m subscriber from its topic, then or after that peer left; subsets take turns, at
                   most 16 per state.
+  GROUP endpoints --control and --publish on tcp://localhost:PORT, tcp://[::1]:*, tcp://127.0.0.1:* and a bare
+                  port bind, and the log names the port bound; a request and a subscription through it are answered.
 
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
 WORK_DIR, so tests running side by side never share a port (group subsets and endpoints bind TCP ports the system
@@ -654,6 +656,42 @@ def group_subsets():
           run.stderr[-2000:])
 
 
+def group_endpoints():
+    """Every TCP loopback form the docs accept binds, the control socket and the publisher alike, and the log names
+    the endpoint bound with the port a wildcard got: a status request and a subscription through it are
+    answered."""
+    port = free_port()
+    forms = [("tcp://localhost:%d" % port, "tcp://localhost:*"), ("tcp://[::1]:*", "tcp://[::1]:*"),
+             ("tcp://127.0.0.1:*", "tcp://127.0.0.1:*"), (str(free_port()), "tcp://127.0.0.1:*")]
+    ctx = zmq.Context.instance()
+    for control, publish in forms:
+        run = Surge("endpoints", ["-s", "time.end_s=1000", "--control", control, "--publish", publish],
+                    publish=False, control=False, paused=True)
+
+        def log_line(words):
+            with open(run.stderr_path) as f:
+                m = re.search(words + r" (\S+)", f.read())
+            return m.group(1) if m else None
+        bound = wait_for(lambda: (log_line("control socket on"), log_line("stats on")) if log_line("stats on") and
+                         log_line("control socket on") else None, 20) or (None, None)
+        reply, stats = {}, None
+        if bound[0] and "*" not in bound[0] and "*" not in bound[1]:
+            sub = surge_client.subscribe(bound[1], ["stats"], ctx, latest_only=False)
+            stats = surge_client.receive(sub, 10000)
+            sub.close(0)
+            try:
+                reply = surge_client.Control(bound[0], 10).request({"cmd": "stop"})
+            except TimeoutError:
+                reply = {"error": "no reply"}
+        if not reply.get("ok"):
+            run.proc.kill()
+        run.wait(60)
+        check("endpoints: --control %s and --publish %s bind, the log names the ports bound (%s, %s), a request "
+              "and a subscriber are answered through them" % (control, publish, bound[0], bound[1]),
+              reply.get("ok") and stats is not None and run.rc == 0 and all(re.search(r":[0-9]+$", b) for b in bound),
+              "reply %s\n%s" % (reply, run.describe()))
+
+
 def group_curve():
     import zmq.auth
     keys = os.path.join(WORK, "curve_keys")
@@ -735,7 +773,7 @@ def group_curve():
 
 
 groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
-          "stalled": group_stalled, "subsets": group_subsets}
+          "stalled": group_stalled, "subsets": group_subsets, "endpoints": group_endpoints}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -3,6 +3,7 @@
  * nothing is copied out of the solver while nobody listens, and a subscriber may ask for a subset of the
  * particle fields by subscribing to "state/name,name,...". */
 #define _POSIX_C_SOURCE 200809L
+#include "surge/endpoint.h"
 #include "surge/platform.h"
 #include "surge/publisher.h"
 
@@ -98,6 +99,7 @@ enum { BODY_FIELD_COUNT = sizeof body_fields / sizeof body_fields[0] };
 struct surge_publisher {
     surge_publisher_def def;
     void *socket;
+    char endpoint[SURGE_ENDPOINT_BYTES]; /* as bound: a wildcard port resolved */
     surge_mailbox *mailbox;
     pthread_t thread;
     atomic_int wanted;    /* WANT_* of the current subscriptions, written by the publisher thread */
@@ -543,8 +545,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, p->socket, err, err_len) != 0) ||
-        zmq_bind(p->socket, def->endpoint) != 0) {
-        snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
+        surge_endpoint_bind(p->socket, def->endpoint, "publish on", p->endpoint, err, err_len) != 0) {
         if (p->socket)
             zmq_close(p->socket);
         free(p);
@@ -562,6 +563,8 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     p->last_wall_s = -INFINITY;
     return p;
 }
+
+const char *surge_publisher_endpoint(const surge_publisher *p) { return p->endpoint; }
 
 void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
 {

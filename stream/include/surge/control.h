@@ -35,6 +35,9 @@ surge_control *surge_control_start(void *zmq_context, const surge_control_def *d
 int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_atomic_t *stop_signal);
 
 /* Closes the socket; a client waiting for a reply gets none. */
+/* The endpoint bound, with the port the system chose for a wildcard one */
+const char *surge_control_endpoint(const surge_control *control);
+
 void surge_control_close(surge_control *control);
 
 #endif
