@@ -676,13 +676,17 @@ def group_endpoints():
                          log_line("control socket on") else None, 20) or (None, None)
         reply, stats = {}, None
         if bound[0] and "*" not in bound[0] and "*" not in bound[1]:
-            sub = surge_client.subscribe(bound[1], ["stats"], ctx, latest_only=False)
-            stats = surge_client.receive(sub, 10000)
-            sub.close(0)
-            try:
-                reply = surge_client.Control(bound[0], 10).request({"cmd": "stop"})
-            except TimeoutError:
-                reply = {"error": "no reply"}
+            sub, req = ctx.socket(zmq.SUB), ctx.socket(zmq.REQ)
+            for sock, endpoint in ((sub, bound[1]), (req, bound[0])):
+                sock.setsockopt(zmq.IPV6, 1)
+                sock.setsockopt(zmq.LINGER, 0)
+                sock.connect(endpoint)
+            sub.setsockopt(zmq.SUBSCRIBE, b"stats")
+            stats = sub.recv_multipart() if sub.poll(10000) else None
+            req.send_json({"cmd": "stop"})
+            reply = req.recv_json() if req.poll(10000) else {"error": "no reply"}
+            sub.close()
+            req.close()
         if not reply.get("ok"):
             run.proc.kill()
         run.wait(60)
