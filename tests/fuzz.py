@@ -9,6 +9,10 @@ Usage: fuzz.py SURGE_SANITIZED SOURCE_DIR WORK_DIR GROUP [--count N] [--seed S]
   GROUP checkpoints  mutated checkpoints (a scene with and one without boulders) through `surge run --restart`;
                      most with the checksum recomputed, so the mutation reaches the reader behind it
   GROUP snapshots    mutated snapshots, run.pvd and params.ini of a run folder through `surge render`
+  GROUP sizes        counts and sizes the files cannot hold (a snapshot's NumberOfPoints, a checkpoint's
+                     parameter block and particle counts) and files that never end (a pipe, /dev/zero) in place
+                     of a snapshot collection, a checkpoint and the boulders' CSV files: each refused with exit
+                     status 2 and a message naming the file, what is wrong and, for a count, the file's size
 
 An input fails when the program dies on a signal, a sanitizer reports (any "runtime error" or AddressSanitizer /
 LeakSanitizer report; leaks inside libOSMesa are suppressed, tests/lsan.supp), it exits with a status outside
@@ -30,7 +34,7 @@ from surgepy import client as surge_client
 SURGE, SOURCE, WORK, GROUP = sys.argv[1:5]
 OPTIONS = dict(zip(sys.argv[5::2], sys.argv[6::2]))
 SEED = int(OPTIONS.get("--seed", 1))
-DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120}
+DEFAULT_COUNT = {"cases": 1200, "control": 2000, "checkpoints": 300, "snapshots": 120, "sizes": 1}
 COUNT = int(OPTIONS.get("--count", DEFAULT_COUNT[GROUP]))
 
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE", OMP_NUM_THREADS="1",
@@ -403,6 +407,74 @@ def group_snapshots():
     finish("snapshots, run.pvd and params.ini through surge render")
 
 
+# ---- sizes read from files ----
+def expect_refusal(what, data, args, message):
+    """The input must be refused as bad input (exit status 2) within 60 s, with a message matching `message`."""
+    rc, stderr, timed_out = run(args, 60)
+    problem = verdict(rc, stderr, timed_out)
+    if not problem and rc != 2:
+        problem = "exit status %s, not 2 (bad input)" % rc
+    if not problem and not re.search(message, stderr):
+        problem = "the message does not match %r" % message
+    print("%-62s %s" % (what, "ok" if not problem else "FAILED: " + problem))
+    if problem:
+        record(what, data, " ".join(args), problem, stderr)
+
+
+def render_with(base, name, data, what, message):
+    target = os.path.join(WORK, "sizes", "run")
+    shutil.rmtree(target, ignore_errors=True)
+    shutil.copytree(base, target)
+    os.remove(os.path.join(target, name))
+    if data is None:
+        os.mkfifo(os.path.join(target, name))
+    else:
+        with open(os.path.join(target, name), "wb") as f:
+            f.write(data)
+    expect_refusal(what, data or b"", [SURGE, "render", target, "--frames", os.path.join(WORK, "sizes", "frames"),
+                                       "--overwrite"], message)
+
+
+def group_sizes():
+    tank, boulders = make_base_runs("sizes")
+    first = sorted(f for f in os.listdir(tank) if f.endswith(".vtp"))[0]
+    vtp = open(os.path.join(tank, first), "rb").read()
+    huge = re.sub(rb'NumberOfPoints="[0-9]+"', b'NumberOfPoints="2147483647"', vtp, count=1)
+    render_with(tank, first, huge, "snapshot declaring 2147483647 points",
+                r"%s: bad NumberOfPoints 2147483647: the file holds %d bytes" % (re.escape(first), len(huge)))
+    body = sorted(f for f in os.listdir(boulders) if f.startswith("boulders_") and f.endswith(".vtp"))[0]
+    bvtp = open(os.path.join(boulders, body), "rb").read()
+    bhuge = re.sub(rb'NumberOfPoints="[0-9]+"', b'NumberOfPoints="1000000000"', bvtp, count=1)
+    render_with(boulders, body, bhuge, "boulder snapshot declaring 10^9 discs",
+                r"%s: bad NumberOfPoints 1000000000: the file holds %d bytes" % (re.escape(body), len(bhuge)))
+    render_with(tank, "run.pvd", None, "run.pvd a pipe", r"run\.pvd' is not a regular file")
+
+    checkpoint = open(os.path.join(tank, "checkpoint.bin"), "rb").read()
+    path, out = os.path.join(WORK, "sizes", "input.bin"), os.path.join(WORK, "sizes", "restarted")
+    restart = [SURGE, "run", "--restart", path, "-o", out, "--overwrite", "--threads", "1"]
+    plen = struct.unpack_from("<Q", checkpoint, 16)[0]
+    for what, at, value, message in (
+            ("checkpoint parameter block of 2^40 bytes", 16, struct.pack("<Q", 1 << 40),
+             r"bad parameter block length 1099511627776: the file holds %d bytes" % len(checkpoint)),
+            ("checkpoint declaring 2^31-1 particles", 24 + plen + 32, struct.pack("<ii", 2147483647, 0),
+             r"bad particle count 2147483647 \(walls 0\): the file holds %d bytes" % len(checkpoint)),
+            ("checkpoint declaring more walls than particles", 24 + plen + 32, struct.pack("<ii", 10, 20),
+             r"bad particle count 10 \(walls 20\)")):
+        data = checkpoint[:at] + value + checkpoint[at + len(value):]
+        with open(path, "wb") as f:
+            f.write(data)
+        expect_refusal(what, data, restart, re.escape("input.bin: ") + message)
+    expect_refusal("/dev/zero as a checkpoint", b"", [SURGE, "run", "--restart", "/dev/zero", "-o", out,
+                                                      "--overwrite"], r"'/dev/zero' is not a regular file")
+    case = os.path.join(SOURCE, "cases", "boulder_settling.ini")
+    for key in ("boulders.file", "boulders.grading_file"):
+        extra = ["-s", "boulders.placement=" + ("graded" if key == "boulders.grading_file" else "file"),
+                 "-s", "boulders.solid_fraction=0.1"]
+        expect_refusal("%s = /dev/zero" % key, b"", [SURGE, "check", case, "-s", key + "=/dev/zero"] + extra,
+                       r"%s: '/dev/zero' is not a regular file" % re.escape(key))
+    finish("sizes and endless files")
+
+
 os.makedirs(WORK, exist_ok=True)
 {"cases": group_cases, "control": group_control, "checkpoints": group_checkpoints,
- "snapshots": group_snapshots}[GROUP]()
+ "snapshots": group_snapshots, "sizes": group_sizes}[GROUP]()

@@ -23,14 +23,22 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   every snapshot; its control socket still answers once the idle peers are closed.
   GROUP stalled   a subscriber that never reads (its subscription shown live first) does not hold the solver
                   back: the run finishes and states were dropped for it (step rates: tools/stream_bench.py).
+  GROUP subsets   junk and many valid field-subset subscriptions from one peer (TCP on 127.0.0.1) do not keep a
+                  state/x_m,y_m subscriber from its topic, then or after that peer left; subsets take turns, at
+                  most 16 per state.
+  GROUP endpoints --control and --publish on tcp://localhost:PORT, tcp://[::1]:*, tcp://127.0.0.1:* and a bare
+                  port bind, and the log names the port bound; a request and a subscription through it are answered.
 
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
-WORK_DIR, so tests running side by side never share a port. Every wait has a timeout: a hang is a failure.
+WORK_DIR, so tests running side by side never share a port (group subsets and endpoints bind TCP ports the system
+picks). Every wait has a timeout: a hang is a failure.
 """
+import itertools
 import json
 import os
 import re
 import shutil
+import socket
 import struct
 import subprocess
 import sys
@@ -662,6 +670,122 @@ def group_stalled():
           received < int(published.group(1)) - 1, "%d of %s" % (received, published.group(1)))
 
 
+def free_port():
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def first_topic(sub, topic, limit_s):
+    """Seconds until a message with exactly this topic arrived on sub, or None after limit_s."""
+    start = time.time()
+    while time.time() - start < limit_s:
+        if sub.poll(100) and sub.recv_multipart()[0] == topic.encode():
+            return time.time() - start
+    return None
+
+
+def group_subsets():
+    """Subscriptions cannot hold a field subset hostage, over TCP on 127.0.0.1: a peer's 40 junk "state/..."
+    subscriptions (unknown fields, a trailing comma, a repeated field) and 100 valid distinct subsets do not keep
+    a state/x_m,y_m subscriber (tools/surge_watch.py's) from its topic, while that peer is there and, for a new
+    subscriber, after it left; the valid subsets take turns, at most 16 per state; the log names that limit and
+    the junk."""
+    port = free_port()
+    run = Surge("subsets", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0", "--publish-hz", "0",
+                            "--publish-hwm", "1000", "--publish", "tcp://127.0.0.1:%d" % port])
+    endpoint = "tcp://127.0.0.1:%d" % port
+    ctx = zmq.Context.instance()
+    fields = ["x_m", "y_m", "vx_mps", "vy_mps", "density_kgpm3", "pressure_pa", "kind", "id"]
+    junk = ["state/junk%d" % i for i in range(37)] + ["state/x_m,", "state/x_m,x_m", "state/x_m,,y_m"]
+    valid = ["state/" + ",".join(c) for c in itertools.permutations(fields, 3)][:100]
+    hog = ctx.socket(zmq.SUB)
+    hog.setsockopt(zmq.RCVHWM, 100000)
+    hog.connect(endpoint)
+    for topic in junk + valid + ["stats"]:
+        hog.setsockopt(zmq.SUBSCRIBE, topic.encode())
+    # the hog's subscriptions reach the publisher in order: its first stats message comes after all of them
+    hog_ready = first_topic(hog, "stats", 30)
+    watcher = surge_client.subscribe(endpoint, ["state/x_m,y_m"], ctx, latest_only=False)
+    with_hog = first_topic(watcher, "state/x_m,y_m", 20)
+    per_state = {}
+    deadline = time.time() + 3
+    while time.time() < deadline:
+        if hog.poll(100):
+            topic, header, *_ = hog.recv_multipart()
+            if topic.startswith(b"state/"):
+                per_state.setdefault(json.loads(header)["seq"], set()).add(topic)
+    hog.close(0)
+    time.sleep(0.5)  # the hog's disconnection reaches the publisher
+    newcomer = surge_client.subscribe(endpoint, ["state/x_m,y_m"], ctx, latest_only=False)
+    after_hog = first_topic(newcomer, "state/x_m,y_m", 20)
+    watcher.close(0)
+    newcomer.close(0)
+    time.sleep(0.5)
+    alone = surge_client.subscribe(endpoint, ["state/x_m,y_m"], ctx, latest_only=False)
+    after_all = first_topic(alone, "state/x_m,y_m", 20)
+    alone.close(0)
+    stopped = surge_client.Control(run.ctl, 10).request({"cmd": "stop"})
+    run.wait()
+    check("subsets: the run ran and stopped on request", hog_ready is not None and stopped.get("ok") and run.rc == 0,
+          run.describe())
+    print("subsets: state/x_m,y_m after %s s beside the hog, %s s for a newcomer after it left, %s s alone" %
+          (with_hog, after_hog, after_all))
+    check("subsets: state/x_m,y_m arrives within 20 s beside a peer holding 40 junk and 100 valid subsets",
+          with_hog is not None, run.describe())
+    check("subsets: ... and for a new subscriber after that peer left, and after every subscriber left",
+          after_hog is not None and after_all is not None, run.describe())
+    most = max((len(t) for t in per_state.values()), default=0)
+    served = set().union(*per_state.values()) & {t.encode() for t in valid}
+    check("subsets: at most 16 subsets per state, taking turns (the hog's valid subsets all served in 3 s)",
+          0 < most <= 16 and len(served) == len(valid), "%d subsets at most per state, %d of %d served" %
+          (most, len(served), len(valid)))
+    check("subsets: the log names the junk not kept and the limit of 16 subsets per state",
+          "not keeping the subscription 'state/junk0'" in run.stderr and "further ones are not shown" in run.stderr
+          and "more than 16 distinct field subsets" in run.stderr and "more than 64" not in run.stderr,
+          run.stderr[-2000:])
+
+
+def group_endpoints():
+    """Every TCP loopback form the docs accept binds, the control socket and the publisher alike, and the log names
+    the endpoint bound with the port a wildcard got: a status request and a subscription through it are
+    answered."""
+    port = free_port()
+    forms = [("tcp://localhost:%d" % port, "tcp://localhost:*"), ("tcp://[::1]:*", "tcp://[::1]:*"),
+             ("tcp://127.0.0.1:*", "tcp://127.0.0.1:*"), (str(free_port()), "tcp://127.0.0.1:*")]
+    ctx = zmq.Context.instance()
+    for control, publish in forms:
+        run = Surge("endpoints", ["-s", "time.end_s=1000", "--control", control, "--publish", publish],
+                    publish=False, control=False, paused=True)
+
+        def log_line(words):
+            with open(run.stderr_path) as f:
+                m = re.search(words + r" (\S+)", f.read())
+            return m.group(1) if m else None
+        bound = wait_for(lambda: (log_line("control socket on"), log_line("stats on")) if log_line("stats on") and
+                         log_line("control socket on") else None, 20) or (None, None)
+        reply, stats = {}, None
+        if bound[0] and "*" not in bound[0] and "*" not in bound[1]:
+            sub, req = ctx.socket(zmq.SUB), ctx.socket(zmq.REQ)
+            for sock, endpoint in ((sub, bound[1]), (req, bound[0])):
+                sock.setsockopt(zmq.IPV6, 1)
+                sock.setsockopt(zmq.LINGER, 0)
+                sock.connect(endpoint)
+            sub.setsockopt(zmq.SUBSCRIBE, b"stats")
+            stats = sub.recv_multipart() if sub.poll(10000) else None
+            req.send_json({"cmd": "stop"})
+            reply = req.recv_json() if req.poll(10000) else {"error": "no reply"}
+            sub.close()
+            req.close()
+        if not reply.get("ok"):
+            run.proc.kill()
+        run.wait(60)
+        check("endpoints: --control %s and --publish %s bind, the log names the ports bound (%s, %s), a request "
+              "and a subscriber are answered through them" % (control, publish, bound[0], bound[1]),
+              reply.get("ok") and stats is not None and run.rc == 0 and all(re.search(r":[0-9]+$", b) for b in bound),
+              "reply %s\n%s" % (reply, run.describe()))
+
+
 def group_curve():
     import zmq.auth
     keys = os.path.join(WORK, "curve_keys")
@@ -742,8 +866,8 @@ def group_curve():
           "%d %s\n%d %s" % (remote.returncode, remote.stderr[-400:], warned.returncode, warned.stderr[-400:]))
 
 
-groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs, "stalled": group_stalled,
-          "peers": group_peers}
+groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
+          "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -211,7 +211,9 @@ static int check_option_combination(const cli *c, int allow_run_options)
         fprintf(stderr, "surge: --paused needs --control (nothing could resume the run)\n");
         return -1;
     }
-    if (c->publish[0] && c->control[0] && !strcmp(c->publish, c->control)) {
+    const size_t len = strlen(c->publish);
+    const int wildcard_port = len > 2 && !strcmp(c->publish + len - 2, ":*"); /* two binds get two ports */
+    if (c->publish[0] && c->control[0] && !strcmp(c->publish, c->control) && !wildcard_port) {
         fprintf(stderr, "surge: --publish and --control need different endpoints\n");
         return -1;
     }

@@ -165,10 +165,10 @@ static int run_with_live_links(const cli *c, surge_sim *sim, const char *outdir,
         surge_sim_destroy(sim);
         return EXIT_USAGE;
     }
-    if (c->publish[0])
-        fprintf(stderr, "surge: publishing state, bodies and stats on %s\n", c->publish);
-    if (c->control[0])
-        fprintf(stderr, "surge: control socket on %s%s\n", c->control,
+    if (links.publisher)
+        fprintf(stderr, "surge: publishing state, bodies and stats on %s\n", surge_publisher_endpoint(links.publisher));
+    if (links.control)
+        fprintf(stderr, "surge: control socket on %s%s\n", surge_control_endpoint(links.control),
                 c->paused ? " (paused: send resume or step)" : "");
     signal(SIGINT, on_signal);
     signal(SIGTERM, on_signal);

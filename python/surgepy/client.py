@@ -63,6 +63,7 @@ def subscribe(endpoint, topics, context=None, latest_only=True, curve=None):
     _secure(sock, curve)
     if latest_only:
         sock.setsockopt(zmq.RCVHWM, 2)
+    sock.setsockopt(zmq.IPV6, 1)  # for tcp://[::1]:PORT; IPv4 addresses still work
     sock.connect(endpoint)
     for topic in topics:
         sock.setsockopt(zmq.SUBSCRIBE, topic.encode())
@@ -136,6 +137,7 @@ class Control:
         self.sock = self.context.socket(zmq.REQ)
         self.sock.setsockopt(zmq.LINGER, 0)
         _secure(self.sock, self.curve)
+        self.sock.setsockopt(zmq.IPV6, 1)
         self.sock.connect(self.endpoint)
 
     def request(self, message):

@@ -4,6 +4,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "surge/platform.h"
 #include "surge/control.h"
+#include "surge/endpoint.h"
 
 #include <cjson/cJSON.h>
 #include <ctype.h>
@@ -34,6 +35,7 @@ enum { LONGEST_REQUEST = 8192 };
 
 struct surge_control {
     void *socket;
+    char endpoint[SURGE_ENDPOINT_BYTES]; /* as bound: a wildcard port resolved */
     surge_journal *journal;
     int paused;
     int64_t pause_at_step; /* "step N" pauses again here; -1: no target */
@@ -76,9 +78,7 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
         zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_RCVHWM, &receive_queue, sizeof receive_queue) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, c->socket, err, err_len) != 0) ||
-        zmq_bind(c->socket, def->endpoint) != 0) {
-        snprintf(err, err_len, "cannot open the control socket on '%s': %s", def->endpoint,
-                 zmq_strerror(zmq_errno()));
+        surge_endpoint_bind(c->socket, def->endpoint, "open the control socket on", c->endpoint, err, err_len) != 0) {
         if (c->socket)
             zmq_close(c->socket);
         free(c);
@@ -96,6 +96,8 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     c->start_wall_s = -1;
     return c;
 }
+
+const char *surge_control_endpoint(const surge_control *c) { return c->endpoint; }
 
 void surge_control_close(surge_control *c)
 {

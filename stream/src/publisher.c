@@ -3,6 +3,7 @@
  * nothing is copied out of the solver while nobody listens, and a subscriber may ask for a subset of the
  * particle fields by subscribing to "state/name,name,...". */
 #define _POSIX_C_SOURCE 200809L
+#include "surge/endpoint.h"
 #include "surge/platform.h"
 #include "surge/publisher.h"
 
@@ -24,7 +25,7 @@
 #error "the wire format sends arrays in memory order, which must be little-endian"
 #endif
 
-enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTIONS = 64, MAX_SUBSCRIPTION_BYTES = 256, SELECTION_RESERVE = 24 };
+enum { SCHEMA_VERSION = 1, MAX_SUBSCRIPTION_BYTES = 256, JUNK_SHOWN = 5 };
 enum { WANT_STATE = 1, WANT_BODIES = 2, WANT_STATS = 4 };
 
 /* The final frame is not dropped at a full queue: the publisher waits up to this long for room, so a
@@ -61,6 +62,19 @@ static const state_field state_fields[] = {
 };
 enum { STATE_FIELD_COUNT = sizeof state_fields / sizeof state_fields[0] };
 
+/* Subscriptions. ZeroMQ tells an XPUB socket of a topic's first subscriber and of its last one leaving (a peer that
+ * disconnects leaves all its topics), never again in between: a subscription the publisher did not keep would stay
+ * unserved, for later subscribers to that topic too, until all of them had gone. So every subscription that can
+ * receive something is kept, and the table cannot be filled:
+ * - the plain topics' prefixes ("", "s", ..., "state", "state/", "stats", "b", ..., "frame"): PLAIN_PREFIXES in all;
+ * - field subsets "state/a,b,c": an ordered choice of distinct fields, SUBSET_CODES of them in all (8 fields), one
+ *   bit each. A peer subscribing to many of them costs no memory; at most SUBSETS_PER_STATE are sent per state,
+ *   taking turns, so every subscribed subset gets a state at least every SUBSET_CODES / SUBSETS_PER_STATE states.
+ * Anything else (an unknown or repeated field, a topic surge never sends, a NUL byte) can match nothing and is not
+ * kept. */
+enum { PLAIN_PREFIXES = 19, PLAIN_PREFIX_BYTES = 8, SUBSET_CODES = 109600, SUBSETS_PER_STATE = 16 };
+_Static_assert(STATE_FIELD_COUNT == 8, "SUBSET_CODES is 8 + 8*7 + ... + 8!, the ordered choices of 8 fields");
+
 static const void *state_field_data(const surge_snapshot *s, int field)
 {
     switch (field) {
@@ -86,6 +100,7 @@ enum { BODY_FIELD_COUNT = sizeof body_fields / sizeof body_fields[0] };
 struct surge_publisher {
     surge_publisher_def def;
     void *socket;
+    char endpoint[SURGE_ENDPOINT_BYTES]; /* as bound: a wildcard port resolved */
     surge_mailbox *mailbox;
     pthread_t thread;
     peer_guard *guard;
@@ -96,8 +111,11 @@ struct surge_publisher {
     int64_t last_step;
     surge_params last_params; /* as posted last: a change of a live parameter is posted at once */
     /* publisher thread */
-    char subscriptions[MAX_SUBSCRIPTIONS][MAX_SUBSCRIPTION_BYTES + 1];
-    int subscription_count;
+    char plain[PLAIN_PREFIXES][PLAIN_PREFIX_BYTES];
+    int plain_count;
+    uint64_t subsets[(SUBSET_CODES + 63) / 64]; /* bit c: the subset of code c is subscribed */
+    int subset_count, subset_turn;             /* subset_turn: the code the next state's subsets start from */
+    int junk_count, turns_told;
     uint64_t messages_sent, bytes_sent;
     double deliver_until_s; /* > 0 while sending the final frame: wait for queue room until this wall time */
     png_slot frame;
@@ -110,74 +128,156 @@ surge_publisher_def surge_default_publisher_def(void)
     return d;
 }
 
-/* A message whose topic starts with a subscription reaches that subscriber (ZeroMQ prefix matching). */
+/* A message whose topic starts with a subscription reaches that subscriber (ZeroMQ prefix matching); the subsets'
+ * own topics are sent only to their subscribers. */
 static int subscribed_to(const surge_publisher *p, const char *topic)
 {
-    for (int i = 0; i < p->subscription_count; i++)
-        if (!strncmp(topic, p->subscriptions[i], strlen(p->subscriptions[i])))
+    for (int i = 0; i < p->plain_count; i++)
+        if (!strncmp(topic, p->plain[i], strlen(p->plain[i])))
             return 1;
     return 0;
 }
 
 static void update_wanted(surge_publisher *p)
 {
-    int wanted = 0;
-    for (int i = 0; i < p->subscription_count; i++)
-        if (!strncmp(p->subscriptions[i], "state/", 6))
-            wanted |= WANT_STATE;
+    int wanted = p->subset_count > 0 ? WANT_STATE : 0;
     wanted |= subscribed_to(p, "state") ? WANT_STATE : 0;
     wanted |= subscribed_to(p, "bodies") ? WANT_BODIES : 0;
     wanted |= subscribed_to(p, "stats") ? WANT_STATS : 0;
     atomic_store(&p->wanted, wanted);
 }
 
-/* Whether a subscription can ever receive a message: a prefix of a topic we send (the empty one included), or a
- * field selection "state/...". Others are junk, never stored, so they cannot fill the table (issue #24, D6). */
-static int could_match(const char *topic)
+/* Whether topic is a prefix of a plain topic we send or of every field subset's ("state/") */
+static int plain_prefix(const char *topic)
 {
-    static const char *const topics[] = {"state", "bodies", "stats", "frame"};
-    if (!strncmp(topic, "state/", 6))
-        return 1;
+    static const char *const topics[] = {"state/", "bodies", "stats", "frame"};
     for (size_t i = 0; i < sizeof topics / sizeof topics[0]; i++)
         if (!strncmp(topics[i], topic, strlen(topic)))
             return 1;
     return 0;
 }
 
-/* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. Field selections may take
- * all slots but SELECTION_RESERVE, which the prefixes of the plain topics (at most 20 of them) always find. */
+/* The ordered choices of k of n fields */
+static int permutations(int n, int k)
+{
+    int count = 1;
+    for (int i = 0; i < k; i++)
+        count *= n - i;
+    return count;
+}
+
+/* A subset's code in [0, SUBSET_CODES): the shorter subsets first, then each field's rank among those not yet
+ * chosen (a mixed-radix number). */
+static int subset_code(const int *indices, int count)
+{
+    int code = 0, used = 0;
+    for (int k = 1; k < count; k++)
+        code += permutations(STATE_FIELD_COUNT, k);
+    for (int i = 0; i < count; i++) {
+        int smaller = 0;
+        for (int v = 0; v < indices[i]; v++)
+            smaller += !(used >> v & 1);
+        code += smaller * permutations(STATE_FIELD_COUNT - i - 1, count - i - 1);
+        used |= 1 << indices[i];
+    }
+    return code;
+}
+
+/* The fields of a subset's code, inverse of subset_code; their count */
+static int subset_indices(int code, int *indices)
+{
+    int count = 1;
+    for (; code >= permutations(STATE_FIELD_COUNT, count); count++)
+        code -= permutations(STATE_FIELD_COUNT, count);
+    int used = 0;
+    for (int i = 0; i < count; i++) {
+        const int weight = permutations(STATE_FIELD_COUNT - i - 1, count - i - 1);
+        int smaller = code / weight, v = 0;
+        code %= weight;
+        while ((used >> v & 1) || smaller-- > 0)
+            v++;
+        indices[i] = v;
+        used |= 1 << v;
+    }
+    return count;
+}
+
+/* Parses "state/a,b,c" into field indices; 0 when a name is unknown, repeated or empty. */
+static int parse_field_subset(const char *subscription, int *indices, int *count)
+{
+    const char *s = subscription + strlen("state/");
+    *count = 0;
+    while (*s) {
+        const size_t len = strcspn(s, ",");
+        int found = -1;
+        for (int i = 0; i < STATE_FIELD_COUNT; i++)
+            if (strlen(state_fields[i].name) == len && !strncmp(s, state_fields[i].name, len))
+                found = i;
+        for (int k = 0; k < *count; k++)
+            if (indices[k] == found)
+                found = -1;
+        if (found < 0 || (s[len] == ',' && s[len + 1] == '\0'))
+            return 0;
+        indices[(*count)++] = found;
+        s += len + (s[len] == ',');
+    }
+    return *count > 0;
+}
+
+static void ignore_subscription(surge_publisher *p, const char *topic, size_t len, const char *why)
+{
+    if (p->junk_count++ < JUNK_SHOWN)
+        fprintf(stderr, "surge: publisher: not keeping the subscription '%.*s' (%zu bytes): %s%s\n",
+                (int)(len < 80 ? len : 80), topic, len, why,
+                p->junk_count == JUNK_SHOWN ? " (further ones are not shown)" : "");
+}
+
+/* One (un)subscription message: the topic of len bytes, subscribe 1 or 0 */
+static void note_subscription(surge_publisher *p, const char *topic, size_t len, int subscribe)
+{
+    int indices[STATE_FIELD_COUNT], count = 0;
+    if (len > MAX_SUBSCRIPTION_BYTES || strlen(topic) != len) {
+        if (subscribe)
+            ignore_subscription(p, topic, len, len > MAX_SUBSCRIPTION_BYTES ? "too long" : "it holds a NUL byte");
+    } else if (!strncmp(topic, "state/", 6) && topic[6]) {
+        if (!parse_field_subset(topic, indices, &count)) {
+            if (subscribe)
+                ignore_subscription(p, topic, len, "it names a field that does not exist, or one twice");
+            return;
+        }
+        const int code = subset_code(indices, count);
+        const uint64_t bit = UINT64_C(1) << (code % 64);
+        if (subscribe != !!(p->subsets[code / 64] & bit)) {
+            p->subsets[code / 64] ^= bit;
+            p->subset_count += subscribe ? 1 : -1;
+        }
+        if (p->subset_count > SUBSETS_PER_STATE && !p->turns_told++)
+            fprintf(stderr, "surge: publisher: more than %d distinct field subsets subscribed: they take turns, "
+                    "%d per state\n", SUBSETS_PER_STATE, SUBSETS_PER_STATE);
+    } else if (plain_prefix(topic)) {
+        int found = -1;
+        for (int i = 0; i < p->plain_count; i++)
+            if (!strcmp(p->plain[i], topic))
+                found = i;
+        if (subscribe && found < 0 && p->plain_count < PLAIN_PREFIXES)
+            memcpy(p->plain[p->plain_count++], topic, len + 1);
+        else if (!subscribe && found >= 0)
+            memcpy(p->plain[found], p->plain[--p->plain_count], sizeof p->plain[0]);
+    } else if (subscribe) {
+        ignore_subscription(p, topic, len, "surge sends no topic it could match");
+    }
+}
+
+/* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. */
 static void read_subscriptions(surge_publisher *p)
 {
     char buf[MAX_SUBSCRIPTION_BYTES + 2];
     int n;
     while ((n = zmq_recv(p->socket, buf, sizeof buf, ZMQ_DONTWAIT)) >= 1) {
-        if (n > (int)sizeof buf - 1) {
-            fprintf(stderr, "surge: publisher: ignoring a subscription longer than %d bytes\n", MAX_SUBSCRIPTION_BYTES);
-            continue;
-        }
-        buf[n] = '\0';
-        const char *topic = buf + 1;
-        int found = -1;
-        for (int i = 0; i < p->subscription_count; i++)
-            if (!strcmp(p->subscriptions[i], topic))
-                found = i;
-        if (buf[0] == 1 && found < 0) {
-            if (!could_match(topic))
-                continue;
-            int selections = 0;
-            for (int i = 0; i < p->subscription_count; i++)
-                selections += !strncmp(p->subscriptions[i], "state/", 6);
-            if (p->subscription_count == MAX_SUBSCRIPTIONS ||
-                (!strncmp(topic, "state/", 6) && selections >= MAX_SUBSCRIPTIONS - SELECTION_RESERVE)) {
-                fprintf(stderr, "surge: publisher: more than %d distinct subscriptions; ignoring '%s'\n",
-                        MAX_SUBSCRIPTIONS, topic);
-                continue;
-            }
-            memcpy(p->subscriptions[p->subscription_count++], topic, (size_t)n);
-        } else if (buf[0] == 0 && found >= 0) {
-            memmove(p->subscriptions[found], p->subscriptions[p->subscription_count - 1], sizeof p->subscriptions[0]);
-            p->subscription_count--;
-        }
+        const size_t len = (size_t)n - 1;
+        buf[len < sizeof buf - 1 ? n : (int)sizeof buf - 1] = '\0';
+        if (buf[0] == 0 || buf[0] == 1)
+            note_subscription(p, buf + 1, len, buf[0]);
     }
     update_wanted(p);
 }
@@ -235,28 +335,6 @@ static void add_field(cJSON *fields, const state_field *field)
     cJSON_AddNumberToObject(o, "components", 1);
     cJSON_AddStringToObject(o, "unit", field->unit);
     cJSON_AddItemToArray(fields, o);
-}
-
-/* Parses "state/a,b,c" into field indices; 0 when a name is unknown or repeated. */
-static int parse_field_subset(const char *subscription, int *indices, int *count)
-{
-    const char *s = subscription + strlen("state/");
-    *count = 0;
-    while (*s) {
-        const size_t len = strcspn(s, ",");
-        int found = -1;
-        for (int i = 0; i < STATE_FIELD_COUNT; i++)
-            if (strlen(state_fields[i].name) == len && !strncmp(s, state_fields[i].name, len))
-                found = i;
-        for (int k = 0; k < *count; k++)
-            if (indices[k] == found)
-                found = -1;
-        if (found < 0 || *count == STATE_FIELD_COUNT)
-            return 0;
-        indices[(*count)++] = found;
-        s += len + (s[len] == ',');
-    }
-    return *count > 0;
 }
 
 static void send_state(surge_publisher *p, const char *topic, const surge_frame *f, const int *indices, int count)
@@ -339,6 +417,25 @@ static void send_stats(surge_publisher *p, const surge_frame *f, uint64_t supers
     cJSON_Delete(h);
 }
 
+/* The subscribed field subsets, at most SUBSETS_PER_STATE of them, from the one whose turn it is */
+static void publish_subsets(surge_publisher *p, const surge_frame *f)
+{
+    int code = p->subset_turn, sent = 0;
+    for (int looked = 0; looked < SUBSET_CODES && sent < p->subset_count && sent < SUBSETS_PER_STATE; looked++) {
+        if (p->subsets[code / 64] >> (code % 64) & 1) {
+            int indices[STATE_FIELD_COUNT];
+            const int count = subset_indices(code, indices);
+            char topic[MAX_SUBSCRIPTION_BYTES + 1] = "state/";
+            for (int i = 0; i < count; i++)
+                strcat(strcat(topic, i ? "," : ""), state_fields[indices[i]].name);
+            send_state(p, topic, f, indices, count);
+            sent++;
+        }
+        code = (code + 1) % SUBSET_CODES;
+    }
+    p->subset_turn = code;
+}
+
 static void publish_frame(surge_publisher *p, const surge_frame *f)
 {
     if (f->final) {
@@ -352,11 +449,7 @@ static void publish_frame(surge_publisher *p, const surge_frame *f)
             all[i] = i;
         send_state(p, "state", f, all, STATE_FIELD_COUNT);
     }
-    for (int i = 0; i < p->subscription_count; i++) {
-        int indices[STATE_FIELD_COUNT], count;
-        if (!strncmp(p->subscriptions[i], "state/", 6) && parse_field_subset(p->subscriptions[i], indices, &count))
-            send_state(p, p->subscriptions[i], f, indices, count);
-    }
+    publish_subsets(p, f);
     if (subscribed_to(p, "bodies"))
         send_bodies(p, f);
     if (subscribed_to(p, "stats"))
@@ -457,8 +550,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         zmq_setsockopt(p->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, p->socket, err, err_len) != 0) ||
-        zmq_bind(p->socket, def->endpoint) != 0) {
-        snprintf(err, err_len, "cannot publish on '%s': %s", def->endpoint, zmq_strerror(zmq_errno()));
+        surge_endpoint_bind(p->socket, def->endpoint, "publish on", p->endpoint, err, err_len) != 0) {
         if (p->socket)
             zmq_close(p->socket);
         free(p);
@@ -483,6 +575,8 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     p->last_wall_s = -INFINITY;
     return p;
 }
+
+const char *surge_publisher_endpoint(const surge_publisher *p) { return p->endpoint; }
 
 void surge_publisher_offer(surge_publisher *p, const surge_sim *sim)
 {

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 static const double pi = 3.14159265358979323846;
 enum { MAX_GRADING_POINTS = 10000, MAX_DISCS = 20000, MAX_PLACEMENT_TRIES = 2000000, LINE_BYTES = 4096 };
@@ -103,6 +104,21 @@ static int header_is(const char *line, const char *const *names, int count)
     return *c == '\0';
 }
 
+/* Opens a CSV the parameter `what` names; NULL with err set. A pipe or a device (/dev/zero) would be read without
+ * end, so only a regular file is read. */
+static FILE *open_csv(const char *path, const char *what, char *err, size_t err_len)
+{
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        snprintf(err, err_len, "%s: '%s' is not a regular file (a CSV file was expected)", what, path);
+        return NULL;
+    }
+    FILE *f = fopen(path, "r");
+    if (!f)
+        snprintf(err, err_len, "%s: cannot read '%s': %s", what, path, strerror(errno));
+    return f;
+}
+
 surge_grading *surge_grading_load(const char *path, char *err, size_t err_len)
 {
     if (!path || !path[0]) {
@@ -117,11 +133,9 @@ surge_grading *surge_grading_load(const char *path, char *err, size_t err_len)
         memcpy(g->passing, standin_passing, sizeof standin_passing);
         return g;
     }
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        snprintf(err, err_len, "boulders.grading_file: cannot read '%s': %s", path, strerror(errno));
+    FILE *f = open_csv(path, "boulders.grading_file", err, err_len);
+    if (!f)
         return NULL;
-    }
     surge_grading *g = grading_new(MAX_GRADING_POINTS);
     char buffer[LINE_BYTES];
     int line_number = 0, header_seen = 0, ok = g != NULL;
@@ -363,11 +377,9 @@ int surge_discs_write_csv(const char *path, const surge_disc *d, int count, char
 int surge_discs_read_csv(const char *path, surge_disc **out, char *err, size_t err_len)
 {
     *out = NULL;
-    FILE *f = fopen(path, "r");
-    if (!f) {
-        snprintf(err, err_len, "boulders.file: cannot read '%s': %s", path, strerror(errno));
+    FILE *f = open_csv(path, "boulders.file", err, err_len);
+    if (!f)
         return -1;
-    }
     static const char *const names[] = {"x_m", "y_m", "r_m", "vx_mps", "vy_mps", "omega_radps"};
     surge_disc *discs = malloc(sizeof *discs * MAX_DISCS);
     char buffer[LINE_BYTES];

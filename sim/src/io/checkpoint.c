@@ -24,6 +24,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "sim_internal.h"
@@ -225,8 +226,31 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
 }
 
 /* The header: magic, version, the parameters (with the live overrides) and the scene they build; NULL with err set */
-static surge_sim *read_header(FILE *f, const char *path, const char *const *overrides, int override_count,
-                              uint32_t *version, char *err, size_t err_len)
+/* The particle counts that follow the parameter block (f is left where it was): a fluid particle takes at least
+ * its position (2 f64) and id (i32) in the file, so counts the file's size cannot hold are refused before the scene
+ * is built. 0, or -1 with err naming the file, the field and the size. */
+static int check_counts_fit(FILE *f, const char *path, long long file_bytes, char *err, size_t err_len)
+{
+    const long here = ftell(f);
+    unsigned char clock[40];
+    int32_t count = 0, wall_count = 0;
+    if (here < 0 || read_all(f, clock, sizeof clock) || fseek(f, here, SEEK_SET) != 0) {
+        snprintf(err, err_len, "%s: truncated checkpoint (it ends before the particle counts)", path);
+        return -1;
+    }
+    memcpy(&count, clock + 32, 4);
+    memcpy(&wall_count, clock + 36, 4);
+    if (count < 0 || wall_count < 0 || wall_count > count ||
+        (long long)(count - wall_count) > file_bytes / (2 * 8 + 4)) {
+        snprintf(err, err_len, "%s: bad particle count %d (walls %d): the file holds %lld bytes, too few for that "
+                 "many particles", path, count, wall_count, file_bytes);
+        return -1;
+    }
+    return 0;
+}
+
+static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, const char *const *overrides,
+                              int override_count, uint32_t *version, char *err, size_t err_len)
 {
     char magic[8];
     uint32_t real_size = 0;
@@ -241,13 +265,22 @@ static surge_sim *read_header(FILE *f, const char *path, const char *const *over
                  "%zu-byte reals", path, *version, real_size, CHECKPOINT_VERSION, sizeof(real));
         return NULL;
     }
+    if (plen > (1u << 20) || plen > (uint64_t)file_bytes) {
+        snprintf(err, err_len, "%s: bad parameter block length %llu: the file holds %lld bytes (and a block takes "
+                 "at most 1 MiB)", path, (unsigned long long)plen, file_bytes);
+        return NULL;
+    }
     char *text = NULL;
-    if (plen > (1u << 20) || !(text = malloc(plen + 1)) || read_all(f, text, plen)) {
+    if (!(text = malloc(plen + 1)) || read_all(f, text, plen)) {
         snprintf(err, err_len, "%s: truncated or corrupt parameter block", path);
         free(text);
         return NULL;
     }
     text[plen] = '\0';
+    if (check_counts_fit(f, path, file_bytes, err, err_len) != 0) {
+        free(text);
+        return NULL;
+    }
     surge_params params = surge_default_params();
     char msg[512];
     surge_sim *sim = NULL;
@@ -399,14 +432,19 @@ static int validate_state(surge_sim *sim, const char *path, const checkpoint_clo
 surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overrides, int override_count,
                                      char *err, size_t err_len)
 {
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    struct stat st;
+    FILE *f = NULL;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+        snprintf(err, err_len, "'%s' is not a regular file (a checkpoint was expected)", path);
+        return NULL;
+    }
+    if (stat(path, &st) != 0 || !(f = fopen(path, "rb"))) {
         snprintf(err, err_len, "cannot open checkpoint '%s': %s", path, strerror(errno));
         return NULL;
     }
     uint32_t version = 0;
     checkpoint_clock clock = {0};
-    surge_sim *sim = read_header(f, path, overrides, override_count, &version, err, err_len);
+    surge_sim *sim = read_header(f, path, (long long)st.st_size, overrides, override_count, &version, err, err_len);
     if (sim && (read_state(f, sim, path, version, &clock, err, err_len) != 0 ||
                 read_end(f, path, version, err, err_len) != 0 || validate_state(sim, path, &clock, err, err_len) != 0)) {
         surge_sim_destroy(sim);

@@ -595,6 +595,11 @@ static char *xml_unescape(const char *value, size_t len)
 /* Loads the entries of the existing file with timestep < before_time_s. A missing file is fine. */
 static int pvd_load(surge_pvd *pvd, double before_time_s, char *err, size_t err_len)
 {
+    struct stat st;
+    if (stat(pvd->path, &st) == 0 && !S_ISREG(st.st_mode)) { /* a pipe or a device would be read without end */
+        set_err(err, err_len, "'%s' is not a regular file (a .pvd collection was expected)", pvd->path);
+        return -1;
+    }
     char *text = read_file(pvd->path);
     if (text == NULL) {
         if (errno == ENOENT) {
@@ -712,13 +717,12 @@ surge_pvd *surge_pvd_read(const char *pvd_path, char *err, size_t err_len)
         set_err(err, err_len, "out of memory");
         return NULL;
     }
-    FILE *probe = fopen(pvd_path, "rb");
-    if (probe == NULL) {
+    struct stat st;
+    if (stat(pvd_path, &st) != 0) {
         set_err(err, err_len, "cannot read '%s': %s", pvd_path, strerror(errno));
         surge_pvd_close(pvd);
         return NULL;
     }
-    fclose(probe);
     if (pvd_load(pvd, INFINITY, err, err_len) != 0) {
         surge_pvd_close(pvd);
         return NULL;
@@ -786,6 +790,8 @@ static int vtp_array(const vtp_source *v, const char *name, const char *type, in
     return 0;
 }
 
+enum { VTP_POINT_BYTES = 3 * 8 }; /* a point's Points entry, the least a point of any surge .vtp takes */
+
 /* Loads a .vtp written by surge and checks its header: v (its data to free by the caller) and the number of points,
  * or -1 with err naming the file. */
 static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, size_t err_len)
@@ -830,6 +836,11 @@ static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, 
     } else if (find_attr(pieces + 6, tag_end(pieces), "NumberOfPoints", &value, &len) != 0 ||
                strtol(value, NULL, 10) < 0 || strtol(value, NULL, 10) > INT32_MAX) {
         set_err(err, err_len, "%s: bad NumberOfPoints", path);
+    } else if (strtol(value, NULL, 10) > (size - (underscore + 1 - (const char *)data)) / VTP_POINT_BYTES) {
+        /* every point takes its 24 bytes of Points in the appended data: a count the file cannot hold is refused
+         * before anything is allocated for it */
+        set_err(err, err_len, "%s: bad NumberOfPoints %ld: the file holds %ld bytes, too few for that many points "
+                "(%d bytes each at least)", path, strtol(value, NULL, 10), size, VTP_POINT_BYTES);
     } else {
         v->appended = (const unsigned char *)underscore + 1;
         *count = (int32_t)strtol(value, NULL, 10);

@@ -40,6 +40,9 @@ int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_a
 void surge_control_peer_counts(const surge_control *control, long *over_limit, long *idle);
 
 /* Closes the socket; a client waiting for a reply gets none. */
+/* The endpoint bound, with the port the system chose for a wildcard one */
+const char *surge_control_endpoint(const surge_control *control);
+
 void surge_control_close(surge_control *control);
 
 #endif

@@ -38,6 +38,9 @@ typedef struct surge_publisher_report {
 surge_publisher *surge_publisher_start(void *zmq_context, const surge_publisher_def *def, char *err,
                                        size_t err_len);
 
+/* The endpoint bound, with the port the system chose for a wildcard one */
+const char *surge_publisher_endpoint(const surge_publisher *publisher);
+
 /* Solver thread, at a step boundary: posts the state when a subscriber wants one and the cadence allows. */
 void surge_publisher_offer(surge_publisher *publisher, const surge_sim *sim);
 
