@@ -31,6 +31,8 @@ typedef struct cli {
     const char *movie_path;
     const char *font_path;
     int overwrite; /* --overwrite: replace an earlier run's files and frames */
+    /* the default scene renders into its run folder (surge run without a case): the paths it chose */
+    char default_frames_dir[4200], default_movie_path[4200];
 } cli;
 
 /* The commands; each takes the arguments after its name and returns the exit status. */

@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "live_links.h"
+#include "surge/platform.h"
 #include "surge/run.h"
 #include "surge/run_folder.h"
 
@@ -14,7 +15,8 @@ static const char *usage_run =
     "usage: surge run [CASE] [-s section.key=value ...] [-o OUTDIR] [--threads N]\n"
     "       surge run --restart CHECKPOINT [-s section.key=value ...] [-o OUTDIR] [--threads N]\n"
     "\n"
-    "Runs CASE (default: the demo scene) and writes to OUTDIR (default: runs/<case name>):\n"
+    "Runs CASE (default: the demo scene, a debris surge with boulders, which also writes OUTDIR/frames/ and\n"
+    "OUTDIR/movie.mp4) and writes to OUTDIR (default: runs/<case name>):\n"
     "  params.ini       the full resolved parameter set\n"
     "  snap_*.vtp       particle snapshots (VTK PolyData), listed with their times in run.pvd for ParaView\n"
     "  diagnostics.csv  time series (energy, max speed, density deviation, fluid volume...)\n"
@@ -129,11 +131,36 @@ static void print_run_start(const cli *c, const surge_sim *sim, const char *outd
             outdir, d->fluid_count, d->wall_count, d->h_m, d->c0_mps, threads, threads == 1 ? "" : "s");
 }
 
+/* The default scene (no case, no restart) renders its frames and movie into its run folder unless the user chose
+ * where: OUTDIR/frames and OUTDIR/movie.mp4. 0, or -1 with the message printed. */
+static int render_default_scene(cli *c, const char *outdir)
+{
+    if (c->case_path || c->restart_path || c->frames_dir || c->movie_path)
+        return 0;
+    snprintf(c->default_frames_dir, sizeof c->default_frames_dir, "%s/frames", outdir);
+    snprintf(c->default_movie_path, sizeof c->default_movie_path, "%s/movie.mp4", outdir);
+    c->frames_dir = c->default_frames_dir;
+    c->movie_path = c->default_movie_path;
+    char err[1024];
+    if (surge_make_folders(outdir, "the output", err, sizeof err) != 0) {
+        fprintf(stderr, "surge: %s\n", err);
+        return -1;
+    }
+    if (claim_folder(c->frames_dir, surge_is_frame_file, c->overwrite, "frames of an earlier run",
+                     "Choose another --frames folder") != 0)
+        return -1;
+    return claim_movie(c->movie_path, c->overwrite);
+}
+
 /* How the run ended, said; returns the exit status. */
-static int report_run_end(surge_run_result r, const char *err, const char *outdir, uint64_t hash)
+static int report_run_end(const cli *c, surge_run_result r, const char *err, const char *outdir, uint64_t hash)
 {
     switch (r) {
     case SURGE_RUN_FINISHED:
+        if (c->frames_dir == c->default_frames_dir) /* the main job says where its results are */
+            fprintf(stderr, "surge: the movie is %s, its frames in %s; the surge's Froude number and mu_eq/mu0 are in "
+                            "%s/flow.csv, the discs in %s/boulders.csv; open %s/run.pvd in ParaView\n",
+                    c->default_movie_path, c->default_frames_dir, outdir, outdir, outdir);
         fprintf(stderr, "surge: done, state hash %016llx, outputs in %s\n", (unsigned long long)hash, outdir);
         return EXIT_OK;
     case SURGE_RUN_UNHEALTHY:
@@ -192,7 +219,7 @@ static int run_with_live_links(const cli *c, surge_sim *sim, const char *outdir,
     }
     if (render_failed && (r == SURGE_RUN_FINISHED || r == SURGE_RUN_STOPPED))
         return EXIT_IO;
-    return report_run_end(r, err, outdir, hash);
+    return report_run_end(c, r, err, outdir, hash);
 }
 
 int command_run(int argc, char **argv)
@@ -211,7 +238,7 @@ int command_run(int argc, char **argv)
     const int created = create_simulation(&c, &sim, outdir, sizeof outdir);
     if (created != EXIT_OK)
         return created;
-    if (claim_run_outputs(&c, outdir, sizeof outdir) != 0) {
+    if (claim_run_outputs(&c, outdir, sizeof outdir) != 0 || render_default_scene(&c, outdir) != 0) {
         surge_sim_destroy(sim);
         return EXIT_USAGE;
     }
