@@ -5,12 +5,12 @@ turns upward, keeps the rest spacing. ID1 at dp = 1 mm, C_h 1.8 (the convergence
 lubrication start, a snapshot every 0.1 s; over 1-3 s, fluid particles 0.3-1.0 dp from the wall's face and 2-12 mm
 above the belt. The density the implicit scheme writes there is the kernel sum over the rest lattice's (times rho0).
 
-Measured 2026-11-27 (twentieth session, the offset taken at the wall's face), over the 21 snapshots: with the
+Measured with the offset taken at the wall's face, over the 21 snapshots: with the
 offset (1) the column's largest kernel density has a median of 1.0184, and its mean is 0.990; without it (0, the
 default, where the contact rule and not the pressure holds the column off the wall and the pressure there sits
 below the bulk's) the median is 1.048, the mean 1.004. The median moves with rounding-level changes (1.0087 in a run
 apart only by the order of one product): over 1-10 s of six runs apart only by implicit.cfl 0.247-0.252 it is
-1.0177 (quartiles 1.006, 1.028). With the offset taken at the ghost (eighteenth session) the median here was 1.000,
+1.0177 (quartiles 1.006, 1.028). With the offset taken at the ghost the median here was 1.000,
 over those six runs 1.0326. At dp = 0.25 mm the compressed column is what stopped the run at the default step
 (1.100 rho0 at 3.48 s).
 

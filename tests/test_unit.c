@@ -999,8 +999,8 @@ static int test_implicit_clump(void)
     expect_below("implicit_clump: 2 rows down, 0.02 - (with - without anti_clumping) / dp",
                  0.02 - (below_with - below_without), 0);
     /* a gap within a kernel of the surface (the second row, shifting off): the rest-density source, measured there
-     * against the flat surface's kernel sum at that depth, must start to close it (1.349 dp after 16 steps; before
-     * 2026-11-26, twelfth session, when a deficit there did not count, 1.401) */
+     * against the flat surface's kernel sum at that depth, must start to close it (1.349 dp after 16 steps; 1.401
+     * when a deficit there did not count) */
     const double gap = clumped_pair_distance(1.0, SURGE_SHIFT_NONE, 1, -0.2);
     printf("implicit_clump: second row, no Lind shift, 16 steps from 1.4 dp: %.4f dp\n", gap);
     expect_below("implicit_clump: second row, distance / dp - 1.38", gap - 1.38, 0);

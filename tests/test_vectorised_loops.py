@@ -1,6 +1,6 @@
 #!/usr/bin/python3
-"""Every `#pragma omp simd` loop of the solver vectorises with AVX2, the instruction set every x86-64 machine these
-sessions and CI run on has (some have AVX-512 as well).
+"""Every `#pragma omp simd` loop of the solver vectorises with AVX2, the instruction set of every x86-64 machine of the
+last decade (some have AVX-512 as well).
 
 Usage: test_vectorised_loops.py CC SOURCE_DIR INCLUDE_DIRS COMPILE_OPTIONS
   CC: GCC (the report read is GCC's -fopt-info-vec; tests/CMakeLists.txt adds the test only for GCC)

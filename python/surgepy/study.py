@@ -300,7 +300,7 @@ def park(tool, runs_dir, parked_dir, extra_files=(), first_snapshot=True):
     """Copies every unfinished run of runs_dir into parked_dir/NAME: its checkpoint, its small files (PARKED_FILES
     and a study's extra_files, such as the debris surge's flow.csv and boulders.csv) and, unless first_snapshot is
     False (a study whose numbers need no snapshot), its first snapshot, the large ones gzip-compressed. Only the
-    committed tree survives from one session to the next; a parked run is carried in it and resumed by unpark in a
+    committed tree survives from one machine or checkout to the next; a parked run is carried in it and resumed by unpark in a
     fresh checkout. A run still going is parked at its last periodic checkpoint (written atomically), with the wall
     time of its current piece counted up to that checkpoint. Returns the names parked. A run that cannot be parked (a bad checkpoint or progress.json) stops it with exit status 2,
     leaving its earlier parked copy, if any, as it was."""

@@ -29,8 +29,8 @@ density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every mem
 vets them before any member starts, and each member's params.ini records them. The case's automatic c0 carries
 discs since 2026-11-28 (112 m/s; docs/method.md, "c0"); the members in docs/validation/debris_surge.md before then
 ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for their remaining members.
-park / unpark: a member longer than a session is carried in the committed tree, since nothing else survives from
-one session to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
+park / unpark: a member longer than one sitting is carried in the committed tree, since nothing else survives from
+one checkout to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
 boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
 for 60 discs at dp = 0.04 m, measured 2026-11-28) into studies/debris_surge/parked/; `unpark` in a fresh
 checkout puts them back, and the same `run` continues each from its checkpoint, bit for bit. A member that finishes

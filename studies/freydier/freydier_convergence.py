@@ -12,7 +12,7 @@ error against wall time (one point per run).
   studies/freydier/freydier_convergence.py park|unpark [--runs-dir runs/convergence]
         [--parked-dir studies/freydier/parked]
 
-A run interrupted (Ctrl-C, --budget-s, end of a session) keeps its checkpoint; the next `run` continues it, and
+A run interrupted (Ctrl-C, --budget-s, the machine taken back) keeps its checkpoint; the next `run` continues it, and
 its wall time adds up across the pieces (progress.json in its folder). runs/ is not committed, so a run that must
 outlive the checkout is parked: `park` copies each interrupted run's checkpoint, small files and initial snapshot
 (compressed) into studies/freydier/parked/, which is committed; `unpark` in a fresh checkout puts them back, and
