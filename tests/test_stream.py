@@ -375,7 +375,7 @@ BAD_REQUESTS = [  # (request bytes, words the error must contain)
     (b'{"cmd": "status"} trailing', "not valid JSON"),
     (b'{"cmd": "status\x00"}', "NUL byte"),
     (b'\xff\xfe{"cmd": 1}', "not valid JSON"),
-    # issue #24: D3 an escaped NUL would cut the string; D4 echoed bytes come back as valid UTF-8 (a request's
+    # an escaped NUL would cut the string; echoed bytes come back as valid UTF-8 (a request's
     # invalid bytes, a character cut by the length limit); D5 numbers and names JSON and the registry do not allow
     (b'{"cmd": "status\\u0000junk"}', "\\u0000"),
     (b'{"cmd": "set", "key": "shifting.form", "value": "none\\u0000junk"}', "\\u0000"),
@@ -501,7 +501,7 @@ def group_inputs():
           not wrong, "\n".join(wrong))
 
     # one subscriber with 100 junk topics and 100 field selections cannot take a later "stats" subscriber's slot
-    # (issue #24, D6: 64 junk subscriptions filled the table and stats never came)
+    # (64 junk subscriptions once filled the table and stats never came)
     hogged = Surge("inputs_hog", ["-s", "time.end_s=100", "--publish-hz", "0"], paused=True)
     hog = surge_client.subscribe(hogged.pub, ["junk%d" % i for i in range(100)] +
                                  ["state/junk%d" % i for i in range(100)], ctx, latest_only=True)
@@ -516,7 +516,7 @@ def group_inputs():
     check("inputs: a subscriber holding 200 useless subscriptions leaves room for a later stats subscriber",
           got is not None, hogged.describe())
 
-    # idle TCP connections cannot take the file descriptors the outputs need (issue #24, D2): the run starts with
+    # idle TCP connections cannot take the file descriptors the outputs need: the run starts with
     # a soft limit of 256 open files, 400 plain connections arrive at its control and publisher ports, and it must
     # still write every snapshot and finish. It starts paused and is resumed once the connections are held, so a
     # fast machine cannot finish the run before they arrive (it did: 202 connected, 2026-11-26)

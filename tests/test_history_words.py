@@ -1,0 +1,49 @@
+#!/usr/bin/python3
+"""The product's text speaks to its users, not of how it was made: no file of the source tree (code, comments, tests,
+docs, cases, tools) speaks of how the work was done: no numbered issues, no sittings of the developers counted out.
+How the project got here is git's history and CHANGELOG.md's.
+
+usage: test_history_words.py SOURCE_DIR
+"""
+import os
+import re
+import sys
+
+from checks import check, finish
+
+# the words, built so that this file does not match itself
+WORDS = re.compile(r"\b(" + "sess" + r"ions?|issue\s*#\s*\d+|(?:first|second|third|fourth|fifth|\w+teenth|twent\w+)"
+                   r"\s+" + "sess" + r"ion)\b", re.IGNORECASE)
+TEXT_SUFFIXES = (".c", ".h", ".py", ".md", ".txt", ".ini", ".cmake", ".sh", ".toml", ".csv")
+SKIP_DIRS = {".git", "build", "__pycache__", "runs"}
+
+
+def text_files(root):
+    for folder, dirs, files in os.walk(root):
+        dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build")]
+        for name in files:
+            if name.endswith(TEXT_SUFFIXES) or name in ("CMakeLists.txt", "run", "surgectl"):
+                yield os.path.join(folder, name)
+
+
+def main():
+    root = os.path.abspath(sys.argv[1])
+    found, scanned = [], 0
+    for path in text_files(root):
+        scanned += 1
+        try:
+            with open(path, encoding="utf-8", errors="replace") as f:
+                for number, line in enumerate(f, 1):
+                    m = WORDS.search(line)
+                    # a process session (start_new_session) is Python's term, not history
+                    if m and "new_session" not in line:
+                        found.append("%s:%d: %s" % (os.path.relpath(path, root), number, line.strip()[:120]))
+        except OSError as e:
+            found.append("%s: cannot read (%s)" % (path, e))
+    check("text files read (%d)" % scanned, scanned > 100, "the source tree at %s holds too few text files" % root)
+    check("no development-history words in the source tree's text", not found, "\n".join(found[:40]))
+    return finish()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
