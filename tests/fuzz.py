@@ -15,8 +15,11 @@ Usage: fuzz.py SURGE_SANITIZED SOURCE_DIR WORK_DIR GROUP [--count N] [--seed S]
                      status 2 and a message naming the file, what is wrong and, for a count, the file's size
 
 An input fails when the program dies on a signal, a sanitizer reports (any "runtime error" or AddressSanitizer /
-LeakSanitizer report; leaks inside libOSMesa are suppressed, tests/lsan.supp), it exits with a status outside
-surge's documented ones (0-4), prints nothing on a refusal, or does not finish within its time limit. A failing
+LeakSanitizer report; leaks inside libOSMesa are suppressed, tests/lsan.supp), it exits with a status outside the
+classes its input may give (a case through surge check 0 or 2; a checkpoint 0, 1 or 2; a run folder through surge
+render 0 or 2; a run a control request ended 0 or 1), refuses it without naming it, or does not finish within its
+time limit. Control requests over 16 KiB, which ZeroMQ drops with their peer, go from a peer of their own, and the
+run must then still answer a status. A failing
 input is kept in WORK_DIR/failures/ with the seed and the command, to rerun by hand. Longer runs outside CI:
 a larger --count, another --seed, or a coverage-guided engine (docs/verification.md, "Fuzzing").
 """
@@ -46,18 +49,22 @@ rng = random.Random(SEED)
 failures = []
 
 
-def verdict(rc, stderr, timed_out):
-    """None when surge behaved, else what went wrong."""
+def verdict(rc, stderr, timed_out, allowed=(0, 1, 2, 3, 4), names=()):
+    """None when surge behaved, else what went wrong: it finished, without a sanitizer report or a signal, with an
+    exit status of the classes this input may give (allowed), and a refusal (2 bad input, 3 a file error) says
+    "surge" and names the input (one of names, when given)."""
     if timed_out:
         return "did not finish within its time limit"
     if SANITIZER_WORDS.search(stderr):
         return "sanitizer report"
     if rc is None or rc < 0:
         return "killed by signal %s" % (-rc if rc else "?")
-    if rc > 4:
-        return "exit status %d is not one of surge's (0-4)" % rc
+    if rc not in allowed:
+        return "exit status %d is not one this input may give (%s)" % (rc, ", ".join(map(str, allowed)))
     if rc in (2, 3) and "surge" not in stderr:
         return "refused without a message"
+    if rc in (2, 3) and names and not any(n in stderr for n in names):
+        return "the refusal does not name the input (%s)" % " or ".join(names)
     return None
 
 
@@ -173,7 +180,7 @@ def group_cases():
             f.write(data)
         rc, stderr, timed_out = run([SURGE, "check", path], 120)
         outcomes[rc] = outcomes.get(rc, 0) + 1
-        problem = verdict(rc, stderr, timed_out)
+        problem = verdict(rc, stderr, timed_out, allowed=(0, 2), names=(path,))
         if problem:
             record("case file %d" % i, data, "surge check input.ini", problem, stderr)
     print("exit statuses: %s" % outcomes)
@@ -237,8 +244,30 @@ def random_request(params):
             data = mutate_bytes(data)
     elif special < 0.32:
         data = rng.choice([b"[" * 100000, b'{"cmd": ' * 20000, b'{"cmd": "status", "pad": "' + b"y" * 70000 + b'"}',
-                           b'{"cmd": "get", "key": "' + b"a" * 60000 + b'"}'])
+                           b'{"cmd": "get", "key": "' + b"a" * 60000 + b'"}', b"[" * 16000, b'{"cmd": ' * 2000,
+                           b'{"cmd": "get", "key": "' + b"a" * 9000 + b'"}'])
     return data
+
+
+MAX_REQUEST_BYTES = 16384  # ZeroMQ closes a peer that sends more (docs/protocol.md), without a reply
+
+
+def send_oversize(live, data):
+    """Sends a request over MAX_REQUEST_BYTES from a peer of its own (ZeroMQ drops that peer without a reply), then
+    asks the run for its status on the usual socket: the run's reply (None when it gives none within 30 s)"""
+    import zmq
+    sock = zmq.Context.instance().socket(zmq.REQ)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(live.endpoint)
+    sock.send(data)
+    answered = sock.poll(2000)
+    sock.close()
+    if answered:
+        return {"ok": False, "error": "an oversize request was answered"}
+    try:
+        return live.control.request({"cmd": "status"})
+    except TimeoutError:
+        return None
 
 
 class LiveRun:
@@ -276,7 +305,14 @@ def group_control():
     for i in range(COUNT):
         data = random_request(params)
         try:
-            reply = live.control.request(data) if len(data) <= 16384 else live.control.request(b'{"cmd":"status"}')
+            if len(data) > MAX_REQUEST_BYTES:
+                reply = send_oversize(live, data)
+                if reply is None:
+                    record("request %d" % i, data[:200], " ".join(live.args), "an oversize request (%d bytes) left "
+                           "the run without an answer to the next status" % len(data), live.stderr())
+                    continue
+            else:
+                reply = live.control.request(data)
             replies["ok" if reply.get("ok") else "error"] += 1
             if not reply.get("ok") and not isinstance(reply.get("error"), str):
                 record("request %d" % i, data, " ".join(live.args), "an error reply without its message", str(reply))
@@ -290,7 +326,7 @@ def group_control():
             record("request %d" % i, data, " ".join(live.args), "no reply within 30 s from a live run", live.stderr())
         else:
             rc, timed_out = live.end()
-            problem = verdict(rc, live.stderr(), timed_out)
+            problem = verdict(rc, live.stderr(), timed_out, allowed=(0, 1))
             if problem:
                 record("request %d" % i, data, " ".join(live.args), "the run ended: " + problem, live.stderr())
         runs += 1
@@ -298,7 +334,7 @@ def group_control():
     ctl_status = live.control.request({"cmd": "status"})
     live.control.request({"cmd": "stop"})
     rc, timed_out = live.end()
-    problem = verdict(rc, live.stderr(), timed_out) or (None if rc == 0 and ctl_status.get("ok") else
+    problem = verdict(rc, live.stderr(), timed_out, allowed=(0,)) or (None if rc == 0 and ctl_status.get("ok") else
                                                          "the last run did not stop cleanly (exit %s)" % rc)
     if problem:
         record("final stop", b"", " ".join(live.args), problem, live.stderr())
@@ -372,7 +408,7 @@ def group_checkpoints():
                 "-s", "time.end_s=0.0045", "-s", "output.progress_interval_s=0"]
         rc, stderr, timed_out = run(args, 120)
         outcomes[rc] = outcomes.get(rc, 0) + 1
-        problem = verdict(rc, stderr, timed_out)
+        problem = verdict(rc, stderr, timed_out, allowed=(0, 1, 2), names=(path,))
         if problem:
             record("checkpoint %d" % i, data, " ".join(args), problem, stderr)
     print("exit statuses: %s" % outcomes)
@@ -400,7 +436,7 @@ def group_snapshots():
         args = [SURGE, "render", target, "--frames", frames, "--overwrite"]
         rc, stderr, timed_out = run(args, 120)
         outcomes[rc] = outcomes.get(rc, 0) + 1
-        problem = verdict(rc, stderr, timed_out)
+        problem = verdict(rc, stderr, timed_out, allowed=(0, 2), names=(target,))
         if problem:
             record("%s mutated (input %d)" % (name, i), data, " ".join(args), problem, stderr)
     print("exit statuses: %s" % outcomes)
