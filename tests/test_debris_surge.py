@@ -196,6 +196,16 @@ check("collect: the phi member is named phi0.04, with the %d discs it placed and
 check("collect: the fluid alone runs at the uniform flow's Froude number within 10 %% (Fr %.3f, window %s-%s s)"
       % (froude, fluid[0]["window_start_s"] if fluid else "?", fluid[0]["window_end_s"] if fluid else "?"),
       abs(froude / 0.977 - 1) < 0.10, out)
+# the Froude number is read against the belt: a block that never moved would have it too (3.5 m/s relative to the
+# belt, Fr 0.95); the fluid alone's front must also run down the belt as it forms (20 m from the wall at the start,
+# 22.5 m at 1.5 s)
+fluid_rows = []
+if os.path.isfile(os.path.join(RUNS, "n0_s1_dp0.066", "flow.csv")):
+    with open(os.path.join(RUNS, "n0_s1_dp0.066", "flow.csv")) as f:
+        fluid_rows = list(csv.DictReader(f))
+front = [float(r["front_from_wall_m"]) for r in fluid_rows]
+check("the fluid alone's front runs at least 1 m down the belt by 1.5 s (%s m from the wall)" % front,
+      len(front) >= 2 and front[-1] - front[0] >= 1.0, str(fluid_rows)[-500:])
 check("collect: each row carries the uniform flow's Froude number, from its params.ini (0.977)",
       len(rows) == 3 and all(abs(float(r["uniform_froude"]) - 0.9774) < 1e-3 for r in rows), str(rows)[-500:])
 # plot: the box plots again from collect's table and a hand-made one (members whose folders are gone); tables that
