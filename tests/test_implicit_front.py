@@ -1,18 +1,17 @@
 #!/usr/bin/python3
 """The implicit scheme carries a Freydier front: ID1 at dp = 1 mm, C_h 1.3, from the lubrication
 profile, 2.5 s of flow. Without the kernel-sum free-surface test (implicit.surface_kernel_margin = 1 turns it off)
-this run stopped at 1.77 s on the density check at the front's foot (2026-11-26); with it the same front ran 10.2 s,
+this run stopped at 1.77 s on the density check at the front's foot; with it the same front ran 10.2 s,
 and with the compressed particles' shift (implicit.anti_clumping) as well, 40 s (docs/validation/stability.md).
 
 Then the front at dp = 2 mm (9 particles in h_n), C_h 1.8, the Freydier cases' settings, 8 s from the lubrication
 profile, against the paper's converged values (tools/freydier_metrics.py over the last 3 s): the four targets,
-zeta_f < 1 % excepted, which this resolution misses (3 % here; measured 2026-11-27: zeta_h 0.025, zeta_f 0.011,
-zeta_fs 0.045, zeta_u 0.032 / 0.023 / 0.012; the explicit scheme's coarse test, tests/test_freydier_coarse.py,
-holds zeta_h to 0.25 and zeta_f to 0.20 at C_h 1.3).
+zeta_f < 1 % excepted, which this resolution misses (3 % here; measured: zeta_h 0.029, zeta_f 0.009, zeta_fs 0.046,
+zeta_u 0.031 / 0.023 / 0.011).
 
 Usage: test_implicit_front.py SURGE_BINARY SOURCE_DIR WORK_DIR
-Checks: the run ends healthy at 2.5 s; the fluid's volume stays within 0.1 % of the first row's; no fluid moves
-faster than 0.2 m/s (the belt moves at 0.075 m/s); the kernel density deviation stays below the health bound; the
+Checks: the run ends healthy at 2.5 s; the fluid's volume stays within 0.1 % of the first row's; the fastest fluid
+moves between 0.05 and 0.2 m/s (the belt moves at 0.075 m/s: the front flows, nothing jets); the
 dp = 2 mm run's zeta_h < 0.05, zeta_f < 0.03, zeta_fs < 0.10, zeta_u < 0.05 at each station.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
@@ -44,10 +43,10 @@ if rows:
     volume = [float(r["fluid_volume_m2"]) for r in rows]
     drift = max(abs(v / volume[0] - 1) for v in volume)
     check("fluid volume within 0.1 %% of the first row's (largest change %.2e)" % drift, drift < 1e-3)
+    # the front flows (its surface runs at about 0.1 m/s against the belt's 0.075 m/s) and nothing jets: a fluid at
+    # rest fails the first bound, a mode that grows the second (the density is the health monitor's to bound)
     speed = max(float(r["max_speed_mps"]) for r in rows[1:])
-    check("fastest fluid below 0.2 m/s (%.4f m/s)" % speed, speed < 0.2)
-    deviation = max(float(r["max_density_deviation"]) for r in rows[1:])
-    check("largest kernel density deviation below 0.1 (%.4f)" % deviation, deviation < 0.1)
+    check("fastest fluid between 0.05 and 0.2 m/s (%.4f m/s)" % speed, 0.05 < speed < 0.2)
 
 coarse = os.path.join(WORK, "dp2mm")
 run = subprocess.run([SURGE, "run", os.path.join(SOURCE, "cases", "freydier_id1.ini"), "-o", coarse, "--overwrite",
