@@ -1,25 +1,30 @@
 #!/usr/bin/python3
 """The solver's step rate while clients flood its control socket (docs/verification.md, "Control floods").
 
-Usage: control_flood.py [SURGE_BINARY] [--seconds S] [--clients N]
+Usage: control_flood.py [SURGE_BINARY] [--seconds S] [--clients N] [--curve]
 
 Starts `SURGE run cases/still_tank.ini --threads 1 --control tcp://127.0.0.1:PORT` (no other output), measures
 its steps per second with nothing else connected, then with N clients (processes, default 4) each keeping 8
 requests in flight on a DEALER socket, for each kind of request in turn, and the idle rate again at the end. Each
 rate is the step count from two `status` requests S seconds apart (default 4). Traffic goes to 127.0.0.1 only and
 every phase is bounded in time. Prints one row per phase: steps/s, the ratio to the idle rate (the mean of the
-two idle phases) and the replies per second the flooding clients received.
+two idle phases) and the replies per second the flooding clients received. With --curve the run and every client
+use ZeroMQ's CURVE (keys made with `surge keygen` in a temporary folder; the clients' key is the one admitted).
 """
 import argparse
 import json
 import multiprocessing
 import os
+import shutil
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 
 import zmq
+
+from surgepy import client as surge_client
 
 SOURCE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 IN_FLIGHT = 8
@@ -33,12 +38,18 @@ KINDS = [
 ]
 
 
-def flood(endpoint, request, seconds, replies):
+def secure(sock, curve):
+    if curve is not None:
+        sock.curve_serverkey, sock.curve_publickey, sock.curve_secretkey = curve
+
+
+def flood(endpoint, request, seconds, replies, curve):
     """One client: IN_FLIGHT requests outstanding, a new one sent for each reply (IN_FLIGHT more after 0.1 s
     without one), until seconds have passed."""
     ctx = zmq.Context()
     s = ctx.socket(zmq.DEALER)
     s.setsockopt(zmq.LINGER, 0)
+    secure(s, curve)
     s.connect(endpoint)
     for _ in range(IN_FLIGHT):
         s.send(request)
@@ -79,7 +90,17 @@ def main():
     ap.add_argument("surge", nargs="?", default=os.path.join(SOURCE, "build", "surge"))
     ap.add_argument("--seconds", type=float, default=4.0)
     ap.add_argument("--clients", type=int, default=4)
+    ap.add_argument("--curve", action="store_true", help="the run and the clients use CURVE")
     args = ap.parse_args()
+    keys_dir = tempfile.mkdtemp(prefix="surge_flood_keys_")
+    curve, secured = None, []
+    if args.curve:
+        for name in ("run", "client"):
+            subprocess.run([args.surge, "keygen", os.path.join(keys_dir, name)], check=True,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        curve = surge_client.curve_keys(os.path.join(keys_dir, "run.pub"), os.path.join(keys_dir, "client.key"))
+        secured = ["--curve-key", os.path.join(keys_dir, "run.key"), "--curve-clients",
+                   os.path.join(keys_dir, "client.pub")]
     probe = socket.socket()
     probe.bind(("127.0.0.1", 0))
     endpoint = "tcp://127.0.0.1:%d" % probe.getsockname()[1]
@@ -88,11 +109,12 @@ def main():
                             "-o", "/tmp/surge_control_flood", "--overwrite", "-s", "time.end_s=1e6", "-s",
                             "output.snapshot_interval_s=0", "-s", "output.checkpoint_interval_s=0", "-s",
                             "output.diagnostics_interval_s=0", "-s", "output.progress_interval_s=0",
-                            "--control", endpoint], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            "--control", endpoint] + secured, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                            env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"))
     ctx = zmq.Context()
     control = ctx.socket(zmq.REQ)
     control.setsockopt(zmq.LINGER, 0)
+    secure(control, curve)
     control.connect(endpoint)
     try:
         steps(control)
@@ -100,7 +122,7 @@ def main():
         rows = [("idle", measure(control, args.seconds), None)]
         for name, request in KINDS:
             replies = multiprocessing.Value("q", 0)
-            clients = [multiprocessing.Process(target=flood, args=(endpoint, request, args.seconds + 2, replies))
+            clients = [multiprocessing.Process(target=flood, args=(endpoint, request, args.seconds + 2, replies, curve))
                        for _ in range(args.clients)]
             for c in clients:
                 c.start()
@@ -122,9 +144,10 @@ def main():
             run.wait(30)
         except subprocess.TimeoutExpired:
             run.kill()
+        shutil.rmtree(keys_dir, ignore_errors=True)
     idle = (rows[0][1] + rows[-1][1]) / 2
-    print("%s, %d flooding clients, %d requests in flight each, %.0f s per phase" %
-          (args.surge, args.clients, IN_FLIGHT, args.seconds))
+    print("%s, %d flooding clients, %d requests in flight each, %.0f s per phase%s" %
+          (args.surge, args.clients, IN_FLIGHT, args.seconds, ", CURVE" if args.curve else ""))
     print("| requests | steps/s | of idle | replies/s to the flood |")
     print("|---|---|---|---|")
     for name, rate, replied in rows:
