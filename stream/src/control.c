@@ -26,12 +26,15 @@ enum { HANDSHAKE_MS = 2000, HEARTBEAT_MS = 5000, HEARTBEAT_TIMEOUT_MS = 15000, R
 /* a request longer than this is refused before it is parsed: the longest real one, a text value of
  * SURGE_TEXT_PARAM_BYTES written as JSON escapes, is well below it */
 enum { LONGEST_REQUEST = 8192 };
-/* Control work at a step boundary is bounded by time: CONTROL_SHARE of the recent step time (at least one
- * request is answered, so a run with tiny steps still answers); a paused run answers for up to PAUSED_BUDGET_S
- * at a time. Requests left waiting stay in ZeroMQ's queue, in order, and are answered at the next boundary. */
+/* Control work is bounded by its cost in time: a running solver earns CONTROL_SHARE of the wall time between two
+ * boundaries as credit (at most MAX_CREDIT_S saved up), and each request answered spends what it took, so a flood
+ * costs the run at most that share of its time, however cheap or dear its requests, while a request to an idle
+ * socket is answered at the next boundary. A paused run answers for up to PAUSED_BUDGET_S at a time. Requests left
+ * waiting stay in ZeroMQ's queue, in order, and are answered at a later boundary. */
 #define CONTROL_SHARE 0.05
+#define MAX_CREDIT_S 0.01
+#define MAX_DEBT_S 0.25 /* one dear request (a checkpoint of a large scene) leaves the socket deaf 5 s at most */
 #define PAUSED_BUDGET_S 0.02
-#define STEP_TIME_SMOOTHING 0.1
 
 struct surge_control {
     void *socket;
@@ -41,7 +44,7 @@ struct surge_control {
     int64_t pause_at_step; /* "step N" pauses again here; -1: no target */
     double start_wall_s;
     int64_t start_step;
-    double step_s;           /* smoothed time between two boundaries, outside this file's work */
+    double credit_s;         /* the time requests may still take (CONTROL_SHARE of the time they were not served) */
     double service_end_s;    /* when the last boundary's work ended; < 0 before the first */
     peer_guard *guard;
     surge_params list_params; /* the parameters list_text was made from */
@@ -91,6 +94,7 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     }
     c->journal = journal;
     c->service_end_s = -1;
+    c->credit_s = MAX_CREDIT_S;
     c->paused = def->start_paused;
     c->pause_at_step = -1;
     c->start_wall_s = -1;
@@ -596,17 +600,23 @@ int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_
         c->start_wall_s = start_s;
         c->start_step = surge_sim_step_count(sim);
     }
-    if (c->service_end_s >= 0 && !c->paused) {
-        const double step_s = start_s - c->service_end_s;
-        c->step_s = c->step_s > 0 ? c->step_s + STEP_TIME_SMOOTHING * (step_s - c->step_s) : step_s;
-    }
+    if (c->service_end_s >= 0 && !c->paused)
+        c->credit_s = fmin(c->credit_s + CONTROL_SHARE * (start_s - c->service_end_s), MAX_CREDIT_S);
     if (c->pause_at_step >= 0 && surge_sim_step_count(sim) >= c->pause_at_step) {
         c->paused = 1;
         c->pause_at_step = -1;
     }
     /* a flood of requests costs the run at most CONTROL_SHARE of its time and never stops it */
     int requests = SURGE_CONTINUE;
-    serve_for(c, sim, &requests, start_s, c->paused ? PAUSED_BUDGET_S : CONTROL_SHARE * c->step_s);
+    if (c->paused)
+        serve_for(c, sim, &requests, start_s, PAUSED_BUDGET_S);
+    else
+        while (c->credit_s > 0) {
+            const double request_start_s = surge_wall_clock_s();
+            if (!serve_one(c, sim, &requests))
+                break;
+            c->credit_s = fmax(c->credit_s - (surge_wall_clock_s() - request_start_s), -MAX_DEBT_S);
+        }
     if (!c->paused || (requests & SURGE_REQUEST_STOP) || (stop_signal && *stop_signal)) {
         c->service_end_s = surge_wall_clock_s();
         return requests;
