@@ -933,9 +933,9 @@ static int test_fluid_share(void)
     return failures;
 }
 
-/* What separates two clumped particles in the implicit scheme (docs/method.md, step 3): two neighbours of the still
- * tank (C_h 1.3) moved from dp to (1 - 2 squeeze) dp apart, N rows under the free surface, then stepped 16 times;
- * returns their distance over dp (-1: the run failed). */
+/* What separates two clumped particles in the implicit scheme (docs/method.md, "The implicit scheme", step 3): two
+ * neighbours of the still tank (C_h 1.3) moved from dp to (1 - 2 squeeze) dp apart, N rows under the free surface,
+ * then stepped 16 times; returns their distance over dp (-1: the run failed). */
 static void implicit_tank(surge_params *p)
 {
     p->numerics.scheme = SURGE_SCHEME_IMPLICIT;

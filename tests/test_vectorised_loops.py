@@ -10,10 +10,10 @@ Each source file of sim/src with such a loop is compiled as the library is (-O3,
 and options) but for -march=x86-64-v3 (AVX2, FMA), with GCC's vectoriser report. A loop passes when the report says
 "loop vectorized" at the loop's place (GCC names a loop by a column of the pragma's line, the `for` line or the line
 after it) and never "couldn't vectorize loop" at that place: a loop inlined into several callers is reported once
-per copy, and every copy must be vectorised. Until 2026-11-28 the pair loops vectorised only where
-AVX-512's masks could if-convert their conditional arithmetic; with AVX2 alone GCC said "control flow in loop" and
-ran them scalar, 2.2-3.2 times slower (docs/performance.md, "AVX2"). The build's -fno-trapping-math is what lets
-them vectorise; without it this test fails for the fluid and wall pair loops.
+per copy, and every copy must be vectorised. The build's -fno-trapping-math is what lets the pair loops vectorise with
+AVX2 alone: without it they vectorise only where AVX-512's masks can if-convert their conditional arithmetic, GCC says
+"control flow in loop" on AVX2 and runs them scalar, 2.2-3.2 times slower (docs/performance.md, "How the pair loops
+are built, and what each part gains"), and this test fails for the fluid and wall pair loops.
 
 Not a timing test: it checks what the compiler made of the loops, not how fast they ran.
 """

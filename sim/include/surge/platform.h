@@ -34,7 +34,7 @@ const char *surge_build_description(void);
 
 /* The machine it runs on, into buf: the CPU's model name, its x86 family and model, the processors online and
  * whether the CPU has AVX2 and AVX-512 (from /proc/cpuinfo; "unknown CPU" where that does not say). Timings are
- * comparable only on the same CPU (docs/performance.md, "AVX2"). */
+ * comparable only on the same CPU (docs/performance.md, "Comparing timings"). */
 void surge_machine_description(char *buf, size_t len);
 
 #endif

@@ -27,7 +27,8 @@ typedef int32_t lanes_mask __attribute__((vector_size(PAIR_LANES * sizeof(int32_
 
 /* A record read as one vector: any alignment of a real, and allowed to alias the record's struct. (A memcpy into a
  * vector, which GCC 12 made of two 16-byte copies through the stack when it targets AVX2, left each vector load
- * waiting on two stores it could not forward from: docs/performance.md, "AVX2".) */
+ * waiting on two stores it could not forward from: docs/performance.md, "How the pair loops are built, and what each
+ * part gains".) */
 typedef real lanes_vector_load __attribute__((vector_size(PAIR_LANES * sizeof(real)), aligned(sizeof(real)), may_alias));
 
 #if defined(__clang__)
