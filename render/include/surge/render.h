@@ -33,6 +33,8 @@ typedef struct surge_canvas_layout {
     double field_min, field_max;                 /* the field's own range in the view (NaN: no fluid there) */
     double scale_px_per_m;
     double world_x0_m, world_y0_m;               /* the world point drawn at (plot_x0, plot_y1) */
+    double view_x0_m, view_x1_m;                 /* the window along the bed (infinite: all of it); on a periodic
+                                                    domain x is taken into it */
     double radius_px;                            /* a particle's disc (dp/2) */
 } surge_canvas_layout;
 
