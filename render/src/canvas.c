@@ -203,6 +203,7 @@ void surge_canvas_destroy(surge_canvas *c)
     free(c->splats);
     free(c->sums.weight);
     free(c->sums.weighted);
+    free(c->sums.solid);
     free(c->pixels);
     free(c);
 }
@@ -312,7 +313,7 @@ static int fluid_body(const surge_snapshot *s, const surge_params *p, double *ba
     double largest_m = 0;
     for (int j = 0; j < s->boulders.count; j++)
         largest_m = fmax(largest_m, 2 * s->boulders.radius_m[j]);
-    const int gap = (int)fmax(1, ceil(largest_m / width)), enough = (int)ceil(0.2 * count[deepest]);
+    const int gap = (int)fmin(columns, fmax(1, ceil(largest_m / width))), enough = (int)ceil(0.2 * count[deepest]);
     int first = deepest, last = deepest; /* columns, unwrapped on a periodic domain */
     for (int dir = 1; dir >= -1; dir -= 2)
         for (int k = deepest + dir, missed = 0; missed <= gap && last - first + 1 < columns; k += dir) {

@@ -22,6 +22,8 @@ static double wendland(double q)
  * a cell centre (both in pixels). */
 static double bulk_sum(double dp_px, double h_px)
 {
+    if (!(2 * h_px < 64 * dp_px)) /* many particles per kernel: the integral, 4 pi h^2 / 7 over dp^2 */
+        return 4 * 3.14159265358979323846 * h_px * h_px / (7 * dp_px * dp_px);
     const int n = (int)ceil(2 * h_px / dp_px) + 1;
     double sum = 0;
     for (int centred = 0; centred < 2; centred++)
@@ -50,6 +52,8 @@ static void splat_sums(surge_field_sums *sums, const surge_layer_target *t, cons
         float *weight = k < count ? sums->weight : sums->solid;
         const float value = k < count ? splats[k].value : 0;
         const double x = splats[k].x_px - t->x0, y = splats[k].y_px - t->y0;
+        if (!isfinite(x) || !isfinite(y))
+            continue;
         const int i0 = (int)fmax(0, ceil(x - support - 0.5)), i1 = (int)fmin(w - 1, floor(x + support - 0.5));
         const int j0 = (int)fmax(0, ceil(y - support - 0.5)), j1 = (int)fmin(h - 1, floor(y + support - 0.5));
         for (int j = j0; j <= j1; j++) {
@@ -132,6 +136,8 @@ static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
 
 void surge_draw_disc(const surge_layer_target *t, double cx, double cy, double radius, double angle_rad)
 {
+    if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius))
+        return;
     const double outline = fmax(1.0, 0.08 * radius), spoke = fmax(0.6, 0.05 * radius);
     const double ux = cos(angle_rad), uy = -sin(angle_rad); /* the picture's y runs down */
     const int i0 = (int)fmax(t->x0, floor(cx - radius - 1)), i1 = (int)fmin(t->x1 - 1, ceil(cx + radius + 1));
