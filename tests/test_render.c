@@ -1,8 +1,9 @@
 /* The renderer on synthetic snapshots: PNG frames decoded with libpng must show each particle in the colour the
- * map gives for its value, at its place and size; background, walls, belt and colour bar where they belong;
- * the slope turns the picture; bad settings give clear errors.
+ * map gives for its value, at its place and size (the particles style); the fluid as a continuous field with a
+ * clean surface (the field style); background, walls, belt and colour bar where they belong; the slope turns the
+ * picture; the follow view keeps the surge's body; boulders are solid discs; bad settings give clear errors.
  *
- * usage: test_render GROUP WORK_DIR   (GROUP: colours, slope, errors) */
+ * usage: test_render GROUP WORK_DIR   (GROUP: colours, slope, errors, boulders, ranges, field) */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <png.h>
@@ -119,6 +120,7 @@ static void group_colours(const char *work)
     surge_snapshot s = {0};
     synthetic(&s);
     surge_params p = synthetic_params();
+    p.render.style = SURGE_STYLE_PARTICLES; /* each particle's own colour, at its place */
     char err[512], path[4096], detail[512];
     surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
     if (!canvas) {
@@ -289,7 +291,9 @@ static void group_ranges(const char *work)
           ink_with[0] > 10 && ink_with[1] > 10 && ink_without[0] == 0 && ink_without[1] == 0, detail);
     surge_canvas_destroy(canvas);
 
-    /* a bed 100 dp long and 3 dp deep under a block 4 dp deep: a flat frame, the same with or without the fluid */
+    /* a bed 100 dp long and 3 dp deep, not periodic, under a block 4 dp deep: a flat frame, the same with or without
+     * the fluid */
+    p.domain.periodic_x = false;
     surge_snapshot bed = {0};
     surge_snapshot_reserve(&bed, 300 + 40);
     int n = 0;
@@ -325,6 +329,7 @@ static void group_slope(const char *work)
     surge_snapshot s = {0};
     synthetic(&s);
     surge_params p = synthetic_params();
+    p.render.style = SURGE_STYLE_PARTICLES; /* the end particles' own colours mark the row */
     p.body.slope_deg = 20;
     char err[512], path[4096], detail[256];
     surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
@@ -421,10 +426,125 @@ static void group_boulders(const char *work)
     const double bottom = l->plot_y1 - (0.06 - l->world_y0_m) * l->scale_px_per_m;
     const double side = l->plot_x0 + (0.14 - l->world_x0_m) * l->scale_px_per_m;
     const double mid = l->plot_y1 - (0.1 - l->world_y0_m) * l->scale_px_per_m;
-    check("boulders: the particle in the direction of the disc's angle carries the mark",
-          near_rgb(pixel(&im, x, top), mark, 1), "");
-    check("boulders: the particles opposite and beside it have the boulder colour",
+    check("boulders: the spoke in the direction of the disc's angle carries the mark",
+          near_rgb(pixel(&im, x, 0.5 * (top + mid)), mark, 1), "");
+    check("boulders: opposite and beside the spoke the disc has the boulder colour",
           near_rgb(pixel(&im, x, bottom), body, 1) && near_rgb(pixel(&im, side, mid), body, 1), "");
+    /* a solid disc: its centre and points half a radius out off the spoke are the body's colour (they lie between
+     * the ring's particles), and its rim carries the darker outline */
+    const double r_px = 0.045 * l->scale_px_per_m;
+    int solid = near_rgb(pixel(&im, x + 2, mid), body, 1);
+    for (int k = 0; k < 8; k++) {
+        const double phi = 3.14159265358979 * (2 * k + 1) / 8;
+        solid = solid && near_rgb(pixel(&im, x + 0.5 * r_px * cos(phi), mid + 0.5 * r_px * sin(phi)), body, 1);
+    }
+    const uint8_t *rim = pixel(&im, x - r_px + 1.5, mid + 0.5);
+    check("boulders: the disc is filled, with a darker outline at its rim",
+          solid && rim[0] < 60, "");
+    surge_canvas_destroy(canvas);
+    surge_snapshot_free(&s);
+}
+
+/* A block of fluid 1 m long and 0.2 m deep (dp 2 cm) on a 3-row bed, every particle moving at 0.5 m/s, with
+ * `ahead` more particles at x = 3 m (carried ahead of the surge). */
+static void surge_block(surge_snapshot *s, int ahead)
+{
+    const double dp = 0.02;
+    surge_snapshot_reserve(s, 500 + 3 * 200 + ahead);
+    int n = 0;
+    for (int j = 0; j < 10; j++)
+        for (int i = 0; i < 50; i++, n++) {
+            s->x_m[n] = (i + 0.5) * dp, s->y_m[n] = (j + 0.5) * dp, s->kind[n] = SURGE_KIND_FLUID;
+        }
+    for (int j = 0; j < 3; j++)
+        for (int i = 0; i < 200; i++, n++) {
+            s->x_m[n] = (i + 0.5) * dp, s->y_m[n] = -(j + 0.5) * dp, s->kind[n] = SURGE_KIND_WALL;
+        }
+    for (int k = 0; k < ahead; k++, n++) {
+        s->x_m[n] = 3 + k * dp, s->y_m[n] = 0.5 * dp, s->kind[n] = SURGE_KIND_FLUID;
+    }
+    for (int k = 0; k < n; k++) {
+        s->vx_mps[k] = s->kind[k] == SURGE_KIND_FLUID ? 0.5f : 0.0f;
+        s->vy_mps[k] = 0;
+        s->density_kgpm3[k] = 1000;
+        s->pressure_pa[k] = 0;
+        s->id[k] = k;
+    }
+    s->count = n;
+}
+
+/* The field style: the block is one colour with no background inside it and a clean surface; the follow view keeps
+ * the block's front at 3/4 of its width with particles far ahead; a periodic whole view fits the fluid, not the
+ * period. */
+static void group_field(const char *work)
+{
+    surge_snapshot s = {0};
+    surge_block(&s, 3);
+    surge_params p = synthetic_params();
+    p.numerics.dp_m = 0.02;
+    p.domain.periodic_x = false;
+    p.render.view = SURGE_VIEW_FIXED;
+    p.render.view_x0_m = 0.3;
+    p.render.view_x1_m = 1.3;
+    char err[512], path[4096], detail[512];
+    surge_canvas *canvas = surge_canvas_create(p.render.width_px, p.render.height_px, NULL, err, sizeof err);
+    image im;
+    snprintf(path, sizeof path, "%s/field.png", work);
+    if (!canvas || !surge_canvas_draw(canvas, &s, &p) || png_round_trip(canvas, path, &im) != 0) {
+        check("field: draw and PNG round trip", 0, err);
+        return;
+    }
+    const surge_canvas_layout *l = surge_canvas_last_layout(canvas);
+    uint8_t expected[3];
+    surge_colormap_rgb(SURGE_COLORMAP_VIRIDIS, 0.5, 0, 1, expected);
+    /* every pixel whose centre lies inside the block, half a dp in from its edges, in the view */
+    int wrong = 0, inside = 0;
+    for (int y = l->plot_y0; y < l->plot_y1; y++)
+        for (int x = l->plot_x0; x < l->plot_x1; x++) {
+            const double X = l->world_x0_m + (x + 0.5 - l->plot_x0) / l->scale_px_per_m;
+            const double Y = l->world_y0_m + (l->plot_y1 - y - 0.5) / l->scale_px_per_m;
+            if (X < 0.3 || X > 1.0 - 0.01 || Y < 0.01 || Y > 0.2 - 0.01)
+                continue;
+            inside++;
+            if (!near_rgb(pixel(&im, x, y), expected, 1) && !wrong++)
+                snprintf(detail, sizeof detail, "pixel (%d, %d): (%d,%d,%d), expected (%d,%d,%d)", x, y,
+                         pixel(&im, x, y)[0], pixel(&im, x, y)[1], pixel(&im, x, y)[2], expected[0], expected[1],
+                         expected[2]);
+        }
+    check("field: the fluid is one continuous colour inside the block, no background between particles",
+          inside > 1000 && wrong == 0, detail);
+    /* the surface: fluid colour half a dp below the block's top, background one dp above it, all along */
+    const uint8_t white[3] = {255, 255, 255};
+    int ragged = 0;
+    for (double X = 0.35; X < 0.95; X += 0.01) {
+        const double x = l->plot_x0 + (X - l->world_x0_m) * l->scale_px_per_m;
+        ragged += !near_rgb(pixel(&im, x, l->plot_y1 - (0.19 - l->world_y0_m) * l->scale_px_per_m), expected, 1) ||
+                  !near_rgb(pixel(&im, x, l->plot_y1 - (0.22 - l->world_y0_m) * l->scale_px_per_m), white, 0);
+    }
+    snprintf(detail, sizeof detail, "%d of 60 columns without a clean surface", ragged);
+    check("field: a clean surface line at the block's top", ragged == 0, detail);
+
+    /* the follow view: the block's front (x = 1 m) at 3/4 of a 1 m window, not the 3 particles at x = 3 m */
+    p.render.view = SURGE_VIEW_FOLLOW;
+    p.render.view_width_m = 1;
+    surge_canvas_draw(canvas, &s, &p);
+    const double front_at = (1.0 - l->world_x0_m) * l->scale_px_per_m / (l->plot_x1 - l->plot_x0);
+    snprintf(detail, sizeof detail, "the block's front at %.3f of the plot width", front_at);
+    check("field: the follow view keeps the surge's front at 3/4 of the width with particles far ahead",
+          fabs(front_at - 0.75) < 0.03, detail);
+
+    /* a periodic whole view of a 6 m period whose fluid holds 1 m: the scale of about 1.1 m, not of the period */
+    p.render.view = SURGE_VIEW_WHOLE;
+    p.domain.periodic_x = true;
+    p.domain.length_m = 6;
+    surge_snapshot_free(&s);
+    surge_block(&s, 0);
+    surge_canvas_draw(canvas, &s, &p);
+    const double shown_m = (l->plot_x1 - l->plot_x0) / l->scale_px_per_m;
+    snprintf(detail, sizeof detail, "%.2f m shown", shown_m);
+    check("field: a periodic whole view shows the part of the period the fluid holds, with a margin",
+          shown_m > 1.0 && shown_m < 1.5, detail);
+    free(im.rgb);
     surge_canvas_destroy(canvas);
     surge_snapshot_free(&s);
 }
@@ -432,7 +552,7 @@ static void group_boulders(const char *work)
 int main(int argc, char **argv)
 {
     if (argc != 3) {
-        fprintf(stderr, "usage: test_render colours|slope|errors|boulders WORK_DIR\n");
+        fprintf(stderr, "usage: test_render colours|slope|errors|boulders|ranges|field WORK_DIR\n");
         return 2;
     }
     if (!strcmp(argv[1], "ranges"))
@@ -445,6 +565,8 @@ int main(int argc, char **argv)
         group_errors(argv[2]);
     else if (!strcmp(argv[1], "boulders"))
         group_boulders(argv[2]);
+    else if (!strcmp(argv[1], "field"))
+        group_field(argv[2]);
     else {
         fprintf(stderr, "unknown group '%s'\n", argv[1]);
         return 2;

@@ -210,18 +210,24 @@ def group_offline():
     code2, stderr2 = run(["render", os.path.join(d, "out"), "--movie", os.path.join(d, "movie.mp4"),
                           "--frames", os.path.join(d, "frames"), "-s", "render.field=pressure", "-s",
                           "render.view=fixed", "-s", "render.view_x0_m=0", "-s", "render.view_x1_m=0.2"])
-    frames = [f for f in os.listdir(os.path.join(d, "frames"))] if os.path.isdir(os.path.join(d, "frames")) else []
+    frames = [f for f in os.listdir(os.path.join(d, "frames")) if f.endswith(".png")] \
+        if os.path.isdir(os.path.join(d, "frames")) else []
     info = probe(os.path.join(d, "movie.mp4"))
     check("offline: surge render makes one frame and one movie frame per snapshot",
           code == 0 and code2 == 0 and len(snapshots) == 5 and len(frames) == 5 and info and info[0] == 5,
           "%d snapshots, %d frames, ffprobe %s\n%s" % (len(snapshots), len(frames), info, stderr2))
+    rows = frame_rows(os.path.join(d, "frames"))
+    check("offline: frames.csv lists each frame with its step and time, as a live run's does",
+          [r[0] for r in rows] == list(range(5)) and all(b[1] > a[1] and b[2] > a[2] for a, b in zip(rows, rows[1:])),
+          str(rows))
     code3, stderr3 = run(["render", os.path.join(d, "out")])
     check("offline: without --frames or --movie the frames go to RUN_DIR/frames",
-          code3 == 0 and len(os.listdir(os.path.join(d, "out", "frames"))) == 5, stderr3)
+          code3 == 0 and len([f for f in os.listdir(os.path.join(d, "out", "frames")) if f.endswith(".png")]) == 5,
+          stderr3)
     # render.frame_interval_s on the command line: one snapshot per interval (snapshots every 0.05 s, 0 to 0.2 s)
     code9, stderr9 = run(["render", os.path.join(d, "out"), "--frames", os.path.join(d, "sparse_frames"), "-s",
                           "render.frame_interval_s=0.1"])
-    sparse = os.listdir(os.path.join(d, "sparse_frames")) if code9 == 0 else []
+    sparse = [f for f in os.listdir(os.path.join(d, "sparse_frames")) if f.endswith(".png")] if code9 == 0 else []
     check("offline: with -s render.frame_interval_s=0.1 one frame per 0.1 s of the 0.05 s snapshots",
           code9 == 0 and len(sparse) == 3 and "rendered 3 snapshots" in stderr9, "%s\n%s" % (sparse, stderr9[-300:]))
     code10, stderr10 = run(["render", os.path.join(d, "out"), "--frames", os.path.join(d, "sparse_frames2"), "-s",
@@ -272,8 +278,8 @@ def group_offline():
           code8 == 2 and len(first) >= 1 and damaged in stderr8 and "Not a PNG" in stderr8 and
           not os.path.exists(os.path.join(d, "cont2.mp4")), "exit %d\n%s" % (code8, stderr8[-400:]))
 
-    # a run with a disc: offline frames draw it in the boulder colour with its orientation mark, which needs the
-    # boulders_*.vtp written next to each snapshot (the mark's colour, 235 grey, is used for nothing else)
+    # a run with a disc: offline frames draw it as a solid disc in the boulder colour with its spoke, which needs the
+    # boulders_*.vtp written next to each snapshot (the spoke's colour, 235 grey, is used for nothing else)
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.image
@@ -281,12 +287,12 @@ def group_offline():
     code4, stderr4 = run(["run", os.path.join(SOURCE, "cases", "boulder_couette.ini"), "-o", disc_run, "-s",
                           "time.end_s=0.001", "-s", "output.progress_interval_s=0"])
     code5, stderr5 = run(["render", disc_run, "--frames", os.path.join(d, "disc_frames")])
-    frames = sorted(os.listdir(os.path.join(d, "disc_frames"))) if code5 == 0 else []
+    frames = sorted(f for f in os.listdir(os.path.join(d, "disc_frames")) if f.endswith(".png")) if code5 == 0 else []
     rgb = (matplotlib.image.imread(os.path.join(d, "disc_frames", frames[-1]))[..., :3] * 255).round() if frames else None
     mark = int(np.count_nonzero((rgb == [235, 235, 235]).all(-1))) if frames else 0
     disc = int(np.count_nonzero((rgb == [95, 80, 70]).all(-1))) if frames else 0
-    check("offline: a disc is drawn in the boulder colour with its orientation mark",
-          code4 == 0 and code5 == 0 and mark > 100 and disc > 1000,
+    check("offline: a disc is drawn in the boulder colour with its spoke",
+          code4 == 0 and code5 == 0 and mark > 10 and disc > 1000,
           "mark pixels %d, boulder pixels %d\n%s%s" % (mark, disc, stderr4[-300:], stderr5[-300:]))
 
 

@@ -18,7 +18,8 @@ static const char *usage_render =
     "                    [--overwrite]\n"
     "\n"
     "Renders every snapshot listed in RUN_DIR/run.pvd with the run's parameters (RUN_DIR/params.ini) and\n"
-    "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot) and/or a movie at render.movie_fps.\n"
+    "the overrides, as PNG frames (frame_NNNNNN.png, one per snapshot, listed in frames.csv) and/or a movie\n"
+    "at render.movie_fps.\n"
     "With -s render.frame_interval_s=T, one snapshot per T of simulated time instead (the first at or after\n"
     "each multiple of T). Without --frames or --movie, frames go to RUN_DIR/frames.\n";
 
@@ -200,9 +201,10 @@ static int fix_colour_range(render_job *job)
     return rc;
 }
 
-/* Draws one snapshot into the frames folder and/or the movie. */
+/* Draws one snapshot into the frames folder, listed in its frames.csv (frame,step,time_s, as a live run writes
+ * it), and/or the movie. */
 static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, const surge_params *p,
-                           const char *frames_dir, size_t index, surge_movie *movie, char *err, size_t err_len)
+                           const char *frames_dir, size_t index_number, surge_movie *movie, char *err, size_t err_len)
 {
     const uint8_t *rgba = surge_canvas_draw(canvas, snap, p);
     if (!rgba) {
@@ -213,7 +215,7 @@ static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, con
         uint8_t *png;
         size_t len;
         char path[PATH_BYTES];
-        snprintf(path, sizeof path, "%s/frame_%06zu.png", frames_dir, index);
+        snprintf(path, sizeof path, "%s/frame_%06zu.png", frames_dir, index_number);
         if (surge_canvas_png(canvas, &png, &len, err, err_len) != 0)
             return -1;
         FILE *f = fopen(path, "wb");
@@ -224,6 +226,14 @@ static int render_snapshot(surge_canvas *canvas, const surge_snapshot *snap, con
             return -1;
         }
         free(png);
+        snprintf(path, sizeof path, "%s/frames.csv", frames_dir);
+        FILE *index = fopen(path, index_number == 0 ? "w" : "a");
+        const int listed = index && (index_number > 0 || fputs("frame,step,time_s\n", index) >= 0) &&
+                           fprintf(index, "%zu,%lld,%.17g\n", index_number, (long long)snap->step, snap->time_s) > 0;
+        if ((index && fclose(index) != 0) || !listed) {
+            snprintf(err, err_len, "cannot write '%.900s': %s", path, strerror(errno));
+            return -1;
+        }
     }
     return movie ? surge_movie_add(movie, rgba, err, err_len) : 0;
 }

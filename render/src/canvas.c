@@ -1,5 +1,6 @@
-/* Drawing one snapshot off-screen: OSMesa context, particles as instanced anti-aliased discs (OpenGL 3.3
- * core), then the overlays (colour bar, time, length scale) composited on the CPU (see surge/render.h). */
+/* Drawing one snapshot off-screen: OSMesa context, walls (and, in the particles style, the fluid) as instanced
+ * anti-aliased discs (OpenGL 3.3 core); then on the CPU the fluid as a field, the boulders as solid discs
+ * (layers.c) and the overlays (colour bar, time, length scale) (see surge/render.h). */
 #define _POSIX_C_SOURCE 200809L
 #define GL_GLEXT_PROTOTYPES
 #include "surge/render.h"
@@ -12,6 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "layers.h"
 #include "png_io.h"
 
 static const double pi = 3.14159265358979323846;
@@ -22,28 +24,6 @@ static const double pi = 3.14159265358979323846;
 static const uint8_t background_rgb[3] = {255, 255, 255};
 static const uint8_t wall_rgb[3] = {150, 150, 150};  /* fixed walls: grey */
 static const uint8_t belt_rgb[3] = {205, 110, 40};   /* the moving belt: orange-brown, outside both colour maps */
-static const uint8_t boulder_rgb[3] = {95, 80, 70};   /* boulders: dark grey-brown */
-static const uint8_t mark_rgb[3] = {235, 235, 235};   /* a boulder's orientation mark: its particles within 25 deg
-                                                         of its angle, seen from its centre */
-enum { MARK_HALF_ANGLE_DEG = 25 };
-
-/* Boulder colour of particle i: the mark when it lies in the sector of its disc's orientation. */
-static const uint8_t *boulder_colour(const surge_snapshot *s, int i, const surge_params *p)
-{
-    const surge_boulder_state *b = &s->boulders;
-    const double period = p->domain.periodic_x ? p->domain.length_m : 0;
-    for (int j = 0; j < b->count; j++) {
-        double dx = s->x_m[i] - b->x_m[j];
-        if (period > 0)
-            dx -= period * floor(dx / period + 0.5);
-        const double dy = s->y_m[i] - b->y_m[j];
-        if (dx * dx + dy * dy > b->radius_m[j] * b->radius_m[j])
-            continue;
-        const double along = dx * cos(b->angle_rad[j]) + dy * sin(b->angle_rad[j]);
-        return along > hypot(dx, dy) * cos(MARK_HALF_ANGLE_DEG * pi / 180.0) ? mark_rgb : boulder_rgb;
-    }
-    return boulder_rgb;
-}
 static const uint8_t ink_rgb[3] = {0, 0, 0};
 
 typedef struct instance {
@@ -60,8 +40,15 @@ struct surge_canvas {
     instance *instances;
     int instance_capacity;
     surge_text *text;
+    surge_splat *splats;
+    int splat_capacity;
+    surge_field_sums sums;
     surge_canvas_layout layout;
     double grown_min, grown_max; /* an automatic colour range so far (NaN: none yet); it only grows */
+    /* the view so far, which only grows (NaN: none yet), for the view and slope of view_key: a whole view's box, the
+     * top of any view, and a periodic whole view's window along x */
+    int view_key;
+    double kept_x0, kept_x1, kept_y0, kept_y1, kept_window_x0, kept_window_x1;
 };
 
 static const char *vertex_shader =
@@ -165,6 +152,7 @@ surge_canvas *surge_canvas_create(int width_px, int height_px, const char *font_
     c->width = width_px;
     c->height = height_px;
     c->grown_min = c->grown_max = NAN;
+    c->view_key = -1;
     c->pixels = malloc((size_t)width_px * (size_t)height_px * 4);
     c->text = c->pixels ? surge_text_open(font_path ? font_path : SURGE_DEFAULT_FONT, width_px, height_px, err, err_len) : NULL;
     if (!c->text) {
@@ -212,6 +200,10 @@ void surge_canvas_destroy(surge_canvas *c)
     }
     surge_text_close(c->text);
     free(c->instances);
+    free(c->splats);
+    free(c->sums.weight);
+    free(c->sums.weighted);
+    free(c->sums.solid);
     free(c->pixels);
     free(c);
 }
@@ -266,84 +258,174 @@ static double field_value(const surge_snapshot *s, int i, int field, double belt
     }
 }
 
-/* The bed frame (x along the bed, y normal) or, with true_slope, the world frame with gravity down. */
-static void world_position(const surge_snapshot *s, int i, double cos_t, double sin_t, double *X, double *Y)
+/* What the picture shows of the bed: a window along x and the picture's turn. */
+typedef struct view_frame {
+    double cos_t, sin_t;  /* the bed frame (x along the bed, y normal) or, with true_slope, gravity down */
+    double x0_m, x1_m;    /* the window along the bed */
+    double period_m;      /* > 0: a periodic domain, whose x is taken into [x0_m, x0_m + period_m) */
+} view_frame;
+
+/* x taken into the window's period. */
+static double view_x(const view_frame *v, double x)
 {
-    *X = s->x_m[i] * cos_t + s->y_m[i] * sin_t;
-    *Y = -s->x_m[i] * sin_t + s->y_m[i] * cos_t;
+    return v->period_m > 0 && isfinite(v->x0_m) ? x - v->period_m * floor((x - v->x0_m) / v->period_m) : x;
 }
 
-/* The x window along the bed the view shows. */
-static void view_window(const surge_snapshot *s, const surge_params *p, double *x0, double *x1)
+static int in_view(const view_frame *v, double x)
 {
-    *x0 = -INFINITY;
-    *x1 = INFINITY;
+    x = view_x(v, x);
+    return x >= v->x0_m && x <= v->x1_m;
+}
+
+/* World coordinates of a point of the bed frame, x taken into the window. */
+static void world_xy(const view_frame *v, double x, double y, double *X, double *Y)
+{
+    x = view_x(v, x);
+    *X = x * v->cos_t + y * v->sin_t;
+    *Y = -x * v->sin_t + y * v->cos_t;
+}
+
+/* The fluid's body along x, robust to particles carried ahead of it: the fluid counted in columns 2 dp wide, the
+ * body the columns around the deepest one that hold at least a fifth of its particles, across gaps no wider than
+ * the largest boulder (or one column). On a periodic domain x wraps, and front - back is at most the period.
+ * Returns -1 without fluid. */
+static int fluid_body(const surge_snapshot *s, const surge_params *p, double *back, double *front)
+{
+    const double period = p->domain.periodic_x ? p->domain.length_m : 0;
+    double lo = period > 0 ? 0 : INFINITY, hi = period > 0 ? period : -INFINITY;
+    for (int i = 0; i < s->count && period <= 0; i++)
+        if (s->kind[i] == SURGE_KIND_FLUID)
+            lo = fmin(lo, s->x_m[i]), hi = fmax(hi, s->x_m[i]);
+    if (!(hi >= lo))
+        return -1;
+    const int columns = (int)fmin(1 << 16, ceil(fmax(hi - lo, 1e-12) / (2 * p->numerics.dp_m)));
+    const double width = fmax(hi - lo, 1e-12) / columns;
+    int *count = calloc((size_t)columns, sizeof *count), deepest = 0;
+    if (!count)
+        return -1;
+    for (int i = 0; i < s->count; i++)
+        if (s->kind[i] == SURGE_KIND_FLUID) {
+            const double x = period > 0 ? s->x_m[i] - period * floor(s->x_m[i] / period) : s->x_m[i];
+            count[(int)fmin(columns - 1, fmax(0, (x - lo) / width))]++;
+        }
+    for (int k = 1; k < columns; k++)
+        deepest = count[k] > count[deepest] ? k : deepest;
+    double largest_m = 0;
+    for (int j = 0; j < s->boulders.count; j++)
+        largest_m = fmax(largest_m, 2 * s->boulders.radius_m[j]);
+    const int gap = (int)fmin(columns, fmax(1, ceil(largest_m / width))), enough = (int)ceil(0.2 * count[deepest]);
+    int first = deepest, last = deepest; /* columns, unwrapped on a periodic domain */
+    for (int dir = 1; dir >= -1; dir -= 2)
+        for (int k = deepest + dir, missed = 0; missed <= gap && last - first + 1 < columns; k += dir) {
+            const int at = period > 0 ? ((k % columns) + columns) % columns : k;
+            if (at < 0 || at >= columns)
+                break;
+            missed = count[at] >= enough ? 0 : missed + 1;
+            if (!missed)
+                *(dir > 0 ? &last : &first) = k;
+        }
+    free(count);
+    *back = lo + first * width;
+    *front = lo + (last + 1) * width;
+    return 0;
+}
+
+/* A periodic whole view: the period's part the fluid's body holds, 4 % of its length and 2 dp added either
+ * side, grown from the canvas's earlier frames (shifted by periods to meet them), at most one period. */
+static void periodic_whole_window(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double *x0,
+                                  double *x1)
+{
+    const double period = p->domain.length_m;
+    double back, front;
+    if (fluid_body(s, p, &back, &front) != 0)
+        back = 0, front = period;
+    const double margin = 0.04 * (front - back) + 2 * p->numerics.dp_m;
+    back -= margin, front += margin;
+    if (isfinite(c->kept_window_x0)) {
+        const double shift = period * round((0.5 * (c->kept_window_x0 + c->kept_window_x1) - 0.5 * (back + front)) /
+                                            period);
+        back = fmin(back + shift, c->kept_window_x0);
+        front = fmax(front + shift, c->kept_window_x1);
+    }
+    if (front - back > period)
+        front = back + period;
+    *x0 = c->kept_window_x0 = back;
+    *x1 = c->kept_window_x1 = front;
+}
+
+/* The window along the bed the view shows, and the picture's turn. */
+static void view_window(surge_canvas *c, const surge_snapshot *s, const surge_params *p, view_frame *v)
+{
+    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
+    v->cos_t = cos(slope);
+    v->sin_t = sin(slope);
+    v->x0_m = -INFINITY;
+    v->x1_m = INFINITY;
+    v->period_m = p->domain.periodic_x ? p->domain.length_m : 0;
+    double back, front;
     if (p->render.view == SURGE_VIEW_FIXED) {
-        *x0 = p->render.view_x0_m;
-        *x1 = p->render.view_x1_m;
+        v->x0_m = p->render.view_x0_m;
+        v->x1_m = p->render.view_x1_m;
     } else if (p->render.view == SURGE_VIEW_FOLLOW) {
-        double front = -INFINITY;
-        for (int i = 0; i < s->count; i++)
-            if (s->kind[i] == SURGE_KIND_FLUID && s->x_m[i] > front)
-                front = s->x_m[i];
-        if (!isfinite(front))
+        if (fluid_body(s, p, &back, &front) != 0)
             front = 0;
-        *x0 = front - 0.75 * p->render.view_width_m;
-        *x1 = front + 0.25 * p->render.view_width_m;
+        v->x0_m = front - 0.75 * p->render.view_width_m;
+        v->x1_m = front + 0.25 * p->render.view_width_m;
+    } else if (v->period_m > 0) {
+        periodic_whole_window(c, s, p, &v->x0_m, &v->x1_m);
     }
 }
 
-static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double belt_mps)
+/* The box of the world the view shows: the particles in its window, from the bottom of the bed to a little above
+ * the fluid and the boulders (a tall wall is cut); the field's range over the fluid there. */
+static void view_box(const surge_snapshot *s, const surge_params *p, const view_frame *v, double belt_mps,
+                     double box[4], double *vmin, double *vmax)
 {
-    surge_canvas_layout *l = &c->layout;
-    const int W = c->width, H = c->height;
-    l->plot_x0 = (int)(0.03 * W);
-    l->plot_x1 = (int)(0.86 * W);
-    l->plot_y0 = (int)(0.10 * H);
-    l->plot_y1 = (int)(0.86 * H);
-    l->colorbar_x0 = (int)(0.885 * W);
-    l->colorbar_x1 = l->colorbar_x0 + (int)fmax(4, 0.015 * W);
-    l->colorbar_y0 = l->plot_y0 + (int)(0.06 * H);
-    l->colorbar_y1 = l->plot_y1;
-    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
-    const double cos_t = cos(slope), sin_t = sin(slope);
-    double wx0, wx1;
-    view_window(s, p, &wx0, &wx1);
-    double X0 = INFINITY, X1 = -INFINITY, Y0 = INFINITY, Y1 = -INFINITY;
-    double vmin = INFINITY, vmax = -INFINITY;
+    double top = -INFINITY;
+    box[0] = box[2] = INFINITY;
+    box[1] = box[3] = -INFINITY;
+    *vmin = INFINITY;
+    *vmax = -INFINITY;
     for (int i = 0; i < s->count; i++) {
-        if (s->x_m[i] < wx0 || s->x_m[i] > wx1)
+        if (!in_view(v, s->x_m[i]))
             continue;
         double X, Y;
-        world_position(s, i, cos_t, sin_t, &X, &Y);
-        X0 = fmin(X0, X);
-        X1 = fmax(X1, X);
-        Y0 = fmin(Y0, Y);
-        Y1 = fmax(Y1, Y);
+        world_xy(v, s->x_m[i], s->y_m[i], &X, &Y);
+        box[0] = fmin(box[0], X), box[1] = fmax(box[1], X), box[2] = fmin(box[2], Y), box[3] = fmax(box[3], Y);
+        if (s->kind[i] == SURGE_KIND_FLUID || s->kind[i] == SURGE_KIND_BOULDER)
+            top = fmax(top, Y);
         if (s->kind[i] == SURGE_KIND_FLUID) {
-            const double v = field_value(s, i, p->render.field, belt_mps);
-            vmin = fmin(vmin, v);
-            vmax = fmax(vmax, v);
+            const double value = field_value(s, i, p->render.field, belt_mps);
+            *vmin = fmin(*vmin, value);
+            *vmax = fmax(*vmax, value);
         }
     }
-    if (!(X1 >= X0)) { /* nothing in the window: show the window itself */
-        X0 = isfinite(wx0) ? wx0 : 0;
-        X1 = isfinite(wx1) ? wx1 : 1;
-        Y0 = 0;
-        Y1 = 0.1 * (X1 - X0);
+    if (isfinite(top))
+        box[3] = fmin(box[3], top + 0.15 * (top - box[2]) + p->numerics.dp_m);
+}
+
+/* The view's box grown from the canvas's earlier frames with the same view and slope, so that the scale holds
+ * through a movie: a whole view's extent, any view's top. */
+static void keep_box(surge_canvas *c, const surge_params *p, double box[4])
+{
+    const int key = p->render.view * 2 + (p->render.true_slope ? 1 : 0);
+    if (key != c->view_key) {
+        c->view_key = key;
+        c->kept_x0 = c->kept_x1 = c->kept_y0 = c->kept_y1 = NAN;
+        c->kept_window_x0 = c->kept_window_x1 = NAN;
+        return;
     }
-    if (p->render.view != SURGE_VIEW_WHOLE && !p->render.true_slope) {
-        X0 = wx0; /* the window's own width, even where it holds no particles */
-        X1 = wx1;
+    if (p->render.view == SURGE_VIEW_WHOLE && isfinite(c->kept_x0)) {
+        box[0] = fmin(box[0], c->kept_x0), box[1] = fmax(box[1], c->kept_x1);
+        box[2] = fmin(box[2], c->kept_y0);
     }
-    const double margin = p->numerics.dp_m;
-    X0 -= margin, X1 += margin, Y0 -= margin, Y1 += margin;
-    const double plot_w = l->plot_x1 - l->plot_x0, plot_h = l->plot_y1 - l->plot_y0;
-    l->scale_px_per_m = fmin(plot_w / (X1 - X0), plot_h / (Y1 - Y0));
-    /* centred across, resting on the bottom of the plot area */
-    l->world_x0_m = 0.5 * (X0 + X1) - 0.5 * plot_w / l->scale_px_per_m;
-    l->world_y0_m = Y0;
-    l->radius_px = 0.5 * p->numerics.dp_m * l->scale_px_per_m;
+    if (isfinite(c->kept_y1))
+        box[3] = fmax(box[3], c->kept_y1);
+}
+
+static void set_colour_range(surge_canvas *c, const surge_params *p, double vmin, double vmax)
+{
+    surge_canvas_layout *l = &c->layout;
     l->field_min = isfinite(vmin) ? vmin : NAN;
     l->field_max = isfinite(vmax) ? vmax : NAN;
     if (p->render.color_max > p->render.color_min) {
@@ -364,10 +446,63 @@ static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_par
         l->color_min = low;
         l->color_max = low + 1;
     }
+}
+
+static int layout_view(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double belt_mps,
+                       view_frame *v)
+{
+    surge_canvas_layout *l = &c->layout;
+    const int W = c->width, H = c->height;
+    l->plot_x0 = (int)(0.03 * W);
+    l->plot_x1 = (int)(0.86 * W);
+    l->plot_y0 = (int)(0.10 * H);
+    l->plot_y1 = (int)(0.86 * H);
+    l->colorbar_x0 = (int)(0.885 * W);
+    l->colorbar_x1 = l->colorbar_x0 + (int)fmax(4, 0.015 * W);
+    l->colorbar_y0 = l->plot_y0 + (int)(0.06 * H);
+    l->colorbar_y1 = l->plot_y1;
+    view_window(c, s, p, v);
+    double box[4], vmin, vmax;
+    view_box(s, p, v, belt_mps, box, &vmin, &vmax);
+    if (!(box[1] >= box[0])) { /* nothing in the window: show the window itself */
+        box[0] = isfinite(v->x0_m) ? v->x0_m : 0;
+        box[1] = isfinite(v->x1_m) ? v->x1_m : 1;
+        box[2] = 0;
+        box[3] = 0.1 * (box[1] - box[0]);
+    }
+    if (p->render.view != SURGE_VIEW_WHOLE && !p->render.true_slope) {
+        box[0] = v->x0_m; /* the window's own width, even where it holds no particles */
+        box[1] = v->x1_m;
+    }
+    keep_box(c, p, box);
+    c->kept_x0 = box[0], c->kept_x1 = box[1], c->kept_y0 = box[2], c->kept_y1 = box[3];
+    const double margin = p->numerics.dp_m;
+    const double X0 = box[0] - margin, X1 = box[1] + margin, Y0 = box[2] - margin, Y1 = box[3] + margin;
+    const double plot_w = l->plot_x1 - l->plot_x0, plot_h = l->plot_y1 - l->plot_y0;
+    l->scale_px_per_m = fmin(plot_w / (X1 - X0), plot_h / (Y1 - Y0));
+    /* centred across, resting on the bottom of the plot area */
+    l->world_x0_m = 0.5 * (X0 + X1) - 0.5 * plot_w / l->scale_px_per_m;
+    l->world_y0_m = Y0;
+    l->view_x0_m = v->x0_m;
+    l->view_x1_m = v->x1_m;
+    l->radius_px = 0.5 * p->numerics.dp_m * l->scale_px_per_m;
+    set_colour_range(c, p, vmin, vmax);
     return 0;
 }
 
-static int fill_instances(surge_canvas *c, const surge_snapshot *s, const surge_params *p, double belt_mps)
+/* Pixel position of a point of the bed frame. */
+static void to_pixels(const surge_canvas_layout *l, const view_frame *v, double x, double y, float *px, float *py)
+{
+    double X, Y;
+    world_xy(v, x, y, &X, &Y);
+    *px = (float)(l->plot_x0 + (X - l->world_x0_m) * l->scale_px_per_m);
+    *py = (float)(l->plot_y1 - (Y - l->world_y0_m) * l->scale_px_per_m);
+}
+
+/* The GL discs: walls, then (particles style) the fluid on top, and a boulder's particles where the snapshot has no
+ * boulder states to draw its disc from. Returns their number, -1 when out of memory. */
+static int fill_instances(surge_canvas *c, const surge_snapshot *s, const surge_params *p, const view_frame *v,
+                          double belt_mps)
 {
     if (s->count > c->instance_capacity) {
         instance *grown = realloc(c->instances, (size_t)s->count * sizeof *grown);
@@ -377,33 +512,68 @@ static int fill_instances(surge_canvas *c, const surge_snapshot *s, const surge_
         c->instance_capacity = s->count;
     }
     const surge_canvas_layout *l = &c->layout;
-    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
-    const double cos_t = cos(slope), sin_t = sin(slope);
-    /* walls first, fluid on top */
+    const int fluid_dots = p->render.style == SURGE_STYLE_PARTICLES, boulder_dots = s->boulders.count == 0;
     int n = 0;
     for (int pass = 0; pass < 2; pass++)
         for (int i = 0; i < s->count; i++) {
-            const int fluid = s->kind[i] == SURGE_KIND_FLUID;
-            if (fluid != pass)
+            const int kind = s->kind[i], fluid = kind == SURGE_KIND_FLUID;
+            if (fluid != pass || (fluid && !fluid_dots) || (kind == SURGE_KIND_BOULDER && !boulder_dots))
                 continue;
-            double X, Y;
-            world_position(s, i, cos_t, sin_t, &X, &Y);
             uint8_t rgb[3];
             if (fluid)
                 surge_colormap_rgb(p->render.colormap, field_value(s, i, p->render.field, belt_mps), l->color_min,
                                    l->color_max, rgb);
-            else if (s->kind[i] == SURGE_KIND_BOULDER)
-                memcpy(rgb, boulder_colour(s, i, p), 3);
             else
-                memcpy(rgb, s->kind[i] == SURGE_KIND_MOVING_WALL ? belt_rgb : wall_rgb, 3);
+                memcpy(rgb, kind == SURGE_KIND_BOULDER ? surge_disc_body_rgb
+                            : kind == SURGE_KIND_MOVING_WALL ? belt_rgb : wall_rgb, 3);
             instance *in = &c->instances[n++];
-            in->x_px = (float)(l->plot_x0 + (X - l->world_x0_m) * l->scale_px_per_m);
-            in->y_px = (float)(l->plot_y1 - (Y - l->world_y0_m) * l->scale_px_per_m);
+            to_pixels(l, v, s->x_m[i], s->y_m[i], &in->x_px, &in->y_px);
             in->r = rgb[0] / 255.0f;
             in->g = rgb[1] / 255.0f;
             in->b = rgb[2] / 255.0f;
         }
     return n;
+}
+
+/* The field style's fluid (layers.c) and the boulders' discs, over the GL image in the plot area. Returns 0, or -1
+ * when out of memory. */
+static int draw_layers(surge_canvas *c, const surge_snapshot *s, const surge_params *p, const view_frame *v,
+                       double belt_mps)
+{
+    const surge_canvas_layout *l = &c->layout;
+    const surge_layer_target t = {c->pixels, c->width, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1};
+    if (p->render.style == SURGE_STYLE_FIELD) {
+        if (s->count > c->splat_capacity) {
+            surge_splat *grown = realloc(c->splats, (size_t)s->count * sizeof *grown);
+            if (!grown)
+                return -1;
+            c->splats = grown;
+            c->splat_capacity = s->count;
+        }
+        int n[2] = {0, 0}; /* the fluid first, then the solids */
+        for (int pass = 0; pass < 2; pass++)
+            for (int i = 0; i < s->count; i++)
+                if ((s->kind[i] == SURGE_KIND_FLUID) == (pass == 0)) {
+                    surge_splat *sp = &c->splats[n[0] + n[1]];
+                    to_pixels(l, v, s->x_m[i], s->y_m[i], &sp->x_px, &sp->y_px);
+                    sp->value = pass == 0 ? (float)field_value(s, i, p->render.field, belt_mps) : 0;
+                    n[pass]++;
+                }
+        if (surge_draw_field(&c->sums, &t, c->splats, n[0], n[1], 2 * l->radius_px, p->render.colormap,
+                             l->color_min, l->color_max) != 0)
+            return -1;
+    }
+    const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
+    const surge_boulder_state *b = &s->boulders;
+    for (int j = 0; j < b->count; j++)
+        for (int image = v->period_m > 0 ? -1 : 0; image <= (v->period_m > 0 ? 1 : 0); image++) {
+            float x, y;
+            to_pixels(l, v, b->x_m[j], b->y_m[j], &x, &y);
+            const double shift_px = image * v->period_m * l->scale_px_per_m; /* a periodic image */
+            surge_draw_disc(&t, x + shift_px * v->cos_t, y + shift_px * v->sin_t, b->radius_m[j] * l->scale_px_per_m,
+                            b->angle_rad[j] - slope);
+        }
+    return 0;
 }
 
 /* ---- overlays, on the CPU ---- */
@@ -547,24 +717,29 @@ static double snapshot_belt_mps(const surge_snapshot *s)
 int surge_render_fitted_height_px(int width_px, const surge_snapshot *s, const surge_params *p)
 {
     const double slope = p->render.true_slope ? p->body.slope_deg * pi / 180.0 : 0.0;
-    const double cos_t = cos(slope), sin_t = sin(slope);
-    double wx0, wx1;
-    view_window(s, p, &wx0, &wx1);
-    if (p->render.view == SURGE_VIEW_FOLLOW)
-        wx0 = -INFINITY, wx1 = INFINITY; /* the window moves: its height is the walls' along the whole bed */
+    const view_frame v = {cos(slope), sin(slope), -INFINITY, INFINITY, 0};
+    const int fixed = p->render.view == SURGE_VIEW_FIXED;
     double X0 = INFINITY, X1 = -INFINITY, Y0 = INFINITY, Y1 = -INFINITY;
     for (int pass = 0; pass < 2 && !(X1 > X0); pass++) /* the fixed walls; every particle when there are none */
         for (int i = 0; i < s->count; i++) {
             const int fixed_wall = s->kind[i] == SURGE_KIND_WALL || s->kind[i] == SURGE_KIND_MOVING_WALL;
-            if ((pass == 0 && !fixed_wall) || s->x_m[i] < wx0 || s->x_m[i] > wx1)
+            if ((pass == 0 && !fixed_wall) || (fixed && (s->x_m[i] < p->render.view_x0_m ||
+                                                         s->x_m[i] > p->render.view_x1_m)))
                 continue;
             double X, Y;
-            world_position(s, i, cos_t, sin_t, &X, &Y);
+            world_xy(&v, s->x_m[i], s->y_m[i], &X, &Y);
             X0 = fmin(X0, X), X1 = fmax(X1, X), Y0 = fmin(Y0, Y), Y1 = fmax(Y1, Y);
         }
-    if (p->render.view != SURGE_VIEW_WHOLE && !p->render.true_slope) {
-        X0 = p->render.view == SURGE_VIEW_FIXED ? p->render.view_x0_m : 0;
-        X1 = p->render.view == SURGE_VIEW_FIXED ? p->render.view_x1_m : p->render.view_width_m;
+    if (!p->render.true_slope) {
+        /* along the bed, up to a little above the initial fluid block (layout_view's margin over the fluid) */
+        Y1 = fmax(Y0, p->fluid.depth_m + 0.15 * (p->fluid.depth_m - Y0) + p->numerics.dp_m);
+        if (p->render.view != SURGE_VIEW_WHOLE) {
+            X0 = fixed ? p->render.view_x0_m : 0;
+            X1 = fixed ? p->render.view_x1_m : p->render.view_width_m;
+        } else if (p->domain.periodic_x) { /* the initial block with the periodic whole view's margins */
+            X0 = 0;
+            X1 = fmin(p->domain.length_m, 1.08 * (p->fluid.x1_m - p->fluid.x0_m) + 4 * p->numerics.dp_m);
+        }
     }
     const double margin = 2 * p->numerics.dp_m;
     const double aspect = (X1 > X0 && Y1 >= Y0) ? (Y1 - Y0 + margin) / (X1 - X0 + margin) : 0.5625;
@@ -577,17 +752,13 @@ int surge_render_fitted_height_px(int width_px, const surge_snapshot *s, const s
 
 const surge_canvas_layout *surge_canvas_layout_only(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
 {
-    return layout_view(c, s, p, snapshot_belt_mps(s)) == 0 ? &c->layout : NULL;
+    view_frame v;
+    return layout_view(c, s, p, snapshot_belt_mps(s), &v) == 0 ? &c->layout : NULL;
 }
 
-const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+/* The GL discs, inside the plot area. Returns 0, or -1 when GL failed. */
+static int draw_instances(surge_canvas *c, int n)
 {
-    const double belt_mps = snapshot_belt_mps(s);
-    if (layout_view(c, s, p, belt_mps) != 0)
-        return NULL;
-    const int n = fill_instances(c, s, p, belt_mps);
-    if (n < 0)
-        return NULL;
     const surge_canvas_layout *l = &c->layout;
     glViewport(0, 0, c->width, c->height);
     glDisable(GL_SCISSOR_TEST);
@@ -605,31 +776,47 @@ const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const
     glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)n * sizeof(instance)), c->instances, GL_STREAM_DRAW);
     glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, n);
     glFinish();
-    if (glGetError() != GL_NO_ERROR)
-        return NULL;
+    return glGetError() == GL_NO_ERROR ? 0 : -1;
+}
 
-    outline_rect(c, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1);
-    draw_colorbar(c, p);
-    draw_length_scale(c);
-    draw_drivers(c, p);
-    char label[160];
-    /* the time, and what drives the flow: the slope and the belt */
+/* The label above the plot: the time, what drives the flow (the slope and the belt), and the discs with what their
+ * spoke means and their solid fraction over the initial fluid block's area (docs/validation/debris_surge.md). */
+static void draw_label(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+{
+    char label[200];
     int used = snprintf(label, sizeof label, "t = %.3f s", s->time_s);
     if (p->body.slope_deg != 0 && used > 0 && used < (int)sizeof label)
         used += snprintf(label + used, sizeof label - (size_t)used, "   slope %.3g deg", p->body.slope_deg);
     if (p->walls.bottom && p->walls.bottom_speed_mps != 0 && used > 0 && used < (int)sizeof label)
         used += snprintf(label + used, sizeof label - (size_t)used, "   belt %.3g m/s", p->walls.bottom_speed_mps);
-    /* the discs and their solid fraction, over the initial fluid block's area (docs/validation/debris_surge.md) */
     const double block_m2 = (p->fluid.x1_m - p->fluid.x0_m) * p->fluid.depth_m;
     if (s->boulders.count > 0 && block_m2 > 0 && used > 0 && used < (int)sizeof label) {
         double area = 0;
         for (int k = 0; k < s->boulders.count; k++)
             area += pi * s->boulders.radius_m[k] * s->boulders.radius_m[k];
-        snprintf(label + used, sizeof label - (size_t)used, "   %d discs, phi %.2g", s->boulders.count,
-                 area / block_m2);
+        snprintf(label + used, sizeof label - (size_t)used, "   %d discs, phi %.2g (spoke: a disc's rotation)",
+                 s->boulders.count, area / block_m2);
     }
     const int size = surge_text_size(c->text);
-    surge_text_draw(c->text, c->pixels, c->width, c->height, l->plot_x0, l->plot_y0 - size / 2, label, ink_rgb);
+    surge_text_draw(c->text, c->pixels, c->width, c->height, c->layout.plot_x0, c->layout.plot_y0 - size / 2, label,
+                    ink_rgb);
+}
+
+const uint8_t *surge_canvas_draw(surge_canvas *c, const surge_snapshot *s, const surge_params *p)
+{
+    const double belt_mps = snapshot_belt_mps(s);
+    view_frame v;
+    if (layout_view(c, s, p, belt_mps, &v) != 0)
+        return NULL;
+    const int n = fill_instances(c, s, p, &v, belt_mps);
+    if (n < 0 || draw_instances(c, n) != 0 || draw_layers(c, s, p, &v, belt_mps) != 0)
+        return NULL;
+    const surge_canvas_layout *l = &c->layout;
+    outline_rect(c, l->plot_x0, l->plot_y0, l->plot_x1, l->plot_y1);
+    draw_colorbar(c, p);
+    draw_length_scale(c);
+    draw_drivers(c, p);
+    draw_label(c, s, p);
     return c->pixels;
 }
 

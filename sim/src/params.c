@@ -329,8 +329,13 @@ static const surge_param_info registry[] = {
      "is set on its command line, then one snapshot per interval.", OFF(render.frame_interval_s)},
     {"render", "width_px", SURGE_PARAM_INT, "px", 1280, 16, 8192, false, NULL, "Frame width.", OFF(render.width_px)},
     {"render", "height_px", SURGE_PARAM_INT, "px", 0, 0, 8192, false, NULL,
-     "Frame height; 0: fitted to the scene (the walls' extent across the bed at the frame's width, between a fifth of the width and the width).",
+     "Frame height; 0: fitted to the flow (from the bed to a little above the initial fluid block, over the view's "
+     "length: a periodic domain's whole view the initial block's with a margin), between a fifth of the width and the width.",
      OFF(render.height_px)},
+    {"render", "style", SURGE_PARAM_ENUM, "-", SURGE_STYLE_FIELD, 0, 1, true, "field|particles",
+     "How the fluid is drawn: a continuous field interpolated from the particles with a kernel, its free surface "
+     "where the kernel sum falls to half the bulk's; or each particle as a disc of diameter dp.",
+     OFF(render.style)},
     {"render", "field", SURGE_PARAM_ENUM, "-", SURGE_FIELD_SPEED, 0, 4, true, "speed|vx_rel|vx|pressure|density",
      "Field that colours the fluid: speed, x velocity relative to the belt, x velocity, pressure, density.",
      OFF(render.field)},
@@ -341,14 +346,16 @@ static const surge_param_info registry[] = {
     {"render", "color_max", SURGE_PARAM_REAL, "field unit", 0, -BIG, BIG, true, NULL,
      "High end of the colour range.", OFF(render.color_max)},
     {"render", "view", SURGE_PARAM_ENUM, "-", SURGE_VIEW_WHOLE, 0, 2, true, "whole|follow|fixed",
-     "What the frame shows: every particle, a window following the surge front, or a fixed window.",
+     "What the frame shows: everything (on a periodic domain, the part of the period the fluid's body holds, with a "
+     "margin), a window following the surge front, or a fixed window.",
      OFF(render.view)},
     {"render", "view_x0_m", SURGE_PARAM_REAL, "m", 0, -1e4, 1e4, true, NULL, "Left end of the fixed view.",
      OFF(render.view_x0_m)},
     {"render", "view_x1_m", SURGE_PARAM_REAL, "m", 0.1, -1e4, 1e4, true, NULL, "Right end of the fixed view.",
      OFF(render.view_x1_m)},
     {"render", "view_width_m", SURGE_PARAM_REAL, "m", 0.2, 1e-6, 1e4, true, NULL,
-     "Width of the follow view; the front (the most downstream fluid particle) stays at 3/4 of it.",
+     "Width of the follow view; the surge front (where the fluid's depth, counted in columns, last exceeds a fifth "
+     "of its largest, going downstream from the deepest column) stays at 3/4 of it.",
      OFF(render.view_width_m)},
     {"render", "true_slope", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "Draw the bed at its slope with gravity pointing down the image (false: bed along the image's x axis, as "

@@ -1,6 +1,7 @@
-/* Off-screen rendering of particle snapshots: OSMesa (OpenGL 3.3 core on Mesa's llvmpipe) draws the particles
- * as anti-aliased discs of their true size, FreeType the labels, libpng writes frames and the ffmpeg program
- * encodes movies. Settings come from the [render] section of the parameters (surge params). */
+/* Off-screen rendering of particle snapshots: OSMesa (OpenGL 3.3 core on Mesa's llvmpipe) draws the walls as
+ * anti-aliased discs of their true size, the CPU the fluid as a kernel-interpolated field (or, in the particles
+ * style, OpenGL each particle) and the boulders as solid discs, FreeType the labels, libpng writes frames and the
+ * ffmpeg program encodes movies. Settings come from the [render] section of the parameters (surge params). */
 #ifndef SURGE_RENDER_H
 #define SURGE_RENDER_H
 
@@ -33,6 +34,8 @@ typedef struct surge_canvas_layout {
     double field_min, field_max;                 /* the field's own range in the view (NaN: no fluid there) */
     double scale_px_per_m;
     double world_x0_m, world_y0_m;               /* the world point drawn at (plot_x0, plot_y1) */
+    double view_x0_m, view_x1_m;                 /* the window along the bed (infinite: all of it); on a periodic
+                                                    domain x is taken into it */
     double radius_px;                            /* a particle's disc (dp/2) */
 } surge_canvas_layout;
 
@@ -50,8 +53,9 @@ const uint8_t *surge_canvas_pixels(const surge_canvas *canvas);
 /* The last image as PNG in a malloc'd buffer. Returns 0, or -1 with err. */
 int surge_canvas_png(const surge_canvas *canvas, uint8_t **png, size_t *png_len, char *err, size_t err_len);
 
-/* The frame height for render.height_px = 0 (fitted): the view's extent across the bed, taken from the fixed walls
- * (so a restarted run gets the same size), at width_px, between a fifth of the width and the width. */
+/* The frame height for render.height_px = 0 (fitted): from the bottom of the bed (the fixed walls) to a little above
+ * the initial fluid block, over the view's length (a periodic whole view: the initial block's), at width_px,
+ * between a fifth of the width and the width; from the parameters and walls only, so a restart gets the same size. */
 int surge_render_fitted_height_px(int width_px, const surge_snapshot *snap, const surge_params *params);
 
 /* Widens [lo, hi] to multiples of its tick step (1, 2 or 5 times a power of ten, about five intervals). */

@@ -72,6 +72,11 @@ typedef enum surge_view_mode {
     SURGE_VIEW_FIXED = 2,  /* x from view_x0_m to view_x1_m */
 } surge_view_mode;
 
+typedef enum surge_render_style {
+    SURGE_STYLE_FIELD = 0,     /* the fluid as a continuous field interpolated with a kernel, free surface drawn */
+    SURGE_STYLE_PARTICLES = 1, /* each particle as a disc of diameter dp */
+} surge_render_style;
+
 typedef struct surge_params {
     struct {
         double length_m;  /* x extent; the period when periodic */
@@ -187,6 +192,7 @@ typedef struct surge_params {
     struct { /* read by the renderer (render/); the solver ignores them */
         double frame_interval_s;  /* simulated time between rendered frames */
         int width_px, height_px;
+        int style;                /* surge_render_style */
         int field;                /* surge_color_field */
         int colormap;             /* surge_colormap_choice */
         double color_min, color_max; /* colour range; equal: from each frame's data */
