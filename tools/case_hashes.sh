@@ -22,6 +22,7 @@ boulder_couette 0.05 0.5
 boulder_settling 0.03 0.1
 couette 0.1 1
 debris_surge 0.1 1
+belt_front 0.02 0.2
 demo 0.02 0.2
 freydier_id1 0.01 0.1
 freydier_id2 0.005 0.05
