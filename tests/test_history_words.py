@@ -35,7 +35,7 @@ def main():
             with open(path, encoding="utf-8", errors="replace") as f:
                 for number, line in enumerate(f, 1):
                     m = WORDS.search(line)
-                    # a process session (start_new_session) is Python's term, not history
+                    # start_new_session is Python's name for a process group, not history
                     if m and "new_session" not in line:
                         found.append("%s:%d: %s" % (os.path.relpath(path, root), number, line.strip()[:120]))
         except OSError as e:
