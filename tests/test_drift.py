@@ -123,7 +123,7 @@ def conservation():
         uniform = BELT_MPS + G * math.sin(SLOPE_RAD) / NU0 * (UNIFORM_DEPTH_M * y[body] - y[body] ** 2 / 2)
         profile_errors.append((float(abs(vx[body] - uniform).mean() / SURFACE_SPEED_MPS), s["time_s"]))
     worst_profile = max(profile_errors) if profile_errors else (float("inf"), 0.0)
-    check("velocity profile in the body (5 m < x < 12 m) within 5 % of the surface speed of the uniform flow from "
+    check("velocity profile in the body (5 m < x < 12 m) within 5 %% of the surface speed of the uniform flow from "
           "4 s on (mean |vx - u(y)| / %.2f m/s)" % SURFACE_SPEED_MPS, worst_profile[0] < 0.05,
           "worst %.3f at t = %.1f s" % worst_profile, show_detail=True)
     worst = max(formed, key=lambda r: abs(r["froude"] / UNIFORM_FROUDE - 1))

@@ -106,6 +106,10 @@ static int read_run(render_job *job)
         fprintf(stderr, "surge: %s\n", job->err);
         return EXIT_USAGE;
     }
+    if (surge_pvd_count(job->pvd) == 0) {
+        fprintf(stderr, "surge: %s lists no snapshot: nothing to render\n", path);
+        return EXIT_USAGE;
+    }
     job->drawn = malloc((surge_pvd_count(job->pvd) + 1) * sizeof *job->drawn);
     if (!job->drawn) {
         fprintf(stderr, "surge: out of memory\n");
