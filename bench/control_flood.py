@@ -1,14 +1,15 @@
 #!/usr/bin/python3
 """The solver's step rate while clients flood its control socket (docs/verification.md, "Control floods").
 
-Usage: control_flood.py [SURGE_BINARY] [--seconds S] [--clients N] [--curve]
+Usage: control_flood.py [SURGE_BINARY] [--seconds S] [--clients N] [--repeat R] [--curve]
 
-Starts `SURGE run cases/still_tank.ini --threads 1 --control tcp://127.0.0.1:PORT` (no other output), measures
-its steps per second with nothing else connected, then with N clients (processes, default 4) each keeping 8
-requests in flight on a DEALER socket, for each kind of request in turn, and the idle rate again at the end. Each
-rate is the step count from two `status` requests S seconds apart (default 4). Traffic goes to 127.0.0.1 only and
-every phase is bounded in time. Prints one row per phase: steps/s, the ratio to the idle rate (the mean of the
-two idle phases) and the replies per second the flooding clients received. With --curve the run and every client
+Starts `SURGE run cases/still_tank.ini --threads 1 --control tcp://127.0.0.1:PORT` (no other output) and measures
+its steps per second with N clients (processes, default 4) each keeping 8 requests in flight on a DEALER socket,
+for each kind of request in turn, each flood between two phases with nothing else connected: its ratio is to the
+mean of those two idle rates (A B A B ..., the machine's drift cancelled), over --repeat rounds. Each rate is the
+step count from two `status` requests S seconds apart (default 4). Traffic goes to 127.0.0.1 only and
+every phase is bounded in time. Prints one row per kind of request: the median ratio and its range, and the
+replies per second the flooding clients received. With --curve the run and every client
 use ZeroMQ's CURVE (keys made with `surge keygen` in a temporary folder; the clients' key is the one admitted).
 """
 import argparse
@@ -17,6 +18,7 @@ import multiprocessing
 import os
 import shutil
 import socket
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -91,6 +93,7 @@ def main():
     ap.add_argument("--seconds", type=float, default=4.0)
     ap.add_argument("--clients", type=int, default=4)
     ap.add_argument("--curve", action="store_true", help="the run and the clients use CURVE")
+    ap.add_argument("--repeat", type=int, default=3, help="rounds of every flood (default 3)")
     args = ap.parse_args()
     keys_dir = tempfile.mkdtemp(prefix="surge_flood_keys_")
     curve, secured = None, []
@@ -119,22 +122,32 @@ def main():
     try:
         steps(control)
         time.sleep(1.0)  # the first steps' start-up out of the way
-        rows = [("idle", measure(control, args.seconds), None)]
-        for name, request in KINDS:
-            replies = multiprocessing.Value("q", 0)
-            clients = [multiprocessing.Process(target=flood, args=(endpoint, request, args.seconds + 2, replies, curve))
-                       for _ in range(args.clients)]
-            for c in clients:
-                c.start()
-            time.sleep(0.5)
-            rate = measure(control, args.seconds)
-            for c in clients:
-                c.join(args.seconds + 30)
-                if c.is_alive():
-                    c.kill()
-            rows.append((name, rate, replies.value / (args.seconds + 2)))
-            time.sleep(0.5)
-        rows.append(("idle again", measure(control, args.seconds), None))
+        # each flood between two idle phases, A B A B ..., so that a ratio compares rates measured seconds apart on
+        # a machine whose speed drifts; --repeat rounds, the medians printed
+        results = {name: [] for name, _ in KINDS}
+        replied = {name: [] for name, _ in KINDS}
+        idle_rates = []
+        before = measure(control, args.seconds)
+        idle_rates.append(before)
+        for _ in range(args.repeat):
+            for name, request in KINDS:
+                replies = multiprocessing.Value("q", 0)
+                clients = [multiprocessing.Process(target=flood, args=(endpoint, request, args.seconds + 2, replies,
+                                                                       curve)) for _ in range(args.clients)]
+                for c in clients:
+                    c.start()
+                time.sleep(0.5)
+                rate = measure(control, args.seconds)
+                for c in clients:
+                    c.join(args.seconds + 30)
+                    if c.is_alive():
+                        c.kill()
+                time.sleep(0.5)
+                after = measure(control, args.seconds)
+                idle_rates.append(after)
+                results[name].append(rate / (0.5 * (before + after)))
+                replied[name].append(replies.value / (args.seconds + 2))
+                before = after
     finally:
         control.send(b'{"cmd": "stop"}')
         control.poll(10000)
@@ -145,14 +158,16 @@ def main():
         except subprocess.TimeoutExpired:
             run.kill()
         shutil.rmtree(keys_dir, ignore_errors=True)
-    idle = (rows[0][1] + rows[-1][1]) / 2
-    print("%s, %d flooding clients, %d requests in flight each, %.0f s per phase%s" %
-          (args.surge, args.clients, IN_FLIGHT, args.seconds, ", CURVE" if args.curve else ""))
-    print("| requests | steps/s | of idle | replies/s to the flood |")
-    print("|---|---|---|---|")
-    for name, rate, replied in rows:
-        print("| %s | %.0f | %.0f %% | %s |" % (name, rate, 100 * rate / idle,
-                                                "-" if replied is None else "%.0f" % replied))
+    print("%s, %d flooding clients, %d requests in flight each, %.0f s per phase, %d rounds%s" %
+          (args.surge, args.clients, IN_FLIGHT, args.seconds, args.repeat, ", CURVE" if args.curve else ""))
+    print("idle steps/s: median %.0f (%.0f to %.0f)" % (statistics.median(idle_rates), min(idle_rates),
+                                                        max(idle_rates)))
+    print("| requests | steps/s of the idle phases beside it: median (range) | replies/s to the flood |")
+    print("|---|---|---|")
+    for name, _ in KINDS:
+        r = results[name]
+        print("| %s | %.0f %% (%.0f-%.0f %%) | %.0f |" % (name, 100 * statistics.median(r), 100 * min(r), 100 * max(r),
+                                                      statistics.median(replied[name])))
     return 0
 
 

@@ -31,9 +31,9 @@ enum { LONGEST_REQUEST = 8192 };
  * costs the run at most that share of its time, however cheap or dear its requests, while a request to an idle
  * socket is answered at the next boundary. A paused run answers for up to PAUSED_BUDGET_S at a time. Requests left
  * waiting stay in ZeroMQ's queue, in order, and are answered at a later boundary. */
-#define CONTROL_SHARE 0.05
+#define CONTROL_SHARE 0.02
 #define MAX_CREDIT_S 0.01
-#define MAX_DEBT_S 0.25 /* one dear request (a checkpoint of a large scene) leaves the socket deaf 5 s at most */
+#define MAX_DEBT_S 0.1 /* one dear request (a checkpoint of a large scene) leaves the socket deaf 5 s at most */
 #define PAUSED_BUDGET_S 0.02
 
 struct surge_control {
