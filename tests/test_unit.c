@@ -388,6 +388,19 @@ static int test_set_param(void)
     expect_below("set_param: a tenfold viscosity accepted (rc)", rc != 0, 0);
     expect_below("set_param: ... and the next step healthy (rc)", surge_sim_step(sim) != 0, 0);
     surge_sim_destroy(sim);
+    /* the implicit scheme's bound: its body-force limit force_cfl sqrt(h / g), which sets its first step at rest */
+    p.numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    if (!(sim = surge_sim_create(&p, err, sizeof err))) {
+        fprintf(stderr, "%s\n", err);
+        return 1;
+    }
+    expect_below("set_param: an implicit first step (rc)", surge_sim_step(sim) != 0, 0);
+    rc = surge_sim_set_param(sim, "implicit.force_cfl", "0.0001", err, sizeof err);
+    printf("set_param: implicit.force_cfl 0.0001 refused with: %s\n", err);
+    expect_below("set_param: an implicit step bound 4000 times shorter refused (rc == 0 is a failure)", rc == 0, 0);
+    rc = surge_sim_set_param(sim, "implicit.force_cfl", "0.2", err, sizeof err);
+    expect_below("set_param: half the implicit step bound accepted (rc)", rc != 0, 0);
+    surge_sim_destroy(sim);
     return failures;
 }
 

@@ -30,8 +30,7 @@ static void update_body_force(surge_sim *sim)
 {
     const surge_params *p = &sim->params;
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
-    sim->gx = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2;
-    sim->gy = -p->body.gravity_mps2 * cos(theta);
+    scene_body_acceleration(p, &sim->gx, &sim->gy);
     /* hydrostatic density difference per metre along the bed normal, linearised Tait (rho0 g_n / c0^2) */
     sim->rho_h_per_m = sim->rho0 * p->body.gravity_mps2 * cos(theta) / (sim->derived.c0_mps * sim->derived.c0_mps);
 }

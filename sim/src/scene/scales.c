@@ -4,6 +4,13 @@
 #include "physics/kernel.h"
 #include "scene/scales.h"
 
+void scene_body_acceleration(const surge_params *p, double *gx_mps2, double *gy_mps2)
+{
+    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
+    *gx_mps2 = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2;
+    *gy_mps2 = -p->body.gravity_mps2 * cos(theta);
+}
+
 /* The hydrostatic head's speed sqrt(g_n H) over the fluid's depth (a closed channel: its height): c0 = 10 times it
  * keeps the hydrostatic density variation rho0 g_n H / (rho0 c0^2) within 1 %. */
 double scene_head_speed(const surge_params *p)

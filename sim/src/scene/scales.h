@@ -4,6 +4,8 @@
 
 #include "surge/params.h"
 
+/* The body acceleration in the bed's frame (m/s^2): tilted gravity plus the channel's driving force */
+void scene_body_acceleration(const surge_params *p, double *gx_mps2, double *gy_mps2);
 /* The largest speed the scene can be expected to reach, from its own scales (docs/method.md) */
 double scene_expected_speed(const surge_params *p);
 double scene_head_speed(const surge_params *p);

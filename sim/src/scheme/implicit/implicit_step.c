@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "scheme/implicit/implicit.h"
+#include "scene/scales.h"
 #include "boulders/boulders.h"
 #include "boundaries/boundary.h"
 #include "health.h"
@@ -543,8 +544,8 @@ static double implicit_step_bound_s(const surge_sim *sim, const surge_params *p)
 {
     if (p->numerics.dt_fixed_s > 0)
         return p->numerics.dt_fixed_s;
-    const double theta = p->body.slope_deg * SURGE_PI / 180.0;
-    const double gx = p->body.gravity_mps2 * sin(theta) + p->body.force_x_mps2, gy = p->body.gravity_mps2 * cos(theta);
+    double gx, gy;
+    scene_body_acceleration(p, &gx, &gy);
     return surge_implicit_dt_s(p, sim->derived.h_m, sqrt(gx * gx + gy * gy), 0.0);
 }
 
