@@ -141,6 +141,8 @@ typedef struct surge_params {
         double disc_coupling;      /* dt <= disc_coupling (m + m~) / k per disc (k its drag stiffness); 0: none */
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
+        bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */
+        double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */

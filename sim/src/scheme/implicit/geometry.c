@@ -289,4 +289,5 @@ void implicit_geometry(surge_sim *sim)
     mirror_weights(sim);
     fluid_geometry(sim);
     surface_layer(sim);
+    implicit_surface_images(sim);
 }

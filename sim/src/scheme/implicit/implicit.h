@@ -78,6 +78,14 @@ typedef struct implicit_work {
     double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (implicit_part_close_pairs) */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
     double *pressure_by_id;              /* per particle id: the fluid's pressure, the next step's p_n (checkpointed) */
+    /* the free surface's mirror images (surface_images.c) */
+    uint8_t *imaged;                     /* per fluid particle: its kernel reaches the surface and sees images */
+    int any_imaged;
+    real *fluid_iw, *fluid_igx, *fluid_igy; /* per fluid-list entry: the image pair's Laplacian weight, V_b f' r_ab' */
+    real *wall_iw, *wall_igx, *wall_igy;    /* per wall-list entry: the same */
+    real *wall_side;                     /* per wall-list entry of an imaged particle: 1 on its side of the surface */
+    double *own_iw, *own_igx, *own_igy;  /* per fluid particle: its own image's */
+    double *wet_grad_x, *wet_grad_y;     /* per fluid particle: the colour gradient, walls by their wetness */
     int32_t pressure_iterations, viscous_iterations; /* the last step's solves (diagnostics) */
     double pressure_residual, viscous_residual;
 } implicit_work;
@@ -170,6 +178,7 @@ void implicit_assemble_pressure(surge_sim *sim);
 int implicit_assemble_sparse(surge_sim *sim, const double *diag, const real *fluid_coef, double fluid_scale,
                              const real *wall_coef, double wall_scale, int honour_fixed);
 void implicit_pressure_operator(surge_sim *sim, const double *x, double *out);
+void implicit_relax_pressure(surge_sim *sim, double *p, const double *offset_pa, double beta);
 /* krylov.c */
 double implicit_dot(const implicit_work *w, const double *a, const double *b, int n);
 int implicit_solve(surge_sim *sim, affine_operator op, int n, int homogeneous, double tolerance, int max_iterations,
@@ -180,6 +189,11 @@ int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const 
                              double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed);
 void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
 int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
+/* surface_images.c */
+void implicit_surface_images(surge_sim *sim);
+void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, double *sx, double *sy);
+void implicit_image_velocity_gradient(const surge_sim *sim, int i, double g[4]);
+double implicit_image_laplacian_row(surge_sim *sim, int i, double ux, double uy);
 /* implicit_report.c */
 void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
 /* implicit_discs.c: the discs' step from the fluid's forces with added_mass (implicit.added_mass; -1 when the contact

@@ -142,6 +142,11 @@ static void viscous_system(surge_sim *sim, double dt)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
         w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
+    const double relaxation = sim->params.implicit.pressure_relaxation;
+    if (w->any_imaged && relaxation > 0) {
+        implicit_assemble_pressure(sim);
+        implicit_relax_pressure(sim, w->pressure_n, w->neumann_pa, relaxation);
+    }
     implicit_wall_pressures(sim, w->pressure_n, w->neumann_pa);
     implicit_pressure_gradient(sim, w->pressure_n);
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -250,8 +255,14 @@ static void projection_sources(surge_sim *sim, double dt)
         memset(&lanes, 0, sizeof lanes);
         gradient_pairs(sim, vxa, vya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &lanes);
         gradient_pairs(sim, vxa, vya, nl->wall_first[i], nl->wall_first[i + 1], 1, &lanes);
-        const double g_xx = lanes_total(lanes.xx), g_xy = lanes_total(lanes.xy), g_yx = lanes_total(lanes.yx);
-        const double g_yy = lanes_total(lanes.yy), sum_w = lanes_total(lanes.w);
+        double g_xx = lanes_total(lanes.xx), g_xy = lanes_total(lanes.xy), g_yx = lanes_total(lanes.yx);
+        double g_yy = lanes_total(lanes.yy);
+        const double sum_w = lanes_total(lanes.w);
+        if (w->imaged[i]) { /* a full kernel with the images beyond the free surface */
+            double g[4];
+            implicit_image_velocity_gradient(sim, i, g);
+            g_xx = g[0], g_xy = g[1], g_yx = g[2], g_yy = g[3];
+        }
         /* div v = tr(G M^-1) */
         const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
@@ -280,7 +291,7 @@ static int project(surge_sim *sim, double dt)
     implicit_assemble_pressure(sim);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
      * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
-    int free_surface = 0;
+    int free_surface = w->any_imaged;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
     /* ... and, with a disc, need not be consistent either: the ghosts' normal velocities over a disc need not sum to
@@ -452,9 +463,15 @@ static void move_particles(surge_sim *sim, double dt)
         implicit_disc_forces(sim);
     #pragma omp parallel
     shifting_compute(sim, dt);
+    /* Lind's shift is a displacement a step (shifting.c); below the scheme's own step at rest it is taken in
+     * proportion, so that a shorter step does not shift more in a second (at 1 ms, a twentieth of the still tank's
+     * own step, the full shift each step set its free surface rippling; docs/method.md, "The free surface") */
+    const double rest_step_s = surge_implicit_dt_s(&sim->params, sim->derived.h_m, sqrt(sim->gx * sim->gx + sim->gy * sim->gy), 0.0);
+    const double shift_share = isfinite(rest_step_s) ? fmin(1.0, dt / rest_step_s) : 1.0;
     const double face_reach_m = sim_contact_reach_m(sim), dp = sim->params.numerics.dp_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
+        sim->shift_x[a] *= (real)shift_share, sim->shift_y[a] *= (real)shift_share;
         double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first] + w->pair_dx[a - first];
         double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
         const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -

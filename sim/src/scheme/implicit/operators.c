@@ -77,6 +77,13 @@ void implicit_pressure_gradient(surge_sim *sim, const double *x)
     const int nf = sim->count - sim->wall_count;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
+        if (w->imaged[i]) {
+            double sx, sy;
+            implicit_image_gradient_sum(sim, i, x, &sx, &sy);
+            w->grad_x[i] = w->minv_xx[i] * sx + w->minv_xy[i] * sy;
+            w->grad_y[i] = w->minv_xy[i] * sx + w->minv_yy[i] * sy;
+            continue;
+        }
         const double pa = w->fixed[i] ? 0.0 : x[i];
         double lx[PAIR_LANES] = {0}, ly[PAIR_LANES] = {0};
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
@@ -112,6 +119,10 @@ void implicit_assemble_pressure(surge_sim *sim)
     for (int i = 0; i < nf; i++) {
         const double wrx = w->weighted_rx[i], wry = w->weighted_ry[i];
         const double ux = w->minv_xx[i] * wrx + w->minv_xy[i] * wry, uy = w->minv_xy[i] * wrx + w->minv_yy[i] * wry;
+        if (w->imaged[i] && !w->fixed[i]) {
+            w->pressure_diag[i] = implicit_image_laplacian_row(sim, i, ux, uy);
+            continue;
+        }
         double diag = 0;
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
             const double c = w->fluid_w[e] + ux * w->fluid_gx[e] + uy * w->fluid_gy[e];
@@ -222,4 +233,32 @@ void implicit_pressure_operator(surge_sim *sim, const double *x, double *out)
         }
         out[i] = w->pressure_diag[i] * x[i] + lanes_total(sum);
     }
+}
+
+/* p relaxed by one weighted Jacobi sweep of the corrected Laplacian, p_a - beta (L p)_a / L_aa, the walls at their
+ * ghosts' values plus offset_pa (implicit.pressure_relaxation; docs/method.md, "The free surface"): a linear field
+ * (the hydrostatic pressure, also next to the walls and, with its images, the free surface) is kept, a field that
+ * alternates from particle to particle decays. Those are the near-null modes of the step's divergence of the
+ * gradient, which the incremental projection carries from step to step undamped and a small asymmetry then grows. */
+void implicit_relax_pressure(surge_sim *sim, double *p, const double *offset_pa, double beta)
+{
+    implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const int nf = sim->count - sim->wall_count;
+    double *relaxed = w->phi_saved;
+    implicit_wall_pressures(sim, p, offset_pa);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        if (w->fixed[i]) {
+            relaxed[i] = 0;
+            continue;
+        }
+        double sum = w->pressure_diag[i] * p[i];
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+            sum += w->fluid_pc[e] * p[nl->fluid_index[e] - sim->wall_count];
+        for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
+            sum += w->wall_pc[e] * w->wall_x[nl->wall_index[e]];
+        relaxed[i] = p[i] - beta * sum / w->pressure_diag[i];
+    }
+    memcpy(p, relaxed, (size_t)nf * sizeof *p);
 }

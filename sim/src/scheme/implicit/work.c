@@ -26,12 +26,14 @@ int implicit_reserve_work(surge_sim *sim)
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
     const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
-        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe))
+        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe) ||
+            GROW(fluid_iw, fe) || GROW(fluid_igx, fe) || GROW(fluid_igy, fe))
             return -1;
         w->fluid_cap = fe;
     }
     if (we > w->wall_cap || !w->wall_w) {
-        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we))
+        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we) ||
+            GROW(wall_iw, we) || GROW(wall_igx, we) || GROW(wall_igy, we) || GROW(wall_side, we))
             return -1;
         w->wall_cap = we;
     }
@@ -64,6 +66,8 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
             GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
+            GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
+            GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) ||
             GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
             GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
             return -1;
@@ -96,7 +100,8 @@ void implicit_destroy(surge_sim *sim)
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
-                      w->z, w->partial};
+                      w->z, w->partial, w->imaged, w->fluid_iw, w->fluid_igx, w->fluid_igy, w->wall_iw, w->wall_igx,
+                      w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     amg_destroy(w->multigrid[MULTIGRID_VISCOUS].amg);
