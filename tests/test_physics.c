@@ -195,8 +195,8 @@ static int test_hydrostatic(void)
         n++;
     }
     printf("hydrostatic: %d particles in the bottom layer, t = %.3f s\n", n, s.time_s);
-    expect_below("hydrostatic: |mean bottom pressure / (rho g (H - y)) - 1|", fabs(sum_p / sum_ref - 1), 0.03);
-    expect_below("hydrostatic: worst bottom-layer particle pressure error", worst, 0.10);
+    expect_below("hydrostatic: |mean bottom pressure / (rho g (H - y)) - 1|", fabs(sum_p / sum_ref - 1), 0.005);
+    expect_below("hydrostatic: worst bottom-layer particle pressure error", worst, 0.02);
     expect_below("hydrostatic: max speed / sqrt(g H)", d.max_speed_mps / sqrt(g * H), 0.01);
     expect_below("hydrostatic: |fluid volume / initial - 1|", fabs(d.fluid_volume_m2 / volume0 - 1), 0.01);
     surge_snapshot_free(&s);
