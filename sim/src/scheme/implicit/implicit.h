@@ -86,8 +86,6 @@ typedef struct implicit_work {
     real *wall_side;                     /* per wall-list entry of an imaged particle: 1 on its side of the surface */
     double *own_iw, *own_igx, *own_igy;  /* per fluid particle: its own image's */
     double *wet_grad_x, *wet_grad_y;     /* per fluid particle: the colour gradient, walls by their wetness */
-    double *surface_pa;                  /* per fluid particle: a free-surface particle's pressure, half a row's weight
-                                          * under the surface's plane (0 without the images) */
     int32_t pressure_iterations, viscous_iterations; /* the last step's solves (diagnostics) */
     double pressure_residual, viscous_residual;
 } implicit_work;
@@ -175,7 +173,7 @@ void implicit_geometry(surge_sim *sim);
 void implicit_viscous_operator(surge_sim *sim, const double *x, double *out);
 void implicit_wall_pressures(surge_sim *sim, const double *x, const double *offset_pa);
 void implicit_wall_offsets_to_rhs(surge_sim *sim, const double *offset_pa);
-void implicit_pressure_gradient(surge_sim *sim, const double *x, const double *fixed_pa);
+void implicit_pressure_gradient(surge_sim *sim, const double *x);
 void implicit_assemble_pressure(surge_sim *sim);
 int implicit_assemble_sparse(surge_sim *sim, const double *diag, const real *fluid_coef, double fluid_scale,
                              const real *wall_coef, double wall_scale, int honour_fixed);
@@ -193,8 +191,7 @@ void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
 int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
 /* surface_images.c */
 void implicit_surface_images(surge_sim *sim);
-void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, const double *fixed_pa, double *sx,
-                                 double *sy);
+void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, double *sx, double *sy);
 void implicit_image_velocity_gradient(const surge_sim *sim, int i, double g[4]);
 double implicit_image_laplacian_row(surge_sim *sim, int i, double ux, double uy);
 /* implicit_report.c */

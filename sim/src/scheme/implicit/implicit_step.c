@@ -137,7 +137,7 @@ static void viscous_system(surge_sim *sim, double dt)
     const double *by_id = w->pressure_by_id;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
-        w->pressure_n[i] = w->fixed[i] ? w->surface_pa[i] : by_id[sim->id[first + i]];
+        w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
     /* the walls' p_n: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
@@ -148,7 +148,7 @@ static void viscous_system(surge_sim *sim, double dt)
         implicit_relax_pressure(sim, w->pressure_n, w->neumann_pa, relaxation);
     }
     implicit_wall_pressures(sim, w->pressure_n, w->neumann_pa);
-    implicit_pressure_gradient(sim, w->pressure_n, w->surface_pa);
+    implicit_pressure_gradient(sim, w->pressure_n);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
@@ -387,7 +387,7 @@ static int rest_density(surge_sim *sim, double dt)
     for (int i = 0; i < nf; i++)
         w->psi_by_id[sim->id[first + i]] = w->x[i];
     implicit_wall_pressures(sim, w->x, NULL);
-    implicit_pressure_gradient(sim, w->x, NULL);
+    implicit_pressure_gradient(sim, w->x);
     density_displacements(sim, dt);
     memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
     return 0;
@@ -401,11 +401,11 @@ static void correct_velocities(surge_sim *sim, double dt)
     const double rho0 = sim->rho0;
     double *by_id = w->pressure_by_id;
     implicit_wall_pressures(sim, w->x, w->neumann_pa);
-    implicit_pressure_gradient(sim, w->x, NULL);
+    implicit_pressure_gradient(sim, w->x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
-        const double p_new = w->fixed[i] ? w->surface_pa[i] : w->pressure_n[i] + w->x[i];
+        const double p_new = w->fixed[i] ? 0.0 : w->pressure_n[i] + w->x[i];
         by_id[sim->id[a]] = p_new;
         sim->pressure[a] = (real)p_new;
         w->pressure_n[i] = p_new;

@@ -68,9 +68,9 @@ void implicit_wall_offsets_to_rhs(surge_sim *sim, const double *offset_pa)
     }
 }
 
-/* The renormalised gradient of the pressure field x (free-surface particles at fixed_pa, 0 where NULL: a
- * correction's; walls at wall_x), exact for a linear field: grad p_a = M^-1 sum_b V_b (p_b - p_a) f r_ab */
-void implicit_pressure_gradient(surge_sim *sim, const double *x, const double *fixed_pa)
+/* The renormalised gradient of the pressure field x (free-surface particles at 0, walls at wall_x), exact for
+ * a linear field: grad p_a = M^-1 sum_b V_b (p_b - p_a) f r_ab */
+void implicit_pressure_gradient(surge_sim *sim, const double *x)
 {
     implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
@@ -79,17 +79,17 @@ void implicit_pressure_gradient(surge_sim *sim, const double *x, const double *f
     for (int i = 0; i < nf; i++) {
         if (w->imaged[i]) {
             double sx, sy;
-            implicit_image_gradient_sum(sim, i, x, fixed_pa, &sx, &sy);
+            implicit_image_gradient_sum(sim, i, x, &sx, &sy);
             w->grad_x[i] = w->minv_xx[i] * sx + w->minv_xy[i] * sy;
             w->grad_y[i] = w->minv_xy[i] * sx + w->minv_yy[i] * sy;
             continue;
         }
-        const double pa = w->fixed[i] ? (fixed_pa ? fixed_pa[i] : 0.0) : x[i];
+        const double pa = w->fixed[i] ? 0.0 : x[i];
         double lx[PAIR_LANES] = {0}, ly[PAIR_LANES] = {0};
         for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e += PAIR_LANES)
             for (int l = 0; l < PAIR_LANES; l++) {
                 const int j = nl->fluid_index[e + l] - sim->wall_count;
-                const double dpb = (w->fixed[j] ? (fixed_pa ? fixed_pa[j] : 0.0) : x[j]) - pa;
+                const double dpb = (w->fixed[j] ? 0.0 : x[j]) - pa;
                 lx[l] += dpb * w->fluid_gx[e + l], ly[l] += dpb * w->fluid_gy[e + l];
             }
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e += PAIR_LANES)
@@ -236,8 +236,7 @@ void implicit_pressure_operator(surge_sim *sim, const double *x, double *out)
 }
 
 /* p relaxed by one weighted Jacobi sweep of the corrected Laplacian, p_a - beta (L p)_a / L_aa, the walls at their
- * ghosts' values plus offset_pa, the free-surface particles held (implicit.pressure_relaxation; docs/method.md, "The
- * free surface"): a linear field
+ * ghosts' values plus offset_pa (implicit.pressure_relaxation; docs/method.md, "The free surface"): a linear field
  * (the hydrostatic pressure, also next to the walls and, with its images, the free surface) is kept, a field that
  * alternates from particle to particle decays. Those are the near-null modes of the step's divergence of the
  * gradient, which the incremental projection carries from step to step undamped and a small asymmetry then grows. */
@@ -251,23 +250,12 @@ void implicit_relax_pressure(surge_sim *sim, double *p, const double *offset_pa,
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         if (w->fixed[i]) {
-            relaxed[i] = p[i];
+            relaxed[i] = 0;
             continue;
         }
-        /* a free-surface neighbour's coefficient (0 in the correction's operator, which holds it at 0) */
-        const double wrx = w->weighted_rx[i], wry = w->weighted_ry[i];
-        const double ux = w->minv_xx[i] * wrx + w->minv_xy[i] * wry, uy = w->minv_xy[i] * wrx + w->minv_yy[i] * wry;
         double sum = w->pressure_diag[i] * p[i];
-        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
-            const int j = nl->fluid_index[e] - sim->wall_count;
-            if (!w->fixed[j]) {
-                sum += w->fluid_pc[e] * p[j];
-                continue;
-            }
-            const double c = w->fluid_w[e] + ux * w->fluid_gx[e] + uy * w->fluid_gy[e];
-            const double image = w->imaged[i] ? w->fluid_iw[e] + ux * w->fluid_igx[e] + uy * w->fluid_igy[e] : 0.0;
-            sum += (image - c) * p[j];
-        }
+        for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
+            sum += w->fluid_pc[e] * p[nl->fluid_index[e] - sim->wall_count];
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
             sum += w->wall_pc[e] * w->wall_x[nl->wall_index[e]];
         relaxed[i] = p[i] - beta * sum / w->pressure_diag[i];

@@ -79,7 +79,7 @@ static double plane_depth(const surge_sim *sim, int a, double nx, double ny)
         const double dy = nl->fluid_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
         outermost = fmax(outermost, -(dx * nx + dy * ny));
     }
-    return isfinite(outermost) ? outermost + 0.5 * sim->params.numerics.dp_m : -1.0;
+    return isfinite(outermost) ? outermost : -1.0;
 }
 
 /* The free surface's plane at fluid particle a, its outward normal n and its depth under it: the line through the
@@ -129,7 +129,7 @@ static int surface_plane(const surge_sim *sim, int a, double *nx, double *ny, do
     const double e_length = sqrt(ex * ex + ey * ey);
     const double sign = ex * *nx + ey * *ny < 0 ? -1.0 : 1.0;
     *nx = sign * ex / e_length, *ny = sign * ey / e_length;
-    *depth = cx * *nx + cy * *ny + 0.5 * dp;
+    *depth = cx * *nx + cy * *ny;
     return 1;
 }
 
@@ -140,8 +140,10 @@ static int particle_images(surge_sim *sim, int a, double nx, double ny, double d
     implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
     const int i = a - sim->wall_count;
-    if (depth <= 0 || depth * depth >= (double)sim->kernel.support2)
+    if (depth < -0.5 * sim->params.numerics.dp_m || depth * depth >= (double)sim->kernel.support2)
         return 0;
+    /* the surface particles lie on the plane, at p = 0, and have no image; nor has a wall level with them */
+    const double half_dp = 0.5 * sim->params.numerics.dp_m;
     moments m = {0};
     for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
         const int b = nl->fluid_index[e];
@@ -149,7 +151,8 @@ static int particle_images(surge_sim *sim, int a, double nx, double ny, double d
         const double dy = nl->fluid_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
         add_pair(&m, 1.0, dx, dy, w->fluid_gx[e], w->fluid_gy[e], w->fluid_w[e]);
         const double depth_b = depth + dx * nx + dy * ny;
-        const image_pair p = depth_b > 0 ? image_of(sim, dx, dy, depth_b, nx, ny) : (image_pair){0};
+        const image_pair p = !sim->surface[b] && depth_b > half_dp ? image_of(sim, dx, dy, depth_b, nx, ny)
+                                                                    : (image_pair){0};
         add_pair(&m, 1.0, p.rx, p.ry, p.gx, p.gy, p.weight);
         w->fluid_iw[e] = (real)p.weight, w->fluid_igx[e] = (real)p.gx, w->fluid_igy[e] = (real)p.gy;
     }
@@ -158,14 +161,15 @@ static int particle_images(surge_sim *sim, int a, double nx, double ny, double d
         const double dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[kw]);
         const double dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[kw]);
         const double depth_w = depth + dx * nx + dy * ny;
-        const double side = depth_w > 0 ? 1.0 : 0.0;
+        /* a wall level with the surface particles (within half a spacing) stays, as they do */
+        const double side = depth_w > -half_dp ? 1.0 : 0.0;
         add_pair(&m, side, dx, dy, w->wall_gx[e], w->wall_gy[e], w->wall_w[e]);
-        const image_pair p = depth_w > 0 ? image_of(sim, dx, dy, depth_w, nx, ny) : (image_pair){0};
+        const image_pair p = depth_w > half_dp ? image_of(sim, dx, dy, depth_w, nx, ny) : (image_pair){0};
         add_pair(&m, 1.0, p.rx, p.ry, p.gx, p.gy, p.weight);
         w->wall_side[e] = (real)side;
         w->wall_iw[e] = (real)p.weight, w->wall_igx[e] = (real)p.gx, w->wall_igy[e] = (real)p.gy;
     }
-    const image_pair own = image_of(sim, 0, 0, depth, nx, ny);
+    const image_pair own = depth > half_dp ? image_of(sim, 0, 0, depth, nx, ny) : (image_pair){0};
     add_pair(&m, 1.0, own.rx, own.ry, own.gx, own.gy, own.weight);
     w->own_iw[i] = own.weight, w->own_igx[i] = own.gx, w->own_igy[i] = own.gy;
     const double det = m.xx * m.yy - m.xy * m.xy;
@@ -185,6 +189,7 @@ static void surface_shift_gradient(surge_sim *sim, int a, double nx, double ny, 
     const implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
     const int i = a - sim->wall_count;
+    const double half_dp = 0.5 * sim->params.numerics.dp_m;
     double gx = 0, gy = 0;
     for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++)
         gx += w->fluid_gx[e], gy += w->fluid_gy[e];
@@ -192,7 +197,7 @@ static void surface_shift_gradient(surge_sim *sim, int a, double nx, double ny, 
         const int kw = nl->wall_index[e];
         const double dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[kw]);
         const double dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[kw]);
-        if (depth + dx * nx + dy * ny > 0)
+        if (depth + dx * nx + dy * ny > -half_dp)
             gx += w->wall_gx[e], gy += w->wall_gy[e];
     }
     sim->grad_c_x[a] = (real)gx, sim->grad_c_y[a] = (real)gy;
@@ -204,7 +209,6 @@ void implicit_surface_images(surge_sim *sim)
     implicit_work *w = implicit_of(sim);
     const int first = sim->wall_count, nf = sim->count - first;
     memset(w->imaged, 0, (size_t)nf * sizeof *w->imaged);
-    memset(w->surface_pa, 0, (size_t)nf * sizeof *w->surface_pa);
     w->any_imaged = 0;
     if (!sim->params.implicit.surface_images)
         return;
@@ -217,15 +221,7 @@ void implicit_surface_images(surge_sim *sim)
         if (!sim->near_surface[a] || !surface_plane(sim, a, &nx, &ny, &depth))
             continue;
         surface_shift_gradient(sim, a, nx, ny, depth);
-        if (sim->surface[a]) {
-            /* held at the weight of the half spacing of fluid between the surface particles' line and the plane,
-             * whatever its own place (a particle held at its own depth's pressure, lower when it rises, is pushed
-             * up the more by the fluid under it: the surface rippled within 2 s) */
-            const double g_in = -(sim->gx * nx + sim->gy * ny);
-            w->surface_pa[i] = w->fixed[i] ? 0.5 * sim->rho0 * fmax(0.0, g_in) * sim->params.numerics.dp_m : 0.0;
-            continue;
-        }
-        if (!particle_images(sim, a, nx, ny, depth))
+        if (sim->surface[a] || !particle_images(sim, a, nx, ny, depth))
             continue;
         w->imaged[i] = 1;
         any = 1;
@@ -235,16 +231,15 @@ void implicit_surface_images(surge_sim *sim)
 
 /* The renormalised gradient's sum for an imaged particle: sum_b V_b [(p_b - p_a) f r_ab + (-p_b - p_a) f' r_ab']
  * over its neighbours and the walls on its side, and its own image's (-2 p_a) f' r_aa' */
-void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, const double *fixed_pa, double *sx,
-                                 double *sy)
+void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, double *sx, double *sy)
 {
     const implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
-    const double pa = w->fixed[i] ? (fixed_pa ? fixed_pa[i] : 0.0) : x[i];
+    const double pa = w->fixed[i] ? 0.0 : x[i];
     double gx = -2 * pa * w->own_igx[i], gy = -2 * pa * w->own_igy[i];
     for (int64_t e = nl->fluid_first[i]; e < nl->fluid_first[i + 1]; e++) {
         const int j = nl->fluid_index[e] - sim->wall_count;
-        const double pb = w->fixed[j] ? (fixed_pa ? fixed_pa[j] : 0.0) : x[j];
+        const double pb = w->fixed[j] ? 0.0 : x[j];
         gx += (pb - pa) * w->fluid_gx[e] - (pb + pa) * w->fluid_igx[e];
         gy += (pb - pa) * w->fluid_gy[e] - (pb + pa) * w->fluid_igy[e];
     }

@@ -5,7 +5,6 @@
 #include <string.h>
 
 #include "scheme/implicit/implicit.h"
-#include "scene/scales.h"
 
 static int grow(void **array, size_t need, size_t size)
 {
@@ -68,7 +67,7 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
             GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
-            GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) || GROW(surface_pa, nf) ||
+            GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) ||
             GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
             GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
             return -1;
@@ -76,10 +75,7 @@ int implicit_reserve_work(surge_sim *sim)
     return 0;
 }
 
-/* The scheme's data, and the fluid's pressure by particle id at rest, which its first step starts from: the scene's
- * (the weight of the column above, half a row's on the top row, as the surface's images hold it), less half a row's
- * weight where the top row is held at p = 0 instead (implicit.surface_images = 0; without it the first steps saw a
- * jump of half a row's weight under the surface, and the tank rang at 10^-4 J/m for a second) */
+/* The scheme's data, and the fluid's pressure by particle id at rest (the scene's), which its first step starts from */
 int implicit_create(surge_sim *sim, char *err, size_t err_len)
 {
     implicit_work *w = calloc(1, sizeof *w);
@@ -88,11 +84,8 @@ int implicit_create(surge_sim *sim, char *err, size_t err_len)
         snprintf(err, err_len, "out of memory for the implicit scheme's pressure");
         return -1;
     }
-    double gx, gy;
-    scene_body_acceleration(&sim->params, &gx, &gy);
-    const double top_row_pa = sim->params.implicit.surface_images ? 0.0 : 0.5 * sim->rho0 * fabs(gy) * sim->params.numerics.dp_m;
     for (int a = sim->wall_count; a < sim->count; a++) /* ids are the indices until the first sort */
-        w->pressure_by_id[sim->id[a]] = fmax(0.0, sim->pressure[a] - top_row_pa);
+        w->pressure_by_id[sim->id[a]] = sim->pressure[a];
     return 0;
 }
 
@@ -108,8 +101,7 @@ void implicit_destroy(surge_sim *sim)
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial, w->imaged, w->fluid_iw, w->fluid_igx, w->fluid_igy, w->wall_iw, w->wall_igx,
-                      w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y,
-                      w->surface_pa};
+                      w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     amg_destroy(w->multigrid[MULTIGRID_VISCOUS].amg);
