@@ -28,6 +28,9 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   most 16 per state.
   GROUP endpoints --control and --publish on tcp://localhost:PORT, tcp://[::1]:*, tcp://127.0.0.1:* and a bare
                   port bind, and the log names the port bound; a request and a subscription through it are answered.
+  GROUP strays    unsubscribe messages from raw ZeroMQ peers that never subscribed (and one that unsubscribes twice)
+                  do not cancel other peers' subscriptions to state, stats and state/x_m,y_m; a genuine unsubscribe
+                  by the last holder still releases its subset.
 
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
 WORK_DIR, so tests running side by side never share a port (group subsets and endpoints bind TCP ports the system
@@ -746,6 +749,95 @@ def group_subsets():
           run.stderr[-2000:])
 
 
+def raw_subscriber(port, frames):
+    """A ZeroMQ peer written by hand (ZMTP 3.0, NULL security, socket type SUB) over TCP: it sends the given
+    frames as they are, such as b"\\x00topic", an unsubscribe that a SUB or XSUB socket would never pass on for a
+    topic it did not subscribe to. Returns the connected socket (close it to leave)."""
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s.sendall(b"\xff" + b"\x00" * 8 + b"\x7f" + b"\x03\x00" + b"NULL".ljust(20, b"\x00") + b"\x00" * 32)
+    greeting = b""
+    while len(greeting) < 64:
+        chunk = s.recv(64 - len(greeting))
+        if not chunk:
+            raise OSError("the publisher closed the connection during the greeting")
+        greeting += chunk
+    ready = b"\x05READY" + b"\x0bSocket-Type" + struct.pack(">I", 3) + b"SUB"
+    s.sendall(b"\x04" + bytes([len(ready)]) + ready)
+    for frame in frames:
+        s.sendall(b"\x00" + bytes([len(frame)]) + frame)
+    return s
+
+
+def newest_seq(sub, topic, limit_s):
+    """The highest seq among the messages of this topic that arrive on sub within limit_s (None if none)."""
+    best, deadline = None, time.time() + limit_s
+    while time.time() < deadline:
+        m = surge_client.receive(sub, 50)
+        if m and m[0] == topic:
+            best = max(best or 0, m[1]["seq"])
+    return best
+
+
+def topic_after(sub, topic, seq, limit_s):
+    """Whether a message of this topic with a seq of at least seq arrives on sub within limit_s."""
+    deadline = time.time() + limit_s
+    while time.time() < deadline:
+        m = surge_client.receive(sub, 100)
+        if m and m[0] == topic and m[1]["seq"] >= seq:
+            return True
+    return False
+
+
+def group_strays():
+    """ZeroMQ tells an XPUB socket of every unsubscribe message a peer sends, also for a topic that peer never
+    subscribed to (libzmq passes them on: it cannot tell them from a last subscriber leaving). A hand-written peer
+    sending such unsubscribes, and one that subscribes once and unsubscribes twice, must not stop the topics other
+    clients hold: plain topics (state, stats) and a field subset (state/x_m,y_m). A bodies subscriber gives the
+    publisher's current seq; each held topic must arrive again after it. Then the subset's one real holder
+    unsubscribes and the subset is no longer sent (a state/ prefix subscriber sees every subset sent)."""
+    port = free_port()
+    endpoint = "tcp://127.0.0.1:%d" % port
+    run = Surge("strays", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0", "--publish-hz", "0",
+                           "--publish", endpoint])
+    ctx = zmq.Context.instance()
+    subs = {t: surge_client.subscribe(endpoint, [t], ctx, latest_only=False) for t in ("state/x_m,y_m", "stats", "state")}
+    reference = surge_client.subscribe(endpoint, ["bodies"], ctx, latest_only=False)
+    every_subset = surge_client.subscribe(endpoint, ["state/"], ctx, latest_only=False)
+    started = [first_topic(sub, t, 30) for t, sub in subs.items()] + [first_topic(reference, "bodies", 10)]
+    print("strays: seconds to each first message: %s" % started)
+    started = None not in started
+    strays = [b"\x00state/x_m,y_m", b"\x00stats", b"\x00state", b"\x00state/", b"\x00", b"\x00s", b"\x00st"]
+    twice = [b"\x01state/x_m,y_m", b"\x00state/x_m,y_m", b"\x00state/x_m,y_m",
+             b"\x01stats", b"\x00stats", b"\x00stats", b"\x01state", b"\x00state", b"\x00state"]
+    peers = [raw_subscriber(port, strays), raw_subscriber(port, twice), raw_subscriber(port, strays * 3)]
+    time.sleep(1.0)  # the publisher thread reads them (it looks every 20 ms)
+    seq = newest_seq(reference, "bodies", 0.5)
+    kept = {t: seq is not None and topic_after(sub, t, seq, 10) for t, sub in subs.items()}
+    seen = seq is not None and topic_after(every_subset, "state/x_m,y_m", seq, 5)  # the prefix sees it while held
+    for p in peers:
+        p.close()
+    check("strays: the run publishes and every subscriber got its topic first", started,
+          open(run.stderr_path).read()[-1000:])
+    check("strays: unsubscribes from peers that did not hold a topic leave other subscribers served (%s)" %
+          ", ".join("%s %s" % (t, "kept" if k else "LOST") for t, k in kept.items()),
+          started and all(kept.values()), "after seq %s" % seq)
+
+    # the subset's last real holder leaves it: the publisher stops sending it (the prefix subscriber sees none)
+    subs["state/x_m,y_m"].setsockopt(zmq.UNSUBSCRIBE, b"state/x_m,y_m")
+    time.sleep(1.0)
+    newest_seq(every_subset, "state/x_m,y_m", 0.2)  # drop what was queued before the unsubscribe arrived
+    seq = newest_seq(reference, "bodies", 0.5)
+    still_sent = seq is not None and topic_after(every_subset, "state/x_m,y_m", seq + 1, 2)
+    check("strays: a genuine unsubscribe by the subset's last holder releases it (no more state/x_m,y_m sent)",
+          seen and seq is not None and not still_sent, "sent while held %s; seq %s, still sent %s" %
+          (seen, seq, still_sent))
+    for sub in list(subs.values()) + [reference, every_subset]:
+        sub.close(0)
+    stopped = surge_client.Control(run.ctl, 10).request({"cmd": "stop"})
+    run.wait()
+    check("strays: the run stopped on request", stopped.get("ok") and run.rc == 0, run.describe())
+
+
 def group_endpoints():
     """Every TCP loopback form the docs accept binds, the control socket and the publisher alike, and the log names
     the endpoint bound with the port a wildcard got: a status request and a subscription through it are
@@ -867,7 +959,8 @@ def group_curve():
 
 
 groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
-          "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints}
+          "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints,
+          "strays": group_strays}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())
