@@ -28,6 +28,10 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   most 16 per state.
   GROUP endpoints --control and --publish on tcp://localhost:PORT, tcp://[::1]:*, tcp://127.0.0.1:* and a bare
                   port bind, and the log names the port bound; a request and a subscription through it are answered.
+  GROUP replies   every control request gets exactly one reply, counted per client, under a flood: a DEALER client
+                  sends 5000 requests and reads nothing for 3 s (its replies fill ZeroMQ's queue: the rest are
+                  refused "busy", none dropped); 600 pipelined to a running run are all answered; another client
+                  sends 2000 while a stop request ends the run (those still waiting are refused "the run has ended").
   GROUP strays    unsubscribe messages from raw ZeroMQ peers that never subscribed (and one that unsubscribes twice)
                   do not cancel other peers' subscriptions to state, stats and state/x_m,y_m; a genuine unsubscribe
                   by the last holder still releases its subset.
@@ -749,6 +753,97 @@ def group_subsets():
           run.stderr[-2000:])
 
 
+def pipelined(endpoint, count, quiet_s, read_after_s=0.0, on_sent=None):
+    """A DEALER client that sends count status requests without waiting for replies, reading none before
+    read_after_s and then all of them until none came for quiet_s (limit: 120 s); on_sent() is called once every
+    request is sent. Its receive queue is kept short, so replies it does not read fill the run's queue to it.
+    Returns (requests sent, the replies: JSON objects, or the bytes that were not one)."""
+    ctx = zmq.Context.instance()
+    sock = ctx.socket(zmq.DEALER)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.setsockopt(zmq.RCVHWM, 1)
+    sock.setsockopt(zmq.RCVBUF, 4096)
+    sock.connect(endpoint)
+    start = time.time()
+    sent, replies, last = 0, [], time.time()
+    while time.time() - start < 120:
+        if sent < count:
+            try:
+                sock.send(b'{"cmd": "status"}', zmq.NOBLOCK)
+                sent += 1
+                if sent == count and on_sent:
+                    on_sent()
+                continue
+            except zmq.Again:
+                pass
+        if time.time() - start >= read_after_s and sock.poll(10):
+            data = sock.recv()
+            try:
+                replies.append(json.loads(data))
+            except ValueError:
+                replies.append(data)
+            last = time.time()
+        elif sent == count and time.time() - max(last, start + read_after_s) > quiet_s:
+            break
+        elif sent < count:
+            time.sleep(0.001)
+    sock.close()
+    return sent, replies
+
+
+def group_replies():
+    """Control work is budgeted by its cost in time, so requests wait; each must still get exactly one reply.
+    1. A client sends 5000 status requests to a paused run and reads nothing for 3 s: ZeroMQ's queue to it fills
+       (1000 replies), and the requests after that are refused with "busy" (not run) instead of their replies being
+       dropped.
+    2. Once the run is resumed, a client sends 600 requests and reads as it goes: they wait for the run's time and
+       all are answered.
+    3. A client sends 2000 requests and reads as it goes while another client's stop ends the run: every request
+       still waiting then is refused with "the run has ended". Replies are counted per client."""
+    run = Surge("replies", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0"], publish=False,
+                paused=True)
+    ctl = surge_client.Control(run.ctl, 10)
+    started = ctl.request({"cmd": "status"}).get("ok")
+
+    def kinds(replies):
+        counted = {}
+        for r in replies:
+            kind = "not JSON" if not isinstance(r, dict) else "ok" if r.get("ok") is True else \
+                "busy" if str(r.get("error", "")).startswith("busy:") else \
+                "ended" if str(r.get("error", "")).startswith("the run has ended") else "other error"
+            counted[kind] = counted.get(kind, 0) + 1
+        return counted
+
+    # paused, the run answers requests as fast as they come (a running one spends 2 % of its time on them)
+    sent, replies = pipelined(run.ctl, 5000, quiet_s=3, read_after_s=3)
+    check("replies: a client that reads nothing for 3 s gets one reply to each of its %d requests (%s)" %
+          (sent, kinds(replies)), started and sent == 5000 and len(replies) == sent and
+          set(kinds(replies)) <= {"ok", "busy"}, "%d replies to %d requests" % (len(replies), sent))
+    resumed = ctl.request({"cmd": "resume"})
+    # running, requests beyond the run's time for them wait and are answered at later steps
+    sent, replies = pipelined(run.ctl, 600, quiet_s=3)
+    check("replies: a running run answers each of %d pipelined requests, later ones at later steps (%s)" %
+          (sent, kinds(replies)), resumed.get("ok") and sent == 600 and kinds(replies) == {"ok": 600},
+          "%d replies to %d requests" % (len(replies), sent))
+
+    stop_reply = {}
+
+    def stop():
+        try:
+            stop_reply.update(surge_client.Control(run.ctl, 20).request({"cmd": "stop"}))
+        except TimeoutError:
+            stop_reply["timeout"] = True
+    sent, replies = pipelined(run.ctl, 2000, quiet_s=3, on_sent=stop)
+    rc = run.wait(60)
+    check("replies: requests waiting when a stop ends the run are each answered or refused (%s; stop %s)" %
+          (kinds(replies), "answered" if stop_reply.get("ok") else stop_reply),
+          resumed.get("ok") and sent == 2000 and len(replies) == sent and
+          set(kinds(replies)) <= {"ok", "busy", "ended"} and stop_reply.get("ok") is True,
+          "%d replies to %d requests" % (len(replies), sent))
+    check("replies: the run ended on the stop request", rc == 0 and "stopped by a control request" in run.stderr,
+          run.describe())
+
+
 def raw_subscriber(port, frames):
     """A ZeroMQ peer written by hand (ZMTP 3.0, NULL security, socket type SUB) over TCP: it sends the given
     frames as they are, such as b"\\x00topic", an unsubscribe that a SUB or XSUB socket would never pass on for a
@@ -960,7 +1055,7 @@ def group_curve():
 
 groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
           "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints,
-          "strays": group_strays}
+          "strays": group_strays, "replies": group_replies}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())
