@@ -895,7 +895,8 @@ def group_strays():
     run = Surge("strays", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0", "--publish-hz", "0",
                            "--publish", endpoint])
     ctx = zmq.Context.instance()
-    subs = {t: surge_client.subscribe(endpoint, [t], ctx, latest_only=False) for t in ("state/x_m,y_m", "stats", "state")}
+    subs = {t: surge_client.subscribe(endpoint, [t], ctx, latest_only=False)
+            for t in ("state/x_m,y_m", "stats", "state")}
     reference = surge_client.subscribe(endpoint, ["bodies"], ctx, latest_only=False)
     every_subset = surge_client.subscribe(endpoint, ["state/"], ctx, latest_only=False)
     started = [first_topic(sub, t, 30) for t, sub in subs.items()] + [first_topic(reference, "bodies", 10)]

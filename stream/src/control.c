@@ -52,8 +52,8 @@ typedef struct owed_replies {
     long busy;
 } owed_replies;
 
-static const char BUSY_REPLY[] = "{\"ok\":false,\"error\":\"busy: this client has not read its earlier replies (the queue "
-                                 "to it is full); the request was not run\"}";
+static const char BUSY_REPLY[] = "{\"ok\":false,\"error\":\"busy: this client has not read its earlier replies "
+                                 "(the queue to it is full); the request was not run\"}";
 static const char ENDED_REPLY[] = "{\"ok\":false,\"error\":\"the run has ended; the request was not run\"}";
 
 struct surge_control {
