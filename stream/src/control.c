@@ -24,6 +24,9 @@ enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED
 /* a connection that has not completed ZeroMQ's greeting by then is closed; a peer that stops answering ZeroMQ's
  * heartbeats is closed; at most RECEIVE_QUEUE requests wait per peer, then ZeroMQ stops reading that peer */
 enum { HANDSHAKE_MS = 2000, HEARTBEAT_MS = 5000, HEARTBEAT_TIMEOUT_MS = 15000, RECEIVE_QUEUE = 16 };
+/* replies ZeroMQ queues for a client that does not read them (beyond the system's socket buffers); past that they are
+ * owed (owed_replies) */
+enum { REPLY_QUEUE = 1000 };
 /* a request longer than this is refused before it is parsed: the longest real one, a text value of
  * SURGE_TEXT_PARAM_BYTES written as JSON escapes, is well below it */
 enum { LONGEST_REQUEST = 8192 };
@@ -41,7 +44,7 @@ enum { LONGEST_REQUEST = 8192 };
 #define END_REFUSALS_S 1.0
 enum { END_QUIET_MS = 100 };
 
-/* Replies owed to a client whose queue to it is full (it has not read ZeroMQ's SNDHWM replies): the first reply not
+/* Replies owed to a client whose queue to it is full (it has left REPLY_QUEUE replies unread): the first reply not
  * yet sent, and the number of "busy" refusals owed after it, one for each request that came from the client in the
  * meantime (those are not run). They go out in order as the client reads; a client that has gone is forgotten. */
 typedef struct owed_replies {
@@ -95,7 +98,8 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     c->socket = zmq_socket(context, ZMQ_ROUTER);
     const int64_t max_bytes = def->max_request_bytes;
     const int linger_ms = 200, handshake_ms = HANDSHAKE_MS, heartbeat_ms = HEARTBEAT_MS,
-              heartbeat_timeout_ms = HEARTBEAT_TIMEOUT_MS, receive_queue = RECEIVE_QUEUE, mandatory = 1;
+              heartbeat_timeout_ms = HEARTBEAT_TIMEOUT_MS, receive_queue = RECEIVE_QUEUE, reply_queue = REPLY_QUEUE,
+              mandatory = 1;
     /* ZMQ_ROUTER_MANDATORY: a reply that finds the client's queue full is not dropped but refused (EAGAIN), and kept */
     if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_ROUTER_MANDATORY, &mandatory, sizeof mandatory) != 0 ||
@@ -104,6 +108,7 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
         zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_RCVHWM, &receive_queue, sizeof receive_queue) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_SNDHWM, &reply_queue, sizeof reply_queue) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, c->socket, err, err_len) != 0) ||
         surge_endpoint_bind(c->socket, def->endpoint, "open the control socket on", c->endpoint, err, err_len) != 0) {
         if (c->socket)

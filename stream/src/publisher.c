@@ -76,7 +76,8 @@ enum { STATE_FIELD_COUNT = sizeof state_fields / sizeof state_fields[0] };
  * not release a slot other peers hold. So each connection's own subscriptions are kept (struct subscriber), as
  * ZeroMQ keeps them for it (a topic at most once per connection); a message is known by its connection's descriptor
  * (ZMQ_SRCFD) and the number the ZAP handler gave that connection (its "User-Id", surge/curve.h), which tells a
- * descriptor's next connection from the one before. ZeroMQ's own unsubscribes for a connection that left carry no
+ * descriptor's next connection from the one before (ZeroMQ sets both properties itself: a peer cannot replace them with
+ * its own in its handshake). ZeroMQ's own unsubscribes for a connection that left carry no
  * descriptor: they release one hold each. */
 enum { PLAIN_PREFIXES = 19, SUBSET_CODES = 109600, SUBSETS_PER_STATE = 16 };
 _Static_assert(STATE_FIELD_COUNT == 8, "SUBSET_CODES is 8 + 8*7 + ... + 8!, the ordered choices of 8 fields");
