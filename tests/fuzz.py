@@ -10,9 +10,11 @@ Usage: fuzz.py SURGE_SANITIZED SOURCE_DIR WORK_DIR GROUP [--count N] [--seed S]
                      most with the checksum recomputed, so the mutation reaches the reader behind it
   GROUP snapshots    mutated snapshots, run.pvd and params.ini of a run folder through `surge render`
   GROUP sizes        counts and sizes the files cannot hold (a snapshot's NumberOfPoints, a checkpoint's
-                     parameter block and particle counts) and files that never end (a pipe, /dev/zero) in place
-                     of a snapshot collection, a checkpoint and the boulders' CSV files: each refused with exit
-                     status 2 and a message naming the file, what is wrong and, for a count, the file's size
+                     parameter block, particle counts, contact count, and parameters describing a scene of 4e7
+                     particles) and files that never end (a pipe, /dev/zero) in place of a snapshot collection, a
+                     checkpoint and the boulders' CSV files: each refused with exit status 2 and a message naming
+                     the file, what is wrong and, for a count, the file's size; refused before anything is built or
+                     allocated for the count (each run under a 1 GB resident-memory limit)
 
 An input fails when the program dies on a signal, a sanitizer reports (any "runtime error" or AddressSanitizer /
 LeakSanitizer report; leaks inside libOSMesa are suppressed, tests/lsan.supp), it exits with a status outside the
@@ -80,9 +82,9 @@ def record(kind, data, command, problem, stderr):
     failures.append("%s: %s (input and stderr in %s.*)\n%s" % (kind, problem, path, stderr[-1500:]))
 
 
-def run(args, timeout_s):
+def run(args, timeout_s, env=ENV):
     try:
-        p = subprocess.run(args, capture_output=True, env=ENV, timeout=timeout_s)
+        p = subprocess.run(args, capture_output=True, env=env, timeout=timeout_s)
         return p.returncode, p.stderr.decode(errors="replace"), False
     except subprocess.TimeoutExpired as e:
         return None, (e.stderr or b"").decode(errors="replace"), True
@@ -434,9 +436,14 @@ def group_snapshots():
 
 
 # ---- sizes read from files ----
+# a count is refused before anything is built or allocated for it: a run that allocated for one of these counts
+# first would pass this limit on its resident memory (AddressSanitizer then ends it with a report)
+SIZES_ENV = dict(ENV, ASAN_OPTIONS=ENV["ASAN_OPTIONS"] + ":hard_rss_limit_mb=1000")
+
+
 def expect_refusal(what, data, args, message):
     """The input must be refused as bad input (exit status 2) within 60 s, with a message matching `message`."""
-    rc, stderr, timed_out = run(args, 60)
+    rc, stderr, timed_out = run(args, 60, SIZES_ENV)
     problem = verdict(rc, stderr, timed_out)
     if not problem and rc != 2:
         problem = "exit status %s, not 2 (bad input)" % rc
@@ -461,35 +468,95 @@ def render_with(base, name, data, what, message):
                                        "--overwrite"], message)
 
 
+def with_points(data, count):
+    """A .vtp's bytes with its NumberOfPoints set to count"""
+    return re.sub(rb'NumberOfPoints="[0-9]+"', b'NumberOfPoints="%d"' % count, data, count=1)
+
+
+def appended_bytes(data):
+    """The bytes of a .vtp's appended data (after its '_')"""
+    return len(data) - data.index(b"_", data.index(b'<AppendedData encoding="raw">')) - 1
+
+
+def with_checksum(body):
+    """A checkpoint's bytes before its checksum, with the FNV-1a checksum that closes it"""
+    return body + struct.pack("<Q", fnv1a(body))
+
+
 def group_sizes():
     tank, boulders = make_base_runs("sizes")
     first = sorted(f for f in os.listdir(tank) if f.endswith(".vtp"))[0]
     vtp = open(os.path.join(tank, first), "rb").read()
-    huge = re.sub(rb'NumberOfPoints="[0-9]+"', b'NumberOfPoints="2147483647"', vtp, count=1)
+    huge = with_points(vtp, 2147483647)
     render_with(tank, first, huge, "snapshot declaring 2147483647 points",
                 r"%s: bad NumberOfPoints 2147483647: the file holds %d bytes" % (re.escape(first), len(huge)))
+    # a count its Points alone could hold (24 bytes a point) but not the arrays read with them (49 bytes a point)
+    thin = with_points(vtp, appended_bytes(vtp) // 30)
+    render_with(tank, first, thin, "snapshot declaring more points than its arrays hold",
+                r"%s: bad NumberOfPoints %d: the file holds %d bytes, too few for that many points \(49 bytes each"
+                % (re.escape(first), appended_bytes(vtp) // 30, len(thin)))
     body = sorted(f for f in os.listdir(boulders) if f.startswith("boulders_") and f.endswith(".vtp"))[0]
     bvtp = open(os.path.join(boulders, body), "rb").read()
-    bhuge = re.sub(rb'NumberOfPoints="[0-9]+"', b'NumberOfPoints="1000000000"', bvtp, count=1)
+    bhuge = with_points(bvtp, 1000000000)
     render_with(boulders, body, bhuge, "boulder snapshot declaring 10^9 discs",
                 r"%s: bad NumberOfPoints 1000000000: the file holds %d bytes" % (re.escape(body), len(bhuge)))
+    bthin = with_points(bvtp, appended_bytes(bvtp) // 30)
+    render_with(boulders, body, bthin, "boulder snapshot declaring more discs than its arrays hold",
+                r"%s: bad NumberOfPoints %d: the file holds %d bytes, too few for that many points \(72 bytes each"
+                % (re.escape(body), appended_bytes(bvtp) // 30, len(bthin)))
     render_with(tank, "run.pvd", None, "run.pvd a pipe", r"run\.pvd' is not a regular file")
 
     checkpoint = open(os.path.join(tank, "checkpoint.bin"), "rb").read()
     path, out = os.path.join(WORK, "sizes", "input.bin"), os.path.join(WORK, "sizes", "restarted")
     restart = [SURGE, "run", "--restart", path, "-o", out, "--overwrite", "--threads", "1"]
     plen = struct.unpack_from("<Q", checkpoint, 16)[0]
+    count, walls = struct.unpack_from("<ii", checkpoint, 24 + plen + 32)
     for what, at, value, message in (
             ("checkpoint parameter block of 2^40 bytes", 16, struct.pack("<Q", 1 << 40),
              r"bad parameter block length 1099511627776: the file holds %d bytes" % len(checkpoint)),
             ("checkpoint declaring 2^31-1 particles", 24 + plen + 32, struct.pack("<ii", 2147483647, 0),
              r"bad particle count 2147483647 \(walls 0\): the file holds %d bytes" % len(checkpoint)),
             ("checkpoint declaring more walls than particles", 24 + plen + 32, struct.pack("<ii", 10, 20),
-             r"bad particle count 10 \(walls 20\)")):
-        data = checkpoint[:at] + value + checkpoint[at + len(value):]
+             r"bad particle count 10 \(walls 20\)"),
+            ("checkpoint declaring one fluid particle less than its scene", 24 + plen + 32,
+             struct.pack("<ii", count - 1, walls),
+             r"particle counts do not match the scene its parameters describe \(the checkpoint holds %d fluid and "
+             r"%d wall particles, the scene %d and %d\)" % (count - walls - 1, walls, count - walls, walls))):
+        data = with_checksum((checkpoint[:at] + value + checkpoint[at + len(value):])[:-8])
         with open(path, "wb") as f:
             f.write(data)
         expect_refusal(what, data, restart, re.escape("input.bin: ") + message)
+
+    # parameters describing 4e7 fluid particles (dp 45 um in the 0.4 x 0.2 m block) in a checkpoint of 800: what
+    # the file must hold for them is known before the scene is built
+    text = checkpoint[24:24 + plen]
+    small = re.sub(rb"(?m)^dp_m = .*$", b"dp_m = 4.5e-05", text, count=1)
+    data = with_checksum(checkpoint[:16] + struct.pack("<Q", len(small)) + small + checkpoint[24 + plen:-8])
+    with open(path, "wb") as f:
+        f.write(data)
+    expect_refusal("checkpoint whose parameters describe 4e7 particles", data, restart,
+                   re.escape("input.bin: ") + r"its parameters describe a scene of 3\d{7} fluid particles \(and "
+                   r"\d+ wall particles\): a checkpoint of it holds at least \d+ bytes; the file holds %d bytes"
+                   % len(data))
+
+    # the boulders' contact count (the contact solver's warm start) beyond what is left of the file
+    bcheckpoint = open(os.path.join(boulders, "checkpoint.bin"), "rb").read()
+    bplen = struct.unpack_from("<Q", bcheckpoint, 16)[0]
+    real_bytes = struct.unpack_from("<I", bcheckpoint, 12)[0]
+    bcount, bwalls = struct.unpack_from("<ii", bcheckpoint, 24 + bplen + 32)
+    discs = int(re.search(rb'NumberOfPoints="([0-9]+)"', bvtp).group(1))
+    at = 24 + bplen + 40 + (bcount - bwalls) * (8 + 8 + 3 * real_bytes + 4) + 4 + (bcount - bwalls) * 16 + discs * 7 * 8
+    contacts = struct.unpack_from("<i", bcheckpoint, at)[0]
+    if not 0 <= contacts < 1000:
+        print("FAILED: the boulder checkpoint's contact count is not where it was looked for (%d)" % contacts)
+        failures.append("contact count not found")
+    else:
+        data = with_checksum((bcheckpoint[:at] + struct.pack("<i", 64 * discs + 1000) + bcheckpoint[at + 4:])[:-8])
+        with open(path, "wb") as f:
+            f.write(data)
+        expect_refusal("checkpoint declaring more contacts than the file holds", data, restart,
+                       re.escape("input.bin: ") + r"bad contact count %d: the file holds %d bytes, too few for that "
+                       r"many contacts" % (64 * discs + 1000, len(data)))
     expect_refusal("/dev/zero as a checkpoint", b"", [SURGE, "run", "--restart", "/dev/zero", "-o", out,
                                                       "--overwrite"], r"'/dev/zero' is not a regular file")
     case = os.path.join(SOURCE, "cases", "boulder_settling.ini")

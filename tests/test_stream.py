@@ -28,6 +28,13 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   most 16 per state.
   GROUP endpoints --control and --publish on tcp://localhost:PORT, tcp://[::1]:*, tcp://127.0.0.1:* and a bare
                   port bind, and the log names the port bound; a request and a subscription through it are answered.
+  GROUP replies   every control request gets exactly one reply, counted per client, under a flood: a DEALER client
+                  sends 5000 requests and reads nothing for 3 s (its replies fill ZeroMQ's queue: the rest are
+                  refused "busy", none dropped); 600 pipelined to a running run are all answered; another client
+                  sends 2000 while a stop request ends the run (those still waiting are refused "the run has ended").
+  GROUP strays    unsubscribe messages from raw ZeroMQ peers that never subscribed (and one that unsubscribes twice)
+                  do not cancel other peers' subscriptions to state, stats and state/x_m,y_m; a genuine unsubscribe
+                  by the last holder still releases its subset.
 
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed. Sockets are ipc:// files in
 WORK_DIR, so tests running side by side never share a port (group subsets and endpoints bind TCP ports the system
@@ -746,6 +753,187 @@ def group_subsets():
           run.stderr[-2000:])
 
 
+def pipelined(endpoint, count, quiet_s, read_after_s=0.0, on_sent=None):
+    """A DEALER client that sends count status requests without waiting for replies, reading none before
+    read_after_s and then all of them until none came for quiet_s (limit: 120 s); on_sent() is called once every
+    request is sent. Its receive queue is kept short, so replies it does not read fill the run's queue to it.
+    Returns (requests sent, the replies: JSON objects, or the bytes that were not one)."""
+    ctx = zmq.Context.instance()
+    sock = ctx.socket(zmq.DEALER)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.setsockopt(zmq.RCVHWM, 1)
+    sock.setsockopt(zmq.RCVBUF, 4096)
+    sock.connect(endpoint)
+    start = time.time()
+    sent, replies, last = 0, [], time.time()
+    while time.time() - start < 120:
+        if sent < count:
+            try:
+                sock.send(b'{"cmd": "status"}', zmq.NOBLOCK)
+                sent += 1
+                if sent == count and on_sent:
+                    on_sent()
+                continue
+            except zmq.Again:
+                pass
+        if time.time() - start >= read_after_s and sock.poll(10):
+            data = sock.recv()
+            try:
+                replies.append(json.loads(data))
+            except ValueError:
+                replies.append(data)
+            last = time.time()
+        elif sent == count and time.time() - max(last, start + read_after_s) > quiet_s:
+            break
+        elif sent < count:
+            time.sleep(0.001)
+    sock.close()
+    return sent, replies
+
+
+def group_replies():
+    """Control work is budgeted by its cost in time, so requests wait; each must still get exactly one reply.
+    1. A client sends 5000 status requests to a paused run and reads nothing for 3 s: ZeroMQ's queue to it fills
+       (1000 replies), and the requests after that are refused with "busy" (not run) instead of their replies being
+       dropped.
+    2. Once the run is resumed, a client sends 600 requests and reads as it goes: they wait for the run's time and
+       all are answered.
+    3. A client sends 2000 requests and reads as it goes while another client's stop ends the run: every request
+       still waiting then is refused with "the run has ended". Replies are counted per client."""
+    run = Surge("replies", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0"], publish=False,
+                paused=True)
+    ctl = surge_client.Control(run.ctl, 10)
+    started = ctl.request({"cmd": "status"}).get("ok")
+
+    def kinds(replies):
+        counted = {}
+        for r in replies:
+            kind = "not JSON" if not isinstance(r, dict) else "ok" if r.get("ok") is True else \
+                "busy" if str(r.get("error", "")).startswith("busy:") else \
+                "ended" if str(r.get("error", "")).startswith("the run has ended") else "other error"
+            counted[kind] = counted.get(kind, 0) + 1
+        return counted
+
+    # paused, the run answers requests as fast as they come (a running one spends 2 % of its time on them)
+    sent, replies = pipelined(run.ctl, 5000, quiet_s=3, read_after_s=3)
+    check("replies: a client that reads nothing for 3 s gets one reply to each of its %d requests (%s)" %
+          (sent, kinds(replies)), started and sent == 5000 and len(replies) == sent and
+          set(kinds(replies)) <= {"ok", "busy"}, "%d replies to %d requests" % (len(replies), sent))
+    resumed = ctl.request({"cmd": "resume"})
+    # running, requests beyond the run's time for them wait and are answered at later steps
+    sent, replies = pipelined(run.ctl, 600, quiet_s=3)
+    check("replies: a running run answers each of %d pipelined requests, later ones at later steps (%s)" %
+          (sent, kinds(replies)), resumed.get("ok") and sent == 600 and kinds(replies) == {"ok": 600},
+          "%d replies to %d requests" % (len(replies), sent))
+
+    stop_reply = {}
+
+    def stop():
+        try:
+            stop_reply.update(surge_client.Control(run.ctl, 20).request({"cmd": "stop"}))
+        except TimeoutError:
+            stop_reply["timeout"] = True
+    sent, replies = pipelined(run.ctl, 2000, quiet_s=3, on_sent=stop)
+    rc = run.wait(60)
+    check("replies: requests waiting when a stop ends the run are each answered or refused (%s; stop %s)" %
+          (kinds(replies), "answered" if stop_reply.get("ok") else stop_reply),
+          resumed.get("ok") and sent == 2000 and len(replies) == sent and
+          set(kinds(replies)) <= {"ok", "busy", "ended"} and stop_reply.get("ok") is True,
+          "%d replies to %d requests" % (len(replies), sent))
+    check("replies: the run ended on the stop request", rc == 0 and "stopped by a control request" in run.stderr,
+          run.describe())
+
+
+def raw_subscriber(port, frames):
+    """A ZeroMQ peer written by hand (ZMTP 3.0, NULL security, socket type SUB) over TCP: it sends the given
+    frames as they are, such as b"\\x00topic", an unsubscribe that a SUB or XSUB socket would never pass on for a
+    topic it did not subscribe to. Returns the connected socket (close it to leave)."""
+    s = socket.create_connection(("127.0.0.1", port), timeout=5)
+    s.sendall(b"\xff" + b"\x00" * 8 + b"\x7f" + b"\x03\x00" + b"NULL".ljust(20, b"\x00") + b"\x00" * 32)
+    greeting = b""
+    while len(greeting) < 64:
+        chunk = s.recv(64 - len(greeting))
+        if not chunk:
+            raise OSError("the publisher closed the connection during the greeting")
+        greeting += chunk
+    ready = b"\x05READY" + b"\x0bSocket-Type" + struct.pack(">I", 3) + b"SUB"
+    s.sendall(b"\x04" + bytes([len(ready)]) + ready)
+    for frame in frames:
+        s.sendall(b"\x00" + bytes([len(frame)]) + frame)
+    return s
+
+
+def newest_seq(sub, topic, limit_s):
+    """The highest seq among the messages of this topic that arrive on sub within limit_s (None if none)."""
+    best, deadline = None, time.time() + limit_s
+    while time.time() < deadline:
+        m = surge_client.receive(sub, 50)
+        if m and m[0] == topic:
+            best = max(best or 0, m[1]["seq"])
+    return best
+
+
+def topic_after(sub, topic, seq, limit_s):
+    """Whether a message of this topic with a seq of at least seq arrives on sub within limit_s."""
+    deadline = time.time() + limit_s
+    while time.time() < deadline:
+        m = surge_client.receive(sub, 100)
+        if m and m[0] == topic and m[1]["seq"] >= seq:
+            return True
+    return False
+
+
+def group_strays():
+    """ZeroMQ tells an XPUB socket of every unsubscribe message a peer sends, also for a topic that peer never
+    subscribed to (libzmq passes them on: it cannot tell them from a last subscriber leaving). A hand-written peer
+    sending such unsubscribes, and one that subscribes once and unsubscribes twice, must not stop the topics other
+    clients hold: plain topics (state, stats) and a field subset (state/x_m,y_m). A bodies subscriber gives the
+    publisher's current seq; each held topic must arrive again after it. Then the subset's one real holder
+    unsubscribes and the subset is no longer sent (a state/ prefix subscriber sees every subset sent)."""
+    port = free_port()
+    endpoint = "tcp://127.0.0.1:%d" % port
+    run = Surge("strays", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0", "--publish-hz", "0",
+                           "--publish", endpoint])
+    ctx = zmq.Context.instance()
+    subs = {t: surge_client.subscribe(endpoint, [t], ctx, latest_only=False)
+            for t in ("state/x_m,y_m", "stats", "state")}
+    reference = surge_client.subscribe(endpoint, ["bodies"], ctx, latest_only=False)
+    every_subset = surge_client.subscribe(endpoint, ["state/"], ctx, latest_only=False)
+    started = [first_topic(sub, t, 30) for t, sub in subs.items()] + [first_topic(reference, "bodies", 10)]
+    print("strays: seconds to each first message: %s" % started)
+    started = None not in started
+    strays = [b"\x00state/x_m,y_m", b"\x00stats", b"\x00state", b"\x00state/", b"\x00", b"\x00s", b"\x00st"]
+    twice = [b"\x01state/x_m,y_m", b"\x00state/x_m,y_m", b"\x00state/x_m,y_m",
+             b"\x01stats", b"\x00stats", b"\x00stats", b"\x01state", b"\x00state", b"\x00state"]
+    peers = [raw_subscriber(port, strays), raw_subscriber(port, twice), raw_subscriber(port, strays * 3)]
+    time.sleep(1.0)  # the publisher thread reads them (it looks every 20 ms)
+    seq = newest_seq(reference, "bodies", 0.5)
+    kept = {t: seq is not None and topic_after(sub, t, seq, 10) for t, sub in subs.items()}
+    seen = seq is not None and topic_after(every_subset, "state/x_m,y_m", seq, 5)  # the prefix sees it while held
+    for p in peers:
+        p.close()
+    check("strays: the run publishes and every subscriber got its topic first", started,
+          open(run.stderr_path).read()[-1000:])
+    check("strays: unsubscribes from peers that did not hold a topic leave other subscribers served (%s)" %
+          ", ".join("%s %s" % (t, "kept" if k else "LOST") for t, k in kept.items()),
+          started and all(kept.values()), "after seq %s" % seq)
+
+    # the subset's last real holder leaves it: the publisher stops sending it (the prefix subscriber sees none)
+    subs["state/x_m,y_m"].setsockopt(zmq.UNSUBSCRIBE, b"state/x_m,y_m")
+    time.sleep(1.0)
+    newest_seq(every_subset, "state/x_m,y_m", 0.2)  # drop what was queued before the unsubscribe arrived
+    seq = newest_seq(reference, "bodies", 0.5)
+    still_sent = seq is not None and topic_after(every_subset, "state/x_m,y_m", seq + 1, 2)
+    check("strays: a genuine unsubscribe by the subset's last holder releases it (no more state/x_m,y_m sent)",
+          seen and seq is not None and not still_sent, "sent while held %s; seq %s, still sent %s" %
+          (seen, seq, still_sent))
+    for sub in list(subs.values()) + [reference, every_subset]:
+        sub.close(0)
+    stopped = surge_client.Control(run.ctl, 10).request({"cmd": "stop"})
+    run.wait()
+    check("strays: the run stopped on request", stopped.get("ok") and run.rc == 0, run.describe())
+
+
 def group_endpoints():
     """Every TCP loopback form the docs accept binds, the control socket and the publisher alike, and the log names
     the endpoint bound with the port a wildcard got: a status request and a subscription through it are
@@ -867,7 +1055,8 @@ def group_curve():
 
 
 groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
-          "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints}
+          "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints,
+          "strays": group_strays, "replies": group_replies}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -78,6 +78,8 @@ int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, vola
             goto fail;
         fprintf(stderr, "surge: CURVE security: %d allowed client key%s (%s)\n", surge_curve_allowed_count(l->curve),
                 surge_curve_allowed_count(l->curve) == 1 ? "" : "s", c->curve_clients_path);
+    } else if (c->publish[0] && !(l->numbering = surge_curve_numbering_start(l->zmq_context, err, sizeof err))) {
+        goto fail; /* the publisher tells its subscribers apart by the number the handler gives each connection */
     }
     if (c->control[0]) {
         surge_control_def def = surge_default_control_def();
@@ -91,7 +93,7 @@ int open_live_links(const cli *c, const char *outdir, const surge_sim *sim, vola
     if (c->publish[0]) {
         surge_publisher_def def = c->publisher;
         def.endpoint = c->publish;
-        def.curve = l->curve;
+        def.curve = l->curve ? l->curve : l->numbering;
         def.max_peers = def.max_peers < peer_cap ? def.max_peers : peer_cap;
         if (!(l->publisher = surge_publisher_start(l->zmq_context, &def, err, sizeof err)))
             goto fail;
@@ -150,6 +152,7 @@ int close_live_links(live_links *l, const surge_sim *sim)
         fprintf(stderr, "surge: refused %ld connection%s whose client key was not allowed\n",
                 surge_curve_refused_count(l->curve), surge_curve_refused_count(l->curve) == 1 ? "" : "s");
     surge_curve_server_stop(l->curve);
+    surge_curve_server_stop(l->numbering);
     if (l->zmq_context)
         zmq_ctx_term(l->zmq_context);
     return rc;

@@ -19,6 +19,7 @@ typedef struct live_links {
     surge_journal *journal;
     surge_renderer *renderer;
     surge_curve_server *curve; /* NULL: the sockets have no security */
+    surge_curve_server *numbering; /* without keys: the ZAP handler that numbers the subscribers' connections */
     const char *movie_path; /* NULL: no movie */
     volatile sig_atomic_t *stop_requested; /* set by a stop request on the control socket, and by the signals */
     char replay_error[1024]; /* set when a journal entry could not be replayed */

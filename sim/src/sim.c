@@ -37,6 +37,14 @@ static void update_body_force(surge_sim *sim)
 
 surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_len)
 {
+    return sim_create_checked(params, NULL, NULL, err, err_len);
+}
+
+surge_sim *sim_create_checked(const surge_params *params,
+                              int (*check)(const surge_sim *sim, long long walls, long long fluid, void *user,
+                                           char *err, size_t err_len),
+                              void *user, char *err, size_t err_len)
+{
     if (surge_params_validate(params, err, err_len) != 0)
         return NULL;
     surge_sim *sim = calloc(1, sizeof *sim);
@@ -44,6 +52,8 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
+    sim->scene_check = check;
+    sim->scene_check_user = user;
     sim->params = *params;
     sim->params.walls.layers = surge_params_wall_layers(params); /* resolve the automatic value */
     const surge_params *p = &sim->params;
@@ -75,8 +85,9 @@ surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_le
         sim->row_kernel_ratio[k] = lattice_kernel_sum(&sim->kernel, dp, k) / sim->lattice_kernel_sum;
     sim->list_lookahead_s = sim->scheme->lookahead_s(sim);
     update_body_force(sim);
-    if (scene_build(sim, err, err_len) != 0 || grid_init(sim, err, err_len) != 0 ||
-        neighbours_init(sim, err, err_len) != 0) {
+    const int built = scene_build(sim, err, err_len);
+    sim->scene_check = NULL;
+    if (built != 0 || grid_init(sim, err, err_len) != 0 || neighbours_init(sim, err, err_len) != 0) {
         surge_sim_destroy(sim);
         return NULL;
     }

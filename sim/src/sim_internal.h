@@ -56,7 +56,19 @@ struct surge_sim {
     double list_lookahead_s;       /* how far ahead of a step's start its force evaluations reach (neighbours.c) */
     const time_scheme *scheme;    /* the time-stepping scheme (scheme/scheme.h) */
     void *scheme_data;             /* and its own state */
+
+    /* while the scene is built (sim_create_checked): its particle counts, known before anything is allocated for
+     * them, with the boulders defined; 0 to go on, or -1 with err to refuse the scene */
+    int (*scene_check)(const surge_sim *sim, long long walls, long long fluid, void *user, char *err, size_t err_len);
+    void *scene_check_user;
 };
+
+/* surge_sim_create, with check (may be NULL) called with the scene's particle counts before they are allocated (a
+ * checkpoint's reader compares them with what the file holds) */
+surge_sim *sim_create_checked(const surge_params *params,
+                              int (*check)(const surge_sim *sim, long long walls, long long fluid, void *user,
+                                           char *err, size_t err_len),
+                              void *user, char *err, size_t err_len);
 
 /* Particle a's copies at the step's start (the step fields of particles/fields.h) */
 static inline void fields_save_step_start(surge_sim *sim, int a)

@@ -8,6 +8,7 @@
 
 #include <cjson/cJSON.h>
 #include <ctype.h>
+#include <errno.h>
 #include <inttypes.h>
 #include <math.h>
 #include <stdio.h>
@@ -23,6 +24,9 @@ enum { MAX_ENVELOPE_FRAMES = 8, PAUSED_POLL_MS = 100, MIN_C0_OVER_EXPECTED_SPEED
 /* a connection that has not completed ZeroMQ's greeting by then is closed; a peer that stops answering ZeroMQ's
  * heartbeats is closed; at most RECEIVE_QUEUE requests wait per peer, then ZeroMQ stops reading that peer */
 enum { HANDSHAKE_MS = 2000, HEARTBEAT_MS = 5000, HEARTBEAT_TIMEOUT_MS = 15000, RECEIVE_QUEUE = 16 };
+/* replies ZeroMQ queues for a client that does not read them (beyond the system's socket buffers); past that they are
+ * owed (owed_replies) */
+enum { REPLY_QUEUE = 1000 };
 /* a request longer than this is refused before it is parsed: the longest real one, a text value of
  * SURGE_TEXT_PARAM_BYTES written as JSON escapes, is well below it */
 enum { LONGEST_REQUEST = 8192 };
@@ -35,6 +39,25 @@ enum { LONGEST_REQUEST = 8192 };
 #define MAX_CREDIT_S 0.01
 #define MAX_DEBT_S 0.1 /* one dear request (a checkpoint of a large scene) leaves the socket deaf 5 s at most */
 #define PAUSED_BUDGET_S 0.02
+/* when the run ends, requests still waiting are refused for up to this long before the socket closes, until none
+ * has come for END_QUIET_MS */
+#define END_REFUSALS_S 1.0
+enum { END_QUIET_MS = 100 };
+
+/* Replies owed to a client whose queue to it is full (it has left REPLY_QUEUE replies unread): the first reply not
+ * yet sent, and the number of "busy" refusals owed after it, one for each request that came from the client in the
+ * meantime (those are not run). They go out in order as the client reads; a client that has gone is forgotten. */
+typedef struct owed_replies {
+    unsigned char identity[256];
+    size_t identity_len;
+    int delimited; /* a REQ client's: an empty frame before the reply */
+    char *reply;   /* NULL once sent */
+    long busy;
+} owed_replies;
+
+static const char BUSY_REPLY[] = "{\"ok\":false,\"error\":\"busy: this client has not read its earlier replies "
+                                 "(the queue to it is full); the request was not run\"}";
+static const char ENDED_REPLY[] = "{\"ok\":false,\"error\":\"the run has ended; the request was not run\"}";
 
 struct surge_control {
     void *socket;
@@ -49,6 +72,8 @@ struct surge_control {
     peer_guard *guard;
     surge_params list_params; /* the parameters list_text was made from */
     char *list_text;          /* the "params" array of "list", kept until a parameter changes */
+    owed_replies *owed;       /* one for each client whose queue was full */
+    int owed_count, owed_capacity;
 };
 
 surge_control_def surge_default_control_def(void)
@@ -73,13 +98,17 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
     c->socket = zmq_socket(context, ZMQ_ROUTER);
     const int64_t max_bytes = def->max_request_bytes;
     const int linger_ms = 200, handshake_ms = HANDSHAKE_MS, heartbeat_ms = HEARTBEAT_MS,
-              heartbeat_timeout_ms = HEARTBEAT_TIMEOUT_MS, receive_queue = RECEIVE_QUEUE;
+              heartbeat_timeout_ms = HEARTBEAT_TIMEOUT_MS, receive_queue = RECEIVE_QUEUE, reply_queue = REPLY_QUEUE,
+              mandatory = 1;
+    /* ZMQ_ROUTER_MANDATORY: a reply that finds the client's queue full is not dropped but refused (EAGAIN), and kept */
     if (!c->socket || zmq_setsockopt(c->socket, ZMQ_MAXMSGSIZE, &max_bytes, sizeof max_bytes) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_ROUTER_MANDATORY, &mandatory, sizeof mandatory) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_HEARTBEAT_TIMEOUT, &heartbeat_timeout_ms, sizeof heartbeat_timeout_ms) != 0 ||
         zmq_setsockopt(c->socket, ZMQ_RCVHWM, &receive_queue, sizeof receive_queue) != 0 ||
+        zmq_setsockopt(c->socket, ZMQ_SNDHWM, &reply_queue, sizeof reply_queue) != 0 ||
         (def->curve && surge_curve_secure_socket(def->curve, c->socket, err, err_len) != 0) ||
         surge_endpoint_bind(c->socket, def->endpoint, "open the control socket on", c->endpoint, err, err_len) != 0) {
         if (c->socket)
@@ -103,12 +132,18 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
 
 const char *surge_control_endpoint(const surge_control *c) { return c->endpoint; }
 
+static void refuse_waiting(surge_control *c);
+
 void surge_control_close(surge_control *c)
 {
     if (!c)
         return;
+    refuse_waiting(c);
     peer_guard_stop(c->guard);
     zmq_close(c->socket);
+    for (int i = 0; i < c->owed_count; i++)
+        free(c->owed[i].reply);
+    free(c->owed);
     free(c->list_text);
     free(c);
 }
@@ -519,9 +554,80 @@ static cJSON *handle_request(surge_control *c, const char *body, size_t len, sur
 
 /* ---- the socket ---- */
 
-/* Receives one request: [identity][empty delimiter, from REQ clients][body]. Answers it in the same envelope.
- * Returns 0 when nothing was waiting. */
-static int serve_one(surge_control *c, surge_sim *sim, int *requests)
+/* Sends a reply through a client's envelope: 0 when it is queued or the client has gone (nothing more to do for it),
+ * -1 when the client's queue is full (EAGAIN: try again later). */
+static int send_reply(surge_control *c, const void *identity, size_t identity_len, int delimited, const char *text)
+{
+    if (zmq_send(c->socket, identity, identity_len, ZMQ_SNDMORE | ZMQ_DONTWAIT) < 0)
+        return zmq_errno() == EAGAIN ? -1 : 0; /* EHOSTUNREACH: the client has gone */
+    /* the rest of a message whose first frame was taken is taken too */
+    if (delimited)
+        zmq_send(c->socket, "", 0, ZMQ_SNDMORE | ZMQ_DONTWAIT);
+    zmq_send(c->socket, text, strlen(text), ZMQ_DONTWAIT);
+    return 0;
+}
+
+static owed_replies *owed_to(surge_control *c, const void *identity, size_t identity_len)
+{
+    for (int i = 0; i < c->owed_count; i++)
+        if (c->owed[i].identity_len == identity_len && !memcmp(c->owed[i].identity, identity, identity_len))
+            return &c->owed[i];
+    return NULL;
+}
+
+/* Keeps a reply the client's full queue refused (text is taken over); 0, or -1 out of memory (text freed) */
+static int owe_reply(surge_control *c, const void *identity, size_t identity_len, int delimited, char *text)
+{
+    if (identity_len > sizeof c->owed[0].identity) {
+        free(text);
+        return -1;
+    }
+    if (c->owed_count == c->owed_capacity) {
+        const int capacity = c->owed_capacity ? 2 * c->owed_capacity : 4;
+        owed_replies *grown = realloc(c->owed, (size_t)capacity * sizeof *grown);
+        if (!grown) {
+            free(text);
+            return -1;
+        }
+        c->owed = grown;
+        c->owed_capacity = capacity;
+    }
+    owed_replies *o = &c->owed[c->owed_count++];
+    memcpy(o->identity, identity, identity_len);
+    o->identity_len = identity_len;
+    o->delimited = delimited;
+    o->reply = text;
+    o->busy = 0;
+    return 0;
+}
+
+/* Sends what is owed, in order, as far as the clients' queues take it */
+static void send_owed(surge_control *c)
+{
+    for (int i = 0; i < c->owed_count;) {
+        owed_replies *o = &c->owed[i];
+        int full = 0;
+        while (!full && (o->reply || o->busy > 0)) {
+            full = send_reply(c, o->identity, o->identity_len, o->delimited, o->reply ? o->reply : BUSY_REPLY) != 0;
+            if (!full && o->reply) {
+                free(o->reply);
+                o->reply = NULL;
+            } else if (!full) {
+                o->busy--;
+            }
+        }
+        if (full) {
+            i++;
+            continue;
+        }
+        c->owed[i] = c->owed[--c->owed_count]; /* all sent, or the client has gone */
+    }
+}
+
+/* Receives one request: [identity][empty delimiter, from REQ clients][body]. Answers it in the same envelope, or,
+ * when ended, refuses it (the run is over). A client still owed replies is answered "busy" without running the
+ * request. Returns 0 when nothing was waiting. */
+static int receive_one(surge_control *c, surge_sim *sim, int *requests, int ended)
 {
     zmq_msg_t frames[MAX_ENVELOPE_FRAMES];
     int count = 0, more = 1, overflow = 0;
@@ -549,7 +655,17 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
     peer_guard_touch(c->guard, source_fd);
     const int delimited = count >= 3 && zmq_msg_size(&frames[1]) == 0;
     const int head = delimited ? 2 : 1; /* identity (+ delimiter) */
-    cJSON *reply;
+    owed_replies *owed = owed_to(c, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]));
+    cJSON *reply = NULL;
+    if (owed || ended) {
+        if (owed)
+            owed->busy++;
+        else if (send_reply(c, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), delimited, ENDED_REPLY) != 0)
+            owe_reply(c, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), delimited, strdup(ENDED_REPLY));
+        for (int i = 0; i < count; i++)
+            zmq_msg_close(&frames[i]);
+        return 1;
+    }
     if (count < 2)
         reply = error_reply("%s", "empty request");
     else if (overflow || count != head + 1)
@@ -572,18 +688,39 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
     }
     char *text = cJSON_PrintUnformatted(reply);
     cJSON_Delete(reply);
-    /* the reply goes back through the same envelope; a client that has gone is silently skipped */
-    zmq_send(c->socket, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), ZMQ_SNDMORE | ZMQ_DONTWAIT);
-    if (delimited)
-        zmq_send(c->socket, "", 0, ZMQ_SNDMORE | ZMQ_DONTWAIT);
-    if (text)
-        zmq_send(c->socket, text, strlen(text), ZMQ_DONTWAIT);
-    else
-        zmq_send(c->socket, "{\"ok\":false,\"error\":\"out of memory\"}", 36, ZMQ_DONTWAIT);
+    /* the reply goes back through the same envelope; a client that has gone is skipped, one whose queue is full is
+     * owed it */
+    const char *sent = text ? text : "{\"ok\":false,\"error\":\"out of memory\"}";
+    if (send_reply(c, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), delimited, sent) != 0) {
+        owe_reply(c, zmq_msg_data(&frames[0]), zmq_msg_size(&frames[0]), delimited, text ? text : strdup(sent));
+        text = NULL;
+    }
     free(text);
     for (int i = 0; i < count; i++)
         zmq_msg_close(&frames[i]);
     return 1;
+}
+
+static int serve_one(surge_control *c, surge_sim *sim, int *requests)
+{
+    return receive_one(c, sim, requests, 0);
+}
+
+/* The run has ended: each request still waiting, or arriving until none has for END_QUIET_MS, is refused, and what
+ * is owed is sent as far as the clients read; for END_REFUSALS_S at most, then the socket closes */
+static void refuse_waiting(surge_control *c)
+{
+    const double start_s = surge_wall_clock_s();
+    int requests = 0;
+    while (surge_wall_clock_s() - start_s < END_REFUSALS_S) {
+        send_owed(c);
+        while (receive_one(c, NULL, &requests, 1) && surge_wall_clock_s() - start_s < END_REFUSALS_S)
+            ;
+        send_owed(c);
+        zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
+        if (zmq_poll(&item, 1, c->owed_count > 0 ? 10 : END_QUIET_MS) <= 0 && c->owed_count == 0)
+            return;
+    }
 }
 
 /* Answers requests until the budget from start_s is spent (at least one, if any is waiting). */
@@ -596,6 +733,7 @@ static void serve_for(surge_control *c, surge_sim *sim, int *requests, double st
 int surge_control_service(surge_control *c, surge_sim *sim, volatile sig_atomic_t *stop_signal)
 {
     const double start_s = surge_wall_clock_s();
+    send_owed(c);
     if (c->start_wall_s < 0) {
         c->start_wall_s = start_s;
         c->start_step = surge_sim_step_count(sim);

@@ -1,10 +1,12 @@
-/* CURVE keys and the ZAP handler that admits only allowed clients (see surge/curve.h; ZeroMQ RFC 26 and 27). */
+/* CURVE keys and the ZAP handler that admits only allowed clients and numbers every connection it admits (see
+ * surge/curve.h; ZeroMQ RFC 26 and 27). */
 #define _POSIX_C_SOURCE 200809L
 #include "surge/curve.h"
 
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <inttypes.h>
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
@@ -27,9 +29,11 @@ static const char ZAP_ENDPOINT[] = "inproc://zeromq.zap.01"; /* fixed by RFC 27 
 static const char ZAP_DOMAIN[] = "surge";
 
 struct surge_curve_server {
+    int secure; /* 0: no keys, the handler admits plain (NULL) connections and only numbers them */
     char secret_z85[SURGE_CURVE_KEY_Z85_BYTES];
     uint8_t (*allowed)[KEY_BYTES];
     int allowed_count;
+    uint64_t admitted; /* connections admitted so far: the last one's number (handler thread) */
     void *zap_socket; /* REP, used by the handler thread only once it runs */
     pthread_t thread;
     int thread_started;
@@ -238,7 +242,9 @@ static int is_allowed(const surge_curve_server *s, const uint8_t *key)
     return 0;
 }
 
-/* Answers one request: frames version, request id, domain, address, routing id, mechanism, credentials. */
+/* Answers one request: frames version, request id, domain, address, routing id, mechanism, credentials (one frame,
+ * the client's key, for CURVE; none for NULL). A secured handler admits CURVE clients with an allowed key, an open
+ * one plain (NULL) connections; each admitted connection gets the next number as its User-Id. */
 static void answer_zap_request(surge_curve_server *s)
 {
     enum { FRAMES = 7 };
@@ -256,11 +262,13 @@ static void answer_zap_request(surge_curve_server *s)
             zmq_msg_close(m);
     }
     const int frames_kept = count < FRAMES ? count : FRAMES;
-    const int well_formed = count == FRAMES && zmq_msg_size(&frame[0]) == 3 &&
-                            !memcmp(zmq_msg_data(&frame[0]), "1.0", 3) && zmq_msg_size(&frame[5]) == 5 &&
+    const int version_ok = count >= 6 && zmq_msg_size(&frame[0]) == 3 && !memcmp(zmq_msg_data(&frame[0]), "1.0", 3);
+    const int well_formed = version_ok && count == FRAMES && zmq_msg_size(&frame[5]) == 5 &&
                             !memcmp(zmq_msg_data(&frame[5]), "CURVE", 5) && zmq_msg_size(&frame[6]) == KEY_BYTES;
-    const int admit = well_formed && is_allowed(s, zmq_msg_data(&frame[6]));
-    if (!admit) {
+    const int plain = version_ok && count == 6 && zmq_msg_size(&frame[5]) == 4 &&
+                      !memcmp(zmq_msg_data(&frame[5]), "NULL", 4);
+    const int admit = s->secure ? well_formed && is_allowed(s, zmq_msg_data(&frame[6])) : plain;
+    if (!admit && s->secure) {
         const long refused = atomic_fetch_add(&s->refused, 1) + 1;
         if (refused <= REFUSALS_REPORTED) {
             char key_z85[SURGE_CURVE_KEY_Z85_BYTES] = "?", address[64] = "?";
@@ -279,13 +287,16 @@ static void answer_zap_request(surge_curve_server *s)
     }
     /* reply (a REP socket must answer every request): version, request id, status, status text, user id,
      * metadata */
-    const char *text = admit ? "OK" : "client key not allowed";
+    const char *text = admit ? "OK" : s->secure ? "client key not allowed" : "only plain connections here";
+    char user_id[24] = "";
+    if (admit)
+        snprintf(user_id, sizeof user_id, "%" PRIu64, ++s->admitted);
     zmq_send(s->zap_socket, "1.0", 3, ZMQ_SNDMORE);
     zmq_send(s->zap_socket, count >= 2 ? zmq_msg_data(&frame[1]) : "", count >= 2 ? zmq_msg_size(&frame[1]) : 0,
              ZMQ_SNDMORE);
     zmq_send(s->zap_socket, admit ? "200" : "400", 3, ZMQ_SNDMORE);
     zmq_send(s->zap_socket, text, strlen(text), ZMQ_SNDMORE);
-    zmq_send(s->zap_socket, "", 0, ZMQ_SNDMORE);
+    zmq_send(s->zap_socket, user_id, strlen(user_id), ZMQ_SNDMORE);
     zmq_send(s->zap_socket, "", 0, 0);
     for (int k = 0; k < frames_kept; k++)
         zmq_msg_close(&frame[k]);
@@ -305,6 +316,26 @@ static void *zap_main(void *arg)
     return NULL;
 }
 
+/* Binds the ZAP endpoint and starts the handler thread; 0, or -1 with err (s is then stopped and freed) */
+static int start_handler(void *context, surge_curve_server *s, char *err, size_t err_len)
+{
+    const int linger_ms = 0;
+    s->zap_socket = zmq_socket(context, ZMQ_REP);
+    if (!s->zap_socket || zmq_setsockopt(s->zap_socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
+        zmq_bind(s->zap_socket, ZAP_ENDPOINT) != 0) {
+        snprintf(err, err_len, "cannot start the CURVE client check (%s): %s", ZAP_ENDPOINT, zmq_strerror(zmq_errno()));
+        surge_curve_server_stop(s);
+        return -1;
+    }
+    if (pthread_create(&s->thread, NULL, zap_main, s) != 0) {
+        snprintf(err, err_len, "cannot start the CURVE client check thread");
+        surge_curve_server_stop(s);
+        return -1;
+    }
+    s->thread_started = 1;
+    return 0;
+}
+
 surge_curve_server *surge_curve_server_start(void *context, const char *server_key_path,
                                              const char *allowed_clients_path, char *err, size_t err_len)
 {
@@ -317,36 +348,34 @@ surge_curve_server *surge_curve_server_start(void *context, const char *server_k
         snprintf(err, err_len, "out of memory");
         return NULL;
     }
+    s->secure = 1;
     char public_z85[SURGE_CURVE_KEY_Z85_BYTES];
     if (surge_curve_read_key_file(server_key_path, public_z85, s->secret_z85, err, err_len) != 0 ||
         read_allow_list(s, allowed_clients_path, err, err_len) != 0) {
         surge_curve_server_stop(s);
         return NULL;
     }
-    const int linger_ms = 0;
-    s->zap_socket = zmq_socket(context, ZMQ_REP);
-    if (!s->zap_socket || zmq_setsockopt(s->zap_socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
-        zmq_bind(s->zap_socket, ZAP_ENDPOINT) != 0) {
-        snprintf(err, err_len, "cannot start the CURVE client check (%s): %s", ZAP_ENDPOINT, zmq_strerror(zmq_errno()));
-        surge_curve_server_stop(s);
+    return start_handler(context, s, err, err_len) == 0 ? s : NULL;
+}
+
+surge_curve_server *surge_curve_numbering_start(void *context, char *err, size_t err_len)
+{
+    surge_curve_server *s = calloc(1, sizeof *s);
+    if (!s) {
+        snprintf(err, err_len, "out of memory");
         return NULL;
     }
-    if (pthread_create(&s->thread, NULL, zap_main, s) != 0) {
-        snprintf(err, err_len, "cannot start the CURVE client check thread");
-        surge_curve_server_stop(s);
-        return NULL;
-    }
-    s->thread_started = 1;
-    return s;
+    return start_handler(context, s, err, err_len) == 0 ? s : NULL;
 }
 
 int surge_curve_secure_socket(const surge_curve_server *s, void *socket, char *err, size_t err_len)
 {
     const int as_server = 1;
     if (zmq_setsockopt(socket, ZMQ_ZAP_DOMAIN, ZAP_DOMAIN, strlen(ZAP_DOMAIN)) != 0 ||
-        zmq_setsockopt(socket, ZMQ_CURVE_SERVER, &as_server, sizeof as_server) != 0 ||
-        zmq_setsockopt(socket, ZMQ_CURVE_SECRETKEY, s->secret_z85, Z85_CHARS) != 0) {
-        snprintf(err, err_len, "cannot make the socket a CURVE server: %s", zmq_strerror(zmq_errno()));
+        (s->secure && (zmq_setsockopt(socket, ZMQ_CURVE_SERVER, &as_server, sizeof as_server) != 0 ||
+                       zmq_setsockopt(socket, ZMQ_CURVE_SECRETKEY, s->secret_z85, Z85_CHARS) != 0))) {
+        snprintf(err, err_len, "cannot make the socket a %s: %s", s->secure ? "CURVE server" : "numbered socket",
+                 zmq_strerror(zmq_errno()));
         return -1;
     }
     return 0;

@@ -62,18 +62,37 @@ static const state_field state_fields[] = {
 };
 enum { STATE_FIELD_COUNT = sizeof state_fields / sizeof state_fields[0] };
 
-/* Subscriptions. ZeroMQ tells an XPUB socket of a topic's first subscriber and of its last one leaving (a peer that
- * disconnects leaves all its topics), never again in between: a subscription the publisher did not keep would stay
- * unserved, for later subscribers to that topic too, until all of them had gone. So every subscription that can
- * receive something is kept, and the table cannot be filled:
+/* Subscriptions. Every subscription that can receive something is kept, and the table cannot be filled:
  * - the plain topics' prefixes ("", "s", ..., "state", "state/", "stats", "b", ..., "frame"): PLAIN_PREFIXES in all;
  * - field subsets "state/a,b,c": an ordered choice of distinct fields, SUBSET_CODES of them in all (8 fields), one
- *   bit each. A peer subscribing to many of them costs no memory; at most SUBSETS_PER_STATE are sent per state,
- *   taking turns, so every subscribed subset gets a state at least every SUBSET_CODES / SUBSETS_PER_STATE states.
+ *   slot each. A peer subscribing to many of them takes no slot another needs; at most SUBSETS_PER_STATE are sent
+ *   per state, taking turns, so every subscribed subset gets a state at least every SUBSET_CODES / SUBSETS_PER_STATE
+ *   states.
  * Anything else (an unknown or repeated field, a topic surge never sends, a NUL byte) can match nothing and is not
- * kept. */
-enum { PLAIN_PREFIXES = 19, PLAIN_PREFIX_BYTES = 8, SUBSET_CODES = 109600, SUBSETS_PER_STATE = 16 };
+ * kept.
+ * A slot counts the connections that hold it and is released when the last one unsubscribes or leaves. The socket is
+ * ZMQ_XPUB_VERBOSER, so every (un)subscribe message reaches the publisher, but ZeroMQ also passes on an unsubscribe
+ * for a topic the peer never subscribed to (it cannot tell it from a last subscriber leaving): such a message must
+ * not release a slot other peers hold. So each connection's own subscriptions are kept (struct subscriber), as
+ * ZeroMQ keeps them for it (a topic at most once per connection); a message is known by its connection's descriptor
+ * (ZMQ_SRCFD) and the number the ZAP handler gave that connection (its "User-Id", surge/curve.h), which tells a
+ * descriptor's next connection from the one before (ZeroMQ sets both properties itself: a peer cannot replace them with
+ * its own in its handshake). ZeroMQ's own unsubscribes for a connection that left carry no
+ * descriptor: they release one hold each. */
+enum { PLAIN_PREFIXES = 19, SUBSET_CODES = 109600, SUBSETS_PER_STATE = 16 };
 _Static_assert(STATE_FIELD_COUNT == 8, "SUBSET_CODES is 8 + 8*7 + ... + 8!, the ordered choices of 8 fields");
+enum { SUBSET_WORDS = (SUBSET_CODES + 63) / 64 };
+static const char *const plain_topics[PLAIN_PREFIXES] = {
+    "", "s", "st", "sta", "stat", "state", "state/", "stats", "b", "bo", "bod", "bodi", "bodie", "bodies",
+    "f", "fr", "fra", "fram", "frame"};
+
+/* One subscriber connection's subscriptions (a slot at most once each, as ZeroMQ holds them for it) */
+typedef struct subscriber {
+    int fd;            /* its connection's descriptor */
+    uint64_t number;   /* the ZAP handler's number for the connection; 0 without one */
+    uint32_t plain;    /* bit i: plain_topics[i] */
+    uint64_t *subsets; /* bit c: the subset of code c; NULL until it holds one */
+} subscriber;
 
 static const void *state_field_data(const surge_snapshot *s, int field)
 {
@@ -111,10 +130,12 @@ struct surge_publisher {
     int64_t last_step;
     surge_params last_params; /* as posted last: a change of a live parameter is posted at once */
     /* publisher thread */
-    char plain[PLAIN_PREFIXES][PLAIN_PREFIX_BYTES];
-    int plain_count;
-    uint64_t subsets[(SUBSET_CODES + 63) / 64]; /* bit c: the subset of code c is subscribed */
-    int subset_count, subset_turn;             /* subset_turn: the code the next state's subsets start from */
+    uint32_t plain_holders[PLAIN_PREFIXES]; /* connections holding plain_topics[i] */
+    uint32_t *subset_holders;               /* [SUBSET_CODES]: connections holding the subset of code c */
+    uint64_t subsets[SUBSET_WORDS];         /* bit c: the subset of code c is subscribed (has a holder) */
+    int subset_count, subset_turn;          /* subset_turn: the code the next state's subsets start from */
+    subscriber *subscribers;                /* by descriptor, one for each connection seen (the newest on it) */
+    int subscriber_count, subscriber_capacity;
     int junk_count, turns_told;
     uint64_t messages_sent, bytes_sent;
     double deliver_until_s; /* > 0 while sending the final frame: wait for queue room until this wall time */
@@ -132,8 +153,8 @@ surge_publisher_def surge_default_publisher_def(void)
  * own topics are sent only to their subscribers. */
 static int subscribed_to(const surge_publisher *p, const char *topic)
 {
-    for (int i = 0; i < p->plain_count; i++)
-        if (!strncmp(topic, p->plain[i], strlen(p->plain[i])))
+    for (int i = 0; i < PLAIN_PREFIXES; i++)
+        if (p->plain_holders[i] > 0 && !strncmp(topic, plain_topics[i], strlen(plain_topics[i])))
             return 1;
     return 0;
 }
@@ -147,14 +168,13 @@ static void update_wanted(surge_publisher *p)
     atomic_store(&p->wanted, wanted);
 }
 
-/* Whether topic is a prefix of a plain topic we send or of every field subset's ("state/") */
+/* The index in plain_topics of a prefix of a plain topic we send or of every field subset's ("state/"); -1 if none */
 static int plain_prefix(const char *topic)
 {
-    static const char *const topics[] = {"state/", "bodies", "stats", "frame"};
-    for (size_t i = 0; i < sizeof topics / sizeof topics[0]; i++)
-        if (!strncmp(topics[i], topic, strlen(topic)))
-            return 1;
-    return 0;
+    for (int i = 0; i < PLAIN_PREFIXES; i++)
+        if (!strcmp(plain_topics[i], topic))
+            return i;
+    return -1;
 }
 
 /* The ordered choices of k of n fields */
@@ -232,53 +252,133 @@ static void ignore_subscription(surge_publisher *p, const char *topic, size_t le
                 p->junk_count == JUNK_SHOWN ? " (further ones are not shown)" : "");
 }
 
-/* One (un)subscription message: the topic of len bytes, subscribe 1 or 0 */
-static void note_subscription(surge_publisher *p, const char *topic, size_t len, int subscribe)
+/* The record of the connection on descriptor fd whose ZAP number is number: a new one, or the one before on that
+ * descriptor emptied when number is newer (that connection has gone: ZeroMQ passes a connection's messages on before
+ * those of a later connection on its descriptor). NULL when number is older than the record's (a message of a
+ * connection that has gone, which should not come so late) or out of memory. */
+static subscriber *subscriber_of(surge_publisher *p, int fd, uint64_t number)
 {
-    int indices[STATE_FIELD_COUNT], count = 0;
+    for (int i = 0; i < p->subscriber_count; i++) {
+        subscriber *s = &p->subscribers[i];
+        if (s->fd != fd)
+            continue;
+        if (number < s->number)
+            return NULL;
+        if (number > s->number) {
+            s->number = number;
+            s->plain = 0;
+            if (s->subsets)
+                memset(s->subsets, 0, SUBSET_WORDS * sizeof *s->subsets);
+        }
+        return s;
+    }
+    if (p->subscriber_count == p->subscriber_capacity) {
+        const int capacity = p->subscriber_capacity ? 2 * p->subscriber_capacity : 16;
+        subscriber *grown = realloc(p->subscribers, (size_t)capacity * sizeof *grown);
+        if (!grown)
+            return NULL;
+        p->subscribers = grown;
+        p->subscriber_capacity = capacity;
+    }
+    subscriber *s = &p->subscribers[p->subscriber_count++];
+    *s = (subscriber){.fd = fd, .number = number};
+    return s;
+}
+
+/* A slot (a plain topic's index, or SUBSET_SLOT + a subset's code) held by one connection more or less */
+enum { SUBSET_SLOT = PLAIN_PREFIXES };
+static void count_holder(surge_publisher *p, int slot, int delta)
+{
+    uint32_t *holders = slot < SUBSET_SLOT ? &p->plain_holders[slot] : &p->subset_holders[slot - SUBSET_SLOT];
+    if (delta < 0 && *holders == 0)
+        return;
+    *holders += (uint32_t)delta;
+    if (slot < SUBSET_SLOT || *holders != (delta > 0 ? 1u : 0u))
+        return;
+    const int code = slot - SUBSET_SLOT;
+    p->subsets[code / 64] ^= UINT64_C(1) << (code % 64);
+    p->subset_count += delta;
+    if (p->subset_count > SUBSETS_PER_STATE && !p->turns_told++)
+        fprintf(stderr, "surge: publisher: more than %d distinct field subsets subscribed: they take turns, "
+                "%d per state\n", SUBSETS_PER_STATE, SUBSETS_PER_STATE);
+}
+
+/* Sets or clears (hold 1 or 0) connection s's hold of slot: 1 when that changed it, 0 when it did not, -1 when there
+ * was no memory to record it */
+static int set_held(subscriber *s, int slot, int hold)
+{
+    uint64_t *word = NULL, bit = 0;
+    if (slot < SUBSET_SLOT) {
+        if (!!(s->plain >> slot & 1) == hold)
+            return 0;
+        s->plain ^= UINT32_C(1) << slot;
+        return 1;
+    }
+    const int code = slot - SUBSET_SLOT;
+    if (!s->subsets && !hold)
+        return 0;
+    if (!s->subsets && !(s->subsets = calloc(SUBSET_WORDS, sizeof *s->subsets)))
+        return -1;
+    word = &s->subsets[code / 64];
+    bit = UINT64_C(1) << (code % 64);
+    if (!!(*word & bit) == hold)
+        return 0;
+    *word ^= bit;
+    return 1;
+}
+
+/* One (un)subscription message (msg: first byte 1 or 0, then the topic) */
+static void note_subscription(surge_publisher *p, zmq_msg_t *msg)
+{
+    const int subscribe = ((const char *)zmq_msg_data(msg))[0] == 1;
+    const size_t len = zmq_msg_size(msg) - 1;
+    char topic[MAX_SUBSCRIPTION_BYTES + 1];
+    memcpy(topic, (const char *)zmq_msg_data(msg) + 1, len < sizeof topic ? len : sizeof topic - 1);
+    topic[len < sizeof topic ? len : sizeof topic - 1] = '\0';
+    int indices[STATE_FIELD_COUNT], count = 0, slot = -1;
     if (len > MAX_SUBSCRIPTION_BYTES || strlen(topic) != len) {
         if (subscribe)
             ignore_subscription(p, topic, len, len > MAX_SUBSCRIPTION_BYTES ? "too long" : "it holds a NUL byte");
     } else if (!strncmp(topic, "state/", 6) && topic[6]) {
-        if (!parse_field_subset(topic, indices, &count)) {
-            if (subscribe)
-                ignore_subscription(p, topic, len, "it names a field that does not exist, or one twice");
-            return;
-        }
-        const int code = subset_code(indices, count);
-        const uint64_t bit = UINT64_C(1) << (code % 64);
-        if (subscribe != !!(p->subsets[code / 64] & bit)) {
-            p->subsets[code / 64] ^= bit;
-            p->subset_count += subscribe ? 1 : -1;
-        }
-        if (p->subset_count > SUBSETS_PER_STATE && !p->turns_told++)
-            fprintf(stderr, "surge: publisher: more than %d distinct field subsets subscribed: they take turns, "
-                    "%d per state\n", SUBSETS_PER_STATE, SUBSETS_PER_STATE);
-    } else if (plain_prefix(topic)) {
-        int found = -1;
-        for (int i = 0; i < p->plain_count; i++)
-            if (!strcmp(p->plain[i], topic))
-                found = i;
-        if (subscribe && found < 0 && p->plain_count < PLAIN_PREFIXES)
-            memcpy(p->plain[p->plain_count++], topic, len + 1);
-        else if (!subscribe && found >= 0)
-            memcpy(p->plain[found], p->plain[--p->plain_count], sizeof p->plain[0]);
-    } else if (subscribe) {
+        if (parse_field_subset(topic, indices, &count))
+            slot = SUBSET_SLOT + subset_code(indices, count);
+        else if (subscribe)
+            ignore_subscription(p, topic, len, "it names a field that does not exist, or one twice");
+    } else if ((slot = plain_prefix(topic)) < 0 && subscribe) {
         ignore_subscription(p, topic, len, "surge sends no topic it could match");
     }
+    if (slot < 0)
+        return;
+    /* from a connection (its descriptor), or ZeroMQ's own unsubscribe for one that left (none) */
+    const int fd = zmq_msg_get(msg, ZMQ_SRCFD);
+    if (fd < 0) {
+        count_holder(p, slot, subscribe ? 1 : -1);
+        return;
+    }
+    const char *number_text = zmq_msg_gets(msg, "User-Id");
+    const uint64_t number = number_text ? strtoull(number_text, NULL, 10) : 0;
+    subscriber *s = subscriber_of(p, fd, number);
+    /* a second subscribe from a connection is one hold, as ZeroMQ keeps it; a hold that could not be recorded (or a
+     * message from a connection that has gone, or any without the ZAP number, whose descriptor's earlier connection
+     * may have held it) is counted all the same and only released when the connection leaves: a slot may be kept too
+     * long, never taken from a subscriber */
+    if (subscribe && (!s || set_held(s, slot, 1) != 0 || number == 0))
+        count_holder(p, slot, 1);
+    else if (!subscribe && s && set_held(s, slot, 0) == 1)
+        count_holder(p, slot, -1); /* an unsubscribe for what it did not hold releases nothing */
 }
 
 /* Reads the (un)subscription messages XPUB delivers: first byte 1 or 0, then the topic. */
 static void read_subscriptions(surge_publisher *p)
 {
-    char buf[MAX_SUBSCRIPTION_BYTES + 2];
-    int n;
-    while ((n = zmq_recv(p->socket, buf, sizeof buf, ZMQ_DONTWAIT)) >= 1) {
-        const size_t len = (size_t)n - 1;
-        buf[len < sizeof buf - 1 ? n : (int)sizeof buf - 1] = '\0';
-        if (buf[0] == 0 || buf[0] == 1)
-            note_subscription(p, buf + 1, len, buf[0]);
+    zmq_msg_t msg;
+    zmq_msg_init(&msg);
+    while (zmq_msg_recv(&msg, p->socket, ZMQ_DONTWAIT) >= 0) {
+        const unsigned char *data = zmq_msg_data(&msg);
+        if (zmq_msg_size(&msg) >= 1 && (data[0] == 0 || data[0] == 1))
+            note_subscription(p, &msg);
     }
+    zmq_msg_close(&msg);
     update_wanted(p);
 }
 
@@ -527,6 +627,16 @@ static void *publisher_main(void *arg)
     }
 }
 
+/* Frees what surge_publisher_start allocated for the subscriptions, and p */
+static void free_publisher(surge_publisher *p)
+{
+    for (int i = 0; i < p->subscriber_count; i++)
+        free(p->subscribers[i].subsets);
+    free(p->subscribers);
+    free(p->subset_holders);
+    free(p);
+}
+
 surge_publisher *surge_publisher_start(void *context, const surge_publisher_def *def, char *err, size_t err_len)
 {
     if (def->every_steps < 1 || !(def->max_rate_hz >= 0) || def->send_hwm < 1) {
@@ -540,11 +650,17 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
     }
     p->def = *def;
     p->last_step = -1;
+    if (!(p->subset_holders = calloc(SUBSET_CODES, sizeof *p->subset_holders))) {
+        free_publisher(p);
+        snprintf(err, err_len, "out of memory");
+        return NULL;
+    }
     pthread_mutex_init(&p->frame.lock, NULL);
     p->socket = zmq_socket(context, ZMQ_XPUB);
     /* connections that never greet are closed after 2 s, subscribers that stop answering heartbeats after 15 s */
-    const int linger_ms = 1000, handshake_ms = 2000, heartbeat_ms = 5000, heartbeat_timeout_ms = 15000;
+    const int linger_ms = 1000, handshake_ms = 2000, heartbeat_ms = 5000, heartbeat_timeout_ms = 15000, every = 1;
     if (!p->socket || zmq_setsockopt(p->socket, ZMQ_SNDHWM, &def->send_hwm, sizeof def->send_hwm) != 0 ||
+        zmq_setsockopt(p->socket, ZMQ_XPUB_VERBOSER, &every, sizeof every) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_LINGER, &linger_ms, sizeof linger_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HANDSHAKE_IVL, &handshake_ms, sizeof handshake_ms) != 0 ||
         zmq_setsockopt(p->socket, ZMQ_HEARTBEAT_IVL, &heartbeat_ms, sizeof heartbeat_ms) != 0 ||
@@ -553,13 +669,13 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         surge_endpoint_bind(p->socket, def->endpoint, "publish on", p->endpoint, err, err_len) != 0) {
         if (p->socket)
             zmq_close(p->socket);
-        free(p);
+        free_publisher(p);
         return NULL;
     }
     /* subscribers only listen, so they have no idle limit: the cap alone bounds them */
     if (!(p->guard = peer_guard_start(context, p->socket, def->max_peers, 0, err, err_len))) {
         zmq_close(p->socket);
-        free(p);
+        free_publisher(p);
         return NULL;
     }
     p->mailbox = surge_mailbox_create();
@@ -568,7 +684,7 @@ surge_publisher *surge_publisher_start(void *context, const surge_publisher_def 
         surge_mailbox_destroy(p->mailbox);
         peer_guard_stop(p->guard);
         zmq_close(p->socket);
-        free(p);
+        free_publisher(p);
         return NULL;
     }
     p->start_wall_s = surge_wall_clock_s();
@@ -617,5 +733,5 @@ void surge_publisher_finish(surge_publisher *p, const surge_sim *sim, surge_publ
     surge_mailbox_destroy(p->mailbox);
     free(p->frame.png);
     pthread_mutex_destroy(&p->frame.lock);
-    free(p);
+    free_publisher(p);
 }

@@ -32,9 +32,32 @@
 #include "boulders/boulders.h"
 #include "boundaries/boundary.h"
 #include "neighbours/neighbours.h"
+#include "scene/scene.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
 #define CHECKPOINT_VERSION 8u
+
+/* The least a checkpoint of this version holds with a parameter block of plen bytes and `fluid` fluid particles: the
+ * header, the clock and counts, the particles' fields, (version 3 on) their neighbour-list build positions, the state
+ * hash and (version 4 on) the checksum. The scheme's own state comes on top, and the boulders' (boulder_bytes). */
+static long long checkpoint_bytes(uint32_t version, uint64_t plen, long long fluid)
+{
+    const long long per_particle = (long long)fields_checkpoint_bytes() + (version >= 3 ? 2 * 8 : 0);
+    return 8 + 4 + 4 + 8 + (long long)plen + 4 * 8 + 2 * 4 + fluid * per_particle + (version >= 3 ? 4 : 0) + 8 +
+           (version >= 4 ? 8 : 0);
+}
+
+/* What a scene with `discs` boulders and `walls` wall particles adds to that: each disc's state, (version 4 on) its
+ * orientation at the last list build, the contact count and (version 3 on) every wall particle's build position */
+#define COUNT_DISC_FIELD(name, meaning) +1
+static long long boulder_bytes(uint32_t version, long long discs, long long walls)
+{
+    if (discs == 0 || version < 2)
+        return 0;
+    const long long per_disc = 8 * (0 SURGE_DISC_STEP_FIELDS(COUNT_DISC_FIELD) + (version >= 4));
+    return discs * per_disc + 4 + (version >= 3 ? 16 * walls : 0);
+}
+#undef COUNT_DISC_FIELD
 
 static int write_all(FILE *f, const void *data, size_t len) { return fwrite(data, 1, len, f) == len ? 0 : -1; }
 
@@ -130,8 +153,10 @@ static int write_boulders(FILE *f, const boulder_set *b)
     return rc;
 }
 
-/* version: the checkpoint's (4 on: the orientations at the last neighbour-list build follow the state) */
-static int read_boulders(FILE *f, boulder_set *b, uint32_t version)
+/* version: the checkpoint's (4 on: the orientations at the last neighbour-list build follow the state); end: where
+ * the state hash starts at the latest (the file's size less the hash and the checksum). -1, or -2 when the contact
+ * count is more than the rest of the file can hold (*contact_count says it) */
+static int read_boulders(FILE *f, boulder_set *b, uint32_t version, long long end, int32_t *contact_count)
 {
     const size_t n = (size_t)b->count * sizeof(double);
     if (b->count == 0)
@@ -151,6 +176,10 @@ static int read_boulders(FILE *f, boulder_set *b, uint32_t version)
             return -1;
     if (read_all(f, &contacts, 4) || contacts < 0 || contacts > 64 * b->count + 1024)
         return -1;
+    const long here = ftell(f);
+    *contact_count = contacts;
+    if (here < 0 || (long long)contacts * (8 + 8 + 8) > end - here)
+        return -2; /* refused before anything is allocated for them */
     int64_t *keys = malloc((size_t)(contacts + 1) * sizeof *keys);
     double *lambda_n = malloc((size_t)(contacts + 1) * sizeof *lambda_n);
     double *lambda_t = malloc((size_t)(contacts + 1) * sizeof *lambda_t);
@@ -225,30 +254,93 @@ int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err
     return 0;
 }
 
-/* The header: magic, version, the parameters (with the live overrides) and the scene they build; NULL with err set */
-/* The particle counts that follow the parameter block (f is left where it was): a fluid particle takes at least
- * its position (2 f64) and id (i32) in the file, so counts the file's size cannot hold are refused before the scene
- * is built. 0, or -1 with err naming the file, the field and the size. */
-static int check_counts_fit(FILE *f, const char *path, long long file_bytes, char *err, size_t err_len)
+/* The particle counts that follow the parameter block (f is left where it was), checked against the file's size: a
+ * checkpoint holds every fluid particle's fields (checkpoint_bytes), so counts the file cannot hold are refused before
+ * anything is built. 0, or -1 with err naming the file, the field and the size. */
+static int read_counts(FILE *f, const char *path, long long file_bytes, uint32_t version, uint64_t plen,
+                       int32_t *count, int32_t *wall_count, char *err, size_t err_len)
 {
     const long here = ftell(f);
     unsigned char clock[40];
-    int32_t count = 0, wall_count = 0;
     if (here < 0 || read_all(f, clock, sizeof clock) || fseek(f, here, SEEK_SET) != 0) {
         snprintf(err, err_len, "%s: truncated checkpoint (it ends before the particle counts)", path);
         return -1;
     }
-    memcpy(&count, clock + 32, 4);
-    memcpy(&wall_count, clock + 36, 4);
-    if (count < 0 || wall_count < 0 || wall_count > count ||
-        (long long)(count - wall_count) > file_bytes / (2 * 8 + 4)) {
-        snprintf(err, err_len, "%s: bad particle count %d (walls %d): the file holds %lld bytes, too few for that "
-                 "many particles", path, count, wall_count, file_bytes);
+    memcpy(count, clock + 32, 4);
+    memcpy(wall_count, clock + 36, 4);
+    if (*count < 0 || *wall_count < 0 || *wall_count > *count ||
+        checkpoint_bytes(version, plen, (long long)*count - *wall_count) > file_bytes) {
+        snprintf(err, err_len, "%s: bad particle count %d (walls %d): the file holds %lld bytes, too few for that many "
+                 "particles", path, *count, *wall_count, file_bytes);
         return -1;
     }
     return 0;
 }
 
+/* The scene the parameters describe, counted before it is built (scene_count), against the checkpoint's counts and
+ * size: the fluid lattice of a scene without boulders is its fluid, so a checkpoint of it holds every site's
+ * particle; the boulders may cover some of the lattice and add wall particles. 0, or -1 with err. */
+static int scene_fits(const surge_params *params, const char *path, long long file_bytes, uint32_t version,
+                      uint64_t plen, int32_t count, int32_t wall_count, char *err, size_t err_len)
+{
+    char msg[512];
+    long long box_walls = 0, sites = 0;
+    if (surge_params_validate(params, msg, sizeof msg) != 0 || scene_count(params, &box_walls, &sites, msg,
+                                                                           sizeof msg) != 0) {
+        snprintf(err, err_len, "%s: bad parameters in checkpoint: %s", path, msg);
+        return -1;
+    }
+    const int boulders = params->boulders.placement != SURGE_BOULDERS_NONE;
+    const long long fluid = (long long)count - wall_count;
+    const long long least = checkpoint_bytes(version, plen, boulders ? 0 : sites);
+    if (least > file_bytes) {
+        snprintf(err, err_len, "%s: its parameters describe a scene of %lld fluid particles (and %lld wall particles): "
+                 "a checkpoint of it holds at least %lld bytes; the file holds %lld bytes", path, sites, box_walls,
+                 least, file_bytes);
+        return -1;
+    }
+    if (boulders ? fluid > sites || wall_count < box_walls : fluid != sites || wall_count != box_walls) {
+        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe (the checkpoint "
+                 "holds %lld fluid and %d wall particles, the scene %s%lld and %s%lld)", path, fluid, wall_count,
+                 boulders ? "at most " : "", sites, boulders ? "at least " : "", box_walls);
+        return -1;
+    }
+    return 0;
+}
+
+/* The checkpoint's counts and size, for the scene's own check while it is built (check_scene) */
+typedef struct checkpoint_counts {
+    const char *path;
+    long long file_bytes;
+    uint32_t version;
+    uint64_t plen;
+    int32_t count, wall_count;
+} checkpoint_counts;
+
+/* Called with the scene's exact counts, its boulders defined, before anything is allocated for its particles: they
+ * must be the checkpoint's, and the file must hold the boulders' state too. 0, or -1 with err. */
+static int check_scene(const surge_sim *sim, long long walls, long long fluid, void *user, char *err, size_t err_len)
+{
+    const checkpoint_counts *c = user;
+    if (walls != c->wall_count || walls + fluid != c->count) {
+        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe (the checkpoint "
+                 "holds %d particles, %d of them walls; the scene %lld, %lld walls)", c->path, c->count,
+                 c->wall_count, walls + fluid, walls);
+        return -1;
+    }
+    const long long least = checkpoint_bytes(c->version, c->plen, fluid) +
+                            boulder_bytes(c->version, sim->boulders.count, walls);
+    if (least > c->file_bytes) {
+        snprintf(err, err_len, "%s: its scene has %d boulders and %lld wall particles: a checkpoint of it holds at "
+                 "least %lld bytes; the file holds %lld bytes", c->path, sim->boulders.count, walls, least,
+                 c->file_bytes);
+        return -1;
+    }
+    return 0;
+}
+
+/* The header: magic, version, the parameters (with the live overrides) and the scene they build, once its counts are
+ * known to fit the file; NULL with err set */
 static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, const char *const *overrides,
                               int override_count, uint32_t *version, char *err, size_t err_len)
 {
@@ -277,7 +369,8 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         return NULL;
     }
     text[plen] = '\0';
-    if (check_counts_fit(f, path, file_bytes, err, err_len) != 0) {
+    checkpoint_counts counts = {.path = path, .file_bytes = file_bytes, .version = *version, .plen = plen};
+    if (read_counts(f, path, file_bytes, *version, plen, &counts.count, &counts.wall_count, err, err_len) != 0) {
         free(text);
         return NULL;
     }
@@ -290,8 +383,9 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         int overridden = 1;
         for (int i = 0; i < override_count && overridden; i++)
             overridden = surge_params_override(&params, overrides[i], true, err, err_len) == 0;
-        if (overridden)
-            sim = surge_sim_create(&params, err, err_len);
+        if (overridden && scene_fits(&params, path, file_bytes, *version, plen, counts.count, counts.wall_count, err,
+                                     err_len) == 0)
+            sim = sim_create_checked(&params, check_scene, &counts, err, err_len);
     }
     free(text);
     return sim;
@@ -307,8 +401,8 @@ typedef struct checkpoint_clock {
 } checkpoint_clock;
 
 /* The state after the header, up to the state hash; -1 with err set */
-static int read_state(FILE *f, surge_sim *sim, const char *path, uint32_t version, checkpoint_clock *c, char *err,
-                      size_t err_len)
+static int read_state(FILE *f, surge_sim *sim, const char *path, long long file_bytes, uint32_t version,
+                      checkpoint_clock *c, char *err, size_t err_len)
 {
     if (read_all(f, &c->step, 8) || read_all(f, &c->time_s, 8) || read_all(f, &c->dt_s, 8) ||
         read_all(f, &c->first_dt_s, 8) || read_all(f, &c->count, 4) || read_all(f, &c->wall_count, 4) ||
@@ -335,7 +429,15 @@ static int read_state(FILE *f, surge_sim *sim, const char *path, uint32_t versio
         snprintf(err, err_len, "%s: a version 1 checkpoint holds no boulder state, but its scene has boulders", path);
         return -1;
     }
-    if (read_boulders(f, &sim->boulders, version)) {
+    int32_t contacts = 0;
+    const int boulders_read = read_boulders(f, &sim->boulders, version, file_bytes - 8 - (version >= 4 ? 8 : 0),
+                                            &contacts);
+    if (boulders_read == -2) {
+        snprintf(err, err_len, "%s: bad contact count %d: the file holds %lld bytes, too few for that many contacts",
+                 path, (int)contacts, file_bytes);
+        return -1;
+    }
+    if (boulders_read != 0) {
         snprintf(err, err_len, "%s: truncated or corrupt boulder state", path);
         return -1;
     }
@@ -445,7 +547,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
     uint32_t version = 0;
     checkpoint_clock clock = {0};
     surge_sim *sim = read_header(f, path, (long long)st.st_size, overrides, override_count, &version, err, err_len);
-    if (sim && (read_state(f, sim, path, version, &clock, err, err_len) != 0 ||
+    if (sim && (read_state(f, sim, path, (long long)st.st_size, version, &clock, err, err_len) != 0 ||
                 read_end(f, path, version, err, err_len) != 0 || validate_state(sim, path, &clock, err, err_len) != 0)) {
         surge_sim_destroy(sim);
         sim = NULL;

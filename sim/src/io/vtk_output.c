@@ -790,11 +790,17 @@ static int vtp_array(const vtp_source *v, const char *name, const char *type, in
     return 0;
 }
 
-enum { VTP_POINT_BYTES = 3 * 8 }; /* a point's Points entry, the least a point of any surge .vtp takes */
+/* What a point takes in the arrays each reader copies out: the particles' Points (3 Float64), velocity_mps (3 Float32),
+ * density_kgpm3, pressure_pa, kind and id; the boulders' Points, velocity_mps (3 Float64), omega_radps, angle_rad and
+ * radius_m. The file holds at least that much per point, and an 8-byte size before each of those arrays. */
+enum { PARTICLE_POINT_BYTES = 3 * 8 + 3 * 4 + 4 + 4 + 1 + 4, PARTICLE_ARRAYS = 6 };
+enum { BOULDER_POINT_BYTES = 3 * 8 + 3 * 8 + 8 + 8 + 8, BOULDER_ARRAYS = 5 };
 
 /* Loads a .vtp written by surge and checks its header: v (its data to free by the caller) and the number of points,
- * or -1 with err naming the file. */
-static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, size_t err_len)
+ * or -1 with err naming the file. A point count the appended data cannot hold, at point_bytes a point and `arrays`
+ * 8-byte sizes, is refused before anything is allocated for it. */
+static int vtp_open(const char *path, vtp_source *v, int32_t *count, long long point_bytes, int arrays, char *err,
+                    size_t err_len)
 {
     if (!host_is_little_endian()) {
         set_err(err, err_len, "reading snapshots needs a little-endian machine");
@@ -836,11 +842,9 @@ static int vtp_open(const char *path, vtp_source *v, int32_t *count, char *err, 
     } else if (find_attr(pieces + 6, tag_end(pieces), "NumberOfPoints", &value, &len) != 0 ||
                strtol(value, NULL, 10) < 0 || strtol(value, NULL, 10) > INT32_MAX) {
         set_err(err, err_len, "%s: bad NumberOfPoints", path);
-    } else if (strtol(value, NULL, 10) > (size - (underscore + 1 - (const char *)data)) / VTP_POINT_BYTES) {
-        /* every point takes its 24 bytes of Points in the appended data: a count the file cannot hold is refused
-         * before anything is allocated for it */
+    } else if (strtol(value, NULL, 10) * point_bytes + 8 * arrays > size - (underscore + 1 - (const char *)data)) {
         set_err(err, err_len, "%s: bad NumberOfPoints %ld: the file holds %ld bytes, too few for that many points "
-                "(%d bytes each at least)", path, strtol(value, NULL, 10), size, VTP_POINT_BYTES);
+                "(%lld bytes each at least)", path, strtol(value, NULL, 10), size, point_bytes);
     } else {
         v->appended = (const unsigned char *)underscore + 1;
         *count = (int32_t)strtol(value, NULL, 10);
@@ -855,7 +859,7 @@ int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err
 {
     vtp_source v;
     int32_t count = 0;
-    if (vtp_open(path, &v, &count, err, err_len) != 0)
+    if (vtp_open(path, &v, &count, PARTICLE_POINT_BYTES, PARTICLE_ARRAYS, err, err_len) != 0)
         return -1;
     int rc = -1;
     if (surge_snapshot_reserve(snap, count) != 0) {
@@ -898,7 +902,7 @@ int surge_vtp_read_boulders(const char *path, surge_snapshot *snap, char *err, s
 {
     vtp_source v;
     int32_t count = 0;
-    if (vtp_open(path, &v, &count, err, err_len) != 0)
+    if (vtp_open(path, &v, &count, BOULDER_POINT_BYTES, BOULDER_ARRAYS, err, err_len) != 0)
         return -1;
     int rc = -1;
     surge_boulder_state *b = &snap->boulders;

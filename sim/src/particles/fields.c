@@ -99,6 +99,15 @@ uint64_t fields_hash(const surge_sim *sim, uint64_t h)
     return h;
 }
 
+size_t fields_checkpoint_bytes(void)
+{
+    size_t bytes = 0;
+    for (size_t i = 0; i < FIELD_COUNT; i++)
+        if (fields[i].roles & FIELD_CHECKPOINTED)
+            bytes += fields[i].size;
+    return bytes;
+}
+
 int fields_write(FILE *f, const surge_sim *sim)
 {
     const size_t w = (size_t)sim->wall_count, nf = (size_t)(sim->count - sim->wall_count);

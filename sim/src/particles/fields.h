@@ -94,6 +94,9 @@ void fields_restore_step_start(surge_sim *sim);
 /* The hashed fields over the fluid, in list order, into the FNV-1a hash h */
 uint64_t fields_hash(const surge_sim *sim, uint64_t h);
 
+/* The bytes a fluid particle's checkpointed fields take in a checkpoint */
+size_t fields_checkpoint_bytes(void);
+
 /* The checkpointed fields over the fluid, in list order; -1 on a write or read error */
 int fields_write(FILE *f, const surge_sim *sim);
 int fields_read(FILE *f, surge_sim *sim);

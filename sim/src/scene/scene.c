@@ -105,15 +105,18 @@ static double lubrication_depth(double xi, double h_n, double tan_theta)
     return 0.5 * (lo + hi) * h_n;
 }
 
-/* The initial fluid as columns of particles: rows[c] particles high in column c, from x0. Returns the number of
- * columns, or -1 with a message. */
-static long fluid_columns(const surge_params *p, int *rows, long max_columns, char *err, size_t err_len)
+/* The initial fluid as columns of particles: rows[c] particles high in column c, from x0 (rows may be NULL); sites
+ * (may be NULL): the rows of all columns together. Returns the number of columns, or -1 with a message. */
+static long fluid_columns(const surge_params *p, int *rows, long max_columns, long long *sites, char *err,
+                          size_t err_len)
 {
     const double dp = p->numerics.dp_m;
     if (p->fluid.shape == SURGE_SHAPE_BLOCK) {
-        const long cols = lround((p->fluid.x1_m - p->fluid.x0_m) / dp);
+        const long cols = lround((p->fluid.x1_m - p->fluid.x0_m) / dp), column_rows = lround(p->fluid.depth_m / dp);
         for (long c = 0; rows && c < cols && c < max_columns; c++)
-            rows[c] = (int)lround(p->fluid.depth_m / dp);
+            rows[c] = (int)column_rows;
+        if (sites)
+            *sites = cols > 0 && column_rows > 0 ? (long long)cols * column_rows : 0;
         return cols;
     }
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
@@ -141,12 +144,15 @@ static long fluid_columns(const surge_params *p, int *rows, long max_columns, ch
     const long cols = lround(length / dp);
     double volume_so_far = 0;
     long rows_so_far = 0;
-    for (long c = 0; rows && c < cols && c < max_columns; c++) {
+    for (long c = 0; (rows || sites) && c < cols; c++) {
         volume_so_far += lubrication_depth(x_tip - (p->fluid.x0_m + (c + 0.5) * dp), h_n, tan_theta) * dp;
         const long total = lround(volume_so_far / (dp * dp));
-        rows[c] = (int)(total - rows_so_far);
+        if (rows && c < max_columns)
+            rows[c] = (int)(total - rows_so_far);
         rows_so_far = total;
     }
+    if (sites)
+        *sites = rows_so_far;
     return cols;
 }
 
@@ -218,14 +224,14 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         goto fail;
     }
 
-    const long cols = fluid_columns(p, NULL, 0, err, err_len);
+    const long cols = fluid_columns(p, NULL, 0, NULL, err, err_len);
     int *rows = cols > 0 ? malloc((size_t)cols * sizeof *rows) : NULL;
     if (cols < 0 || !rows) {
         if (cols >= 0)
             snprintf(err, err_len, "out of memory");
         goto fail;
     }
-    fluid_columns(p, rows, cols, err, err_len);
+    fluid_columns(p, rows, cols, NULL, err, err_len);
     const double theta = p->body.slope_deg * SURGE_PI / 180.0;
     const double g_normal = p->body.gravity_mps2 * cos(theta);
     long fluid_count = 0;
@@ -238,6 +244,10 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     }
     const int boulder_particles = boulders_particle_count(s);
     s->wall_count = walls.n + boulder_particles;
+    if (s->scene_check && s->scene_check(s, s->wall_count, fluid_count, s->scene_check_user, err, err_len) != 0) {
+        free(rows);
+        goto fail;
+    }
     if (allocate_state(s, s->wall_count + (int)fluid_count) != 0) {
         snprintf(err, err_len, "out of memory for %ld particles", (long)s->wall_count + fluid_count);
         free(rows);
@@ -282,4 +292,24 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
 fail:
     free(walls.x); free(walls.y); free(walls.gdx); free(walls.gdy); free(walls.wall);
     return -1;
+}
+
+int scene_count(const surge_params *params, long long *box_walls, long long *fluid_sites, char *err, size_t err_len)
+{
+    surge_params q = *params;
+    q.walls.layers = surge_params_wall_layers(params); /* resolved as surge_sim_create does */
+    const surge_params *p = &q;
+    const double dp = p->numerics.dp_m, L = p->domain.length_m, depth = p->walls.layers * dp;
+    /* as build_walls lays them */
+    const double xlo = p->walls.left ? -depth : 0.0, xhi = p->walls.right ? L + depth : L;
+    const long long nx_ext = fmax(0, lround((xhi - xlo) / dp)), ny = fmax(0, lround(p->domain.height_m / dp)),
+                    nu = fmax(0, lround(p->walls.upstream_height_m / dp));
+    long long walls = 0;
+    for (int k = 0; k < p->walls.layers; k++) {
+        walls += (p->walls.bottom + p->walls.top) * nx_ext + (p->walls.left + p->walls.right) * ny;
+        if (p->walls.upstream)
+            walls += nu * (1 + (scene_upstream_back_m(p) + (k + 0.5) * dp < p->walls.upstream_x_m - depth));
+    }
+    *box_walls = walls;
+    return fluid_columns(p, NULL, 0, fluid_sites, err, err_len) < 0 ? -1 : 0;
 }

@@ -30,19 +30,22 @@ typedef struct surge_control surge_control;
 surge_control *surge_control_start(void *zmq_context, const surge_control_def *def, surge_journal *journal,
                                    char *err, size_t err_len);
 
-/* Solver thread, at a step boundary: answers pending requests for at most 5 % of the recent step time (at least
- * one request), so that a flood of requests cannot hold the solver; the rest wait in order for the next boundary.
- * While paused it answers for up to 20 ms, waits up to 0.1 s for a request, and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping (unless stop_signal is set).
- * Returns SURGE_CONTINUE or SURGE_REQUEST_* flags (surge/run.h). */
+/* Solver thread, at a step boundary: answers pending requests while its credit lasts (2 % of the wall time between
+ * boundaries, each request spending the time it took), so that a flood of requests cannot hold the solver; the rest
+ * wait in order for a later boundary. A reply that finds its client's queue full is kept and sent as the client
+ * reads; that client's requests meanwhile are refused "busy", not run. While paused it answers for up to 20 ms,
+ * waits up to 0.1 s for a request, and adds SURGE_REQUEST_AGAIN, so the run loop calls again before stepping
+ * (unless stop_signal is set). Returns SURGE_CONTINUE or SURGE_REQUEST_* flags (surge/run.h). */
 int surge_control_service(surge_control *control, surge_sim *sim, volatile sig_atomic_t *stop_signal);
 
 /* Connections closed so far for going over max_peers, and for idling past idle_peer_s. */
 void surge_control_peer_counts(const surge_control *control, long *over_limit, long *idle);
 
-/* Closes the socket; a client waiting for a reply gets none. */
 /* The endpoint bound, with the port the system chose for a wildcard one */
 const char *surge_control_endpoint(const surge_control *control);
 
+/* The run has ended: refuses the requests still waiting ("the run has ended"), and those that come until none has
+ * for 0.1 s, for 1 s at most, then closes the socket. */
 void surge_control_close(surge_control *control);
 
 #endif

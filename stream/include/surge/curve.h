@@ -7,7 +7,10 @@
  *         secret-key = "<40 Z85 characters>"     (only in NAME.key, which stays private)
  * The run holds the server's NAME.key; each client holds its own .key and the server's .pub; the run admits
  * only clients whose .pub lies in its allow-list (a file, or a folder of *.pub files). A ZAP handler
- * (ZeroMQ RFC 27) in its own thread answers the handshakes, so a slow or refused peer never blocks the solver. */
+ * (ZeroMQ RFC 27) in its own thread answers the handshakes, so a slow or refused peer never blocks the solver.
+ * It gives every connection it admits a number of its own, one more than the last, as its ZAP User-Id (the message
+ * property "User-Id"): the publisher tells its subscribers apart by it. A run without keys starts the handler alone
+ * (surge_curve_numbering_start) for that. */
 #ifndef SURGE_CURVE_H
 #define SURGE_CURVE_H
 #include <stddef.h>
@@ -32,7 +35,12 @@ typedef struct surge_curve_server surge_curve_server;
 surge_curve_server *surge_curve_server_start(void *zmq_context, const char *server_key_path,
                                              const char *allowed_clients_path, char *err, size_t err_len);
 
-/* Makes socket (not yet bound) a CURVE server that admits only the allowed clients. 0, or -1 with err. */
+/* The handler alone, without keys: it admits every plain (NULL security) connection of the sockets passed to
+ * surge_curve_secure_socket and numbers it. Must come before any socket of that context binds. NULL with err. */
+surge_curve_server *surge_curve_numbering_start(void *zmq_context, char *err, size_t err_len);
+
+/* Makes socket (not yet bound) a CURVE server that admits only the allowed clients, or, with a handler started
+ * without keys, a plain socket whose connections the handler numbers. 0, or -1 with err. */
 int surge_curve_secure_socket(const surge_curve_server *server, void *socket, char *err, size_t err_len);
 
 /* Number of keys admitted, and of handshakes refused so far. */

@@ -18,7 +18,8 @@ typedef struct surge_publisher_def {
     int every_steps;      /* publish at most once every this many steps */
     double max_rate_hz;   /* and at most this many times per wall-clock second; 0: no limit */
     int send_hwm;         /* messages queued per subscriber before the newest are dropped (ZMQ_SNDHWM) */
-    const surge_curve_server *curve; /* CURVE security with an allow-list of subscribers; NULL: none */
+    const surge_curve_server *curve; /* CURVE security with an allow-list of subscribers, or the handler that only
+                                        numbers connections (surge_curve_numbering_start); NULL: none */
     int max_peers;        /* subscribers connected at once; a new one beyond closes the one connected longest */
 } surge_publisher_def;
 
