@@ -304,7 +304,7 @@ static double velocity_difference(const surge_snapshot *a, const surge_snapshot 
     return (rms ? sqrt(sum2 / fluid) : difference) / largest;
 }
 
-#define HELD_ITERATIONS_RATIO 1.2
+#define HELD_ITERATIONS_RATIO 1.3
 static int test_preconditioners(void)
 {
     surge_snapshot first[3] = {{0}}, last[3] = {{0}};
@@ -349,9 +349,9 @@ static int test_preconditioners(void)
     expect_below("preconditioners: amg's pressure iterations / jacobi's", (double)iterations[1] / iterations[0], 1.0 / 3);
     expect_below("preconditioners: amg's viscous iterations / jacobi's", (double)viscous[1] / viscous[0], 0.75);
     /* hierarchies held over 16 steps take about the iterations of ones built every step: a hierarchy that lost
-     * track of its particles' order took 6.0 times as many when written. (The free-surface rows' sizing, which
-     * doubled them every few steps on the front at dp = 0.5 mm, shows little on this small scene: 1.12 without it,
-     * 1.11 with it; docs/method.md.) */
+     * track of its particles' order took 6.0 times as many when written. The rows under the free surface change
+     * with the surface's mirror images from step to step, which a held stand-in does not follow: 1.23 on this
+     * scene (1.11 with the kernels cut off under the surface, implicit.surface_images = 0) */
     printf("preconditioners: pressure iterations over 20 steps: amg held %ld, built every step %ld\n",
            pressure_sum[1], pressure_sum[2]);
     expect_below("preconditioners: pressure iterations, held hierarchies / built every step",

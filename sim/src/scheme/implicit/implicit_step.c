@@ -463,15 +463,17 @@ static void move_particles(surge_sim *sim, double dt)
         implicit_disc_forces(sim);
     #pragma omp parallel
     shifting_compute(sim, dt);
-    /* Lind's shift is a displacement a step (shifting.c); below the scheme's own step at rest it is taken in
-     * proportion, so that a shorter step does not shift more in a second (at 1 ms, a twentieth of the still tank's
-     * own step, the full shift each step set its free surface rippling; docs/method.md, "The free surface") */
+    /* Lind's shift is a displacement a step (shifting.c); in the free-surface layer, below the scheme's own step at
+     * rest, it is taken in proportion, so that a shorter step does not shift the surface more in a second (at 1 ms,
+     * a twentieth of the still tank's own step, the full shift each step set its surface rippling; docs/method.md,
+     * "The free surface") */
     const double rest_step_s = surge_implicit_dt_s(&sim->params, sim->derived.h_m, sqrt(sim->gx * sim->gx + sim->gy * sim->gy), 0.0);
     const double shift_share = isfinite(rest_step_s) ? fmin(1.0, dt / rest_step_s) : 1.0;
     const double face_reach_m = sim_contact_reach_m(sim), dp = sim->params.numerics.dp_m;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = first; a < n; a++) {
-        sim->shift_x[a] *= (real)shift_share, sim->shift_y[a] *= (real)shift_share;
+        if (sim->near_surface[a])
+            sim->shift_x[a] *= (real)shift_share, sim->shift_y[a] *= (real)shift_share;
         double dx = dt * sim->vx[a] + sim->shift_x[a] + w->density_dx[a - first] + w->pair_dx[a - first];
         double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
         const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -
