@@ -220,16 +220,17 @@ static const surge_param_info registry[] = {
      "below the bulk's pressure; docs/method.md, \"Walls\").", OFF(implicit.wall_neumann_offset)},
     {"implicit", "surface_images", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: how the pressure meets p = 0 on the free surface. 1: each particle whose kernel reaches the "
-     "surface sees mirror images of its neighbours beyond it (pressure negated, velocity kept), the surface half a "
-     "spacing beyond the outermost surface particle, so its gradient, divergence and Laplacian are those of a full "
-     "kernel; 0: the surface particles hold p = 0 and the kernels under them are cut off, which lets a mode under the "
-     "surface grow at steps shorter than the scheme's own (docs/method.md, \"The free surface\").",
+     "surface sees mirror images of its neighbours across the surface particles' line (pressure negated, velocity "
+     "kept), so its gradient, divergence and Laplacian are those of a full kernel; 0: the kernels under the surface "
+     "are cut off, which lets a mode under the surface grow at steps shorter than the scheme's own (docs/method.md, "
+     "\"Mirror images beyond the surface\").",
      OFF(implicit.surface_images)},
     {"implicit", "pressure_relaxation", SURGE_PARAM_REAL, "-", 0.5, 0, 1, true, NULL,
      "Implicit scheme, under a free surface: the last step's pressure is relaxed by one weighted Jacobi sweep of the "
      "pressure's Laplacian, p - beta (L p)/L_aa, before the step uses it. A linear (hydrostatic) field is kept; a "
      "field that alternates from particle to particle, which the projection's gradient does not see and the "
-     "incremental step carries undamped, decays (0: none; docs/method.md, \"The free surface\").",
+     "incremental step carries undamped, decays (0: none; docs/method.md, \"Relaxation of the last step's "
+     "pressure\").",
      OFF(implicit.pressure_relaxation)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",

@@ -466,7 +466,7 @@ static void move_particles(surge_sim *sim, double dt)
     /* Lind's shift is a displacement a step (shifting.c); in the free-surface layer, below the scheme's own step at
      * rest, it is taken in proportion, so that a shorter step does not shift the surface more in a second (at 1 ms,
      * a twentieth of the still tank's own step, the full shift each step set its surface rippling; docs/method.md,
-     * "The free surface") */
+     * "The shift under the surface") */
     const double rest_step_s = surge_implicit_dt_s(&sim->params, sim->derived.h_m, sqrt(sim->gx * sim->gx + sim->gy * sim->gy), 0.0);
     const double shift_share = isfinite(rest_step_s) ? fmin(1.0, dt / rest_step_s) : 1.0;
     const double face_reach_m = sim_contact_reach_m(sim), dp = sim->params.numerics.dp_m;

@@ -236,7 +236,7 @@ void implicit_pressure_operator(surge_sim *sim, const double *x, double *out)
 }
 
 /* p relaxed by one weighted Jacobi sweep of the corrected Laplacian, p_a - beta (L p)_a / L_aa, the walls at their
- * ghosts' values plus offset_pa (implicit.pressure_relaxation; docs/method.md, "The free surface"): a linear field
+ * ghosts' values plus offset_pa (implicit.pressure_relaxation; docs/method.md, "Relaxation of the last step's pressure"): a linear field
  * (the hydrostatic pressure, also next to the walls and, with its images, the free surface) is kept, a field that
  * alternates from particle to particle decays. Those are the near-null modes of the step's divergence of the
  * gradient, which the incremental projection carries from step to step undamped and a small asymmetry then grows. */

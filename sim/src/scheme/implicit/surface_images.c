@@ -1,10 +1,10 @@
-/* The free surface by mirror images (implicit.surface_images; docs/method.md, "The free surface"). A particle whose
- * kernel reaches the free surface sees, beyond a plane half a spacing outside the outermost surface particle near it,
- * the mirror image of each neighbour on its side of the plane: the image's pressure is the neighbour's negated (so
- * p = 0 on the plane), its velocity the neighbour's own. Its gradient, divergence and Laplacian are then those of a
+/* The free surface by mirror images (implicit.surface_images; docs/method.md, "The implicit scheme", "Mirror images
+ * beyond the surface"). A particle whose kernel reaches the free surface sees, beyond the line of the surface
+ * particles near it (held at p = 0), the mirror image of each neighbour on its side of the line: the image's
+ * pressure is the neighbour's negated (so p = 0 on the line), its velocity the neighbour's own. Its gradient, divergence and Laplacian are then those of a
  * full kernel, and the step's gradient and divergence pair closely enough that no mode under the surface grows at
  * steps shorter than the scheme's own (docs/validation/stability.md, "Short steps in a thin fluid"). Wall particles
- * beyond the plane (a side wall above the fluid) are left out: the images of those below it take their place. */
+ * beyond the line (a side wall above the fluid) are left out: the images of those below it take their place. */
 #include <math.h>
 #include <string.h>
 
@@ -63,8 +63,8 @@ static inline void add_pair(moments *m, double scale, double dx, double dy, doub
     m->wrx += scale * weight * dx, m->wry += scale * weight * dy;
 }
 
-/* The plane's depth under fluid particle a along its outward normal n: half a spacing beyond the outermost surface
- * particle in reach (a itself included); -1 where none is */
+/* The depth of fluid particle a along its outward normal n under the outermost surface particle in reach (a itself
+ * included); -1 where none is */
 static double plane_depth(const surge_sim *sim, int a, double nx, double ny)
 {
     const neighbour_lists *nl = &sim->neighbours;
@@ -84,9 +84,9 @@ static double plane_depth(const surge_sim *sim, int a, double nx, double ny)
 
 /* The free surface's plane at fluid particle a, its outward normal n and its depth under it: the line through the
  * surface particles in reach (a itself included), weighted as the Laplacian (its normal the direction of their
- * positions' least spread, turned against the colour gradient of fluid and wet walls), moved out by half a spacing;
- * where fewer than two surface particles are in reach or they lie in a clump, the colour gradient's direction and
- * half a spacing beyond the outermost. 0 where neither can be read. */
+ * positions' least spread, turned against the colour gradient of fluid and wet walls); where fewer than two surface
+ * particles are in reach or they lie in a clump, the colour gradient's direction through the outermost. 0 where
+ * neither can be read. */
 static int surface_plane(const surge_sim *sim, int a, double *nx, double *ny, double *depth)
 {
     const implicit_work *w = implicit_of(sim);
@@ -120,7 +120,7 @@ static int surface_plane(const surge_sim *sim, int a, double *nx, double *ny, do
     const double cxx = sxx / sw - cx * cx, cxy = sxy / sw - cx * cy, cyy = syy / sw - cy * cy;
     const double mean = 0.5 * (cxx + cyy), spread = sqrt(0.25 * (cxx - cyy) * (cxx - cyy) + cxy * cxy);
     const double dp = sim->params.numerics.dp_m;
-    if (mean + spread < 0.2 * dp * dp) /* a clump, not a line: half a spacing beyond the outermost */
+    if (mean + spread < 0.2 * dp * dp) /* a clump, not a line */
         return 1;
     /* the eigenvector of the smaller eigenvalue mean - spread of the positions' covariance */
     double ex = cxy, ey = mean - spread - cxx;
@@ -161,7 +161,7 @@ static int particle_images(surge_sim *sim, int a, double nx, double ny, double d
         const double dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[kw]);
         const double dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[kw]);
         const double depth_w = depth + dx * nx + dy * ny;
-        /* a wall level with the surface particles (within half a spacing) stays, as they do */
+        /* a wall level with the surface particles (within half a spacing of their line) stays, as they do */
         const double side = depth_w > -half_dp ? 1.0 : 0.0;
         add_pair(&m, side, dx, dy, w->wall_gx[e], w->wall_gy[e], w->wall_w[e]);
         const image_pair p = depth_w > half_dp ? image_of(sim, dx, dy, depth_w, nx, ny) : (image_pair){0};
