@@ -291,8 +291,9 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         int overridden = 1;
         for (int i = 0; i < override_count && overridden; i++)
             overridden = surge_params_override(&params, overrides[i], true, err, err_len) == 0;
-        if (overridden)
-            sim = surge_sim_create(&params, err, err_len);
+        char why[512];
+        if (overridden && !(sim = surge_sim_create(&params, why, sizeof why)))
+            snprintf(err, err_len, "%s: the checkpoint's parameters build no scene: %s", path, why);
     }
     free(text);
     return sim;
