@@ -18,6 +18,7 @@
 #include "physics/shifting.h"
 #include "scene/scales.h"
 #include "scene/scene.h"
+#include "scheme/implicit/implicit.h"
 
 static int failures = 0;
 
@@ -1210,12 +1211,70 @@ static int test_implicit_dt(void)
     return failures;
 }
 
+/* Three discs thrown through a weightless viscous slab, periodic, without walls (test_boulders.py's momentum scene),
+ * with the implicit scheme */
+static void thrown_discs_implicit(surge_params *p)
+{
+    p->numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    p->walls.bottom = p->walls.top = false;
+    p->domain.height_m = 0.2;
+    p->fluid.viscosity_m2ps = 0.002;
+    p->boulders.density_ratio = 1.5;
+    char err[160];
+    surge_param_set(p, surge_param_find("boulders.list_m"),
+                    "0.195 0.05 0.0125 0.04 0.005 0, 0.08 0.05 0.0125 -0.01 0 0.5, 0.10 0.02 0.0125 0 -0.01 0", err,
+                    sizeof err);
+}
+
+/* The coupled viscous operator (docs/method.md, "Boulders in the implicit scheme") exchanges momentum between the fluid
+ * and the discs exactly: applied to any fluid and disc velocities x in a scene without fixed walls, the momentum of
+ * its answer, sum_a m_a out_a + sum_d m_d out_d (the discs' Vx, Vy rows), is that of x, to round-off: each disc's
+ * rows take the reaction of what its particles give the fluid's rows, pair by pair, and the fluid's pairs are
+ * symmetric. The bound is round-off against the momentum the operator moves (sum of |m (out - x)|). */
+static int test_implicit_disc_momentum(void)
+{
+    surge_sim *sim = case_sim("boulder_couette.ini", 0, thrown_discs_implicit);
+    if (!sim || surge_sim_step(sim) != 0)
+        return 1;
+    const implicit_work *w = implicit_of(sim);
+    const int nf = sim->count - sim->wall_count, n = 2 * nf + w->disc_rows;
+    double *x = malloc((size_t)n * sizeof *x), *out = malloc((size_t)n * sizeof *out);
+    uint32_t state = 12345u; /* a fixed pseudo-random field (xorshift), 0.01 m/s in size */
+    for (int q = 0; q < n; q++) {
+        state ^= state << 13, state ^= state >> 17, state ^= state << 5;
+        x[q] = 0.01 * ((double)state / 4294967296.0 - 0.5);
+    }
+    implicit_coupled_viscous_operator(sim, x, out);
+    double change[2] = {0, 0}, moved[2] = {0, 0}, discs_moved = 0;
+    for (int c = 0; c < 2; c++) {
+        for (int i = 0; i < nf; i++)
+            change[c] += sim->mass * (out[c * nf + i] - x[c * nf + i]),
+                moved[c] += fabs(sim->mass * (out[c * nf + i] - x[c * nf + i]));
+        for (int d = 0; d < sim->boulders.count; d++) {
+            const double m = sim->boulders.mass[d], dq = out[2 * nf + 3 * d + c] - x[2 * nf + 3 * d + c];
+            change[c] += m * dq, moved[c] += fabs(m * dq), discs_moved += fabs(m * dq);
+        }
+    }
+    printf("implicit_disc_momentum: %d fluid particles, %d discs: momentum change (%.3e, %.3e) of (%.3e, %.3e) moved "
+           "(kg m/s per m), %.3e of it by the discs' rows\n", nf, sim->boulders.count, change[0], change[1], moved[0],
+           moved[1], discs_moved);
+    expect_below("implicit_disc_momentum: the discs' rows take part (1 = they do not)", discs_moved > 0 ? 0 : 1, 0);
+    expect_below("implicit_disc_momentum: |x momentum change| / momentum moved", fabs(change[0]) / moved[0], 1e-12);
+    expect_below("implicit_disc_momentum: |y momentum change| / momentum moved", fabs(change[1]) / moved[1], 1e-12);
+    free(x);
+    free(out);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
         return 2;
     if (!strcmp(argv[1], "implicit_dt"))
         return test_implicit_dt() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_disc_momentum"))
+        return test_implicit_disc_momentum() ? 1 : 0;
     if (!strcmp(argv[1], "kernel"))
         return test_kernel() ? 1 : 0;
     if (!strcmp(argv[1], "eos"))

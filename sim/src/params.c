@@ -193,17 +193,6 @@ static const surge_param_info registry[] = {
      "just inside the lattice's 0.5, lets the belt-wall corner run at implicit.force_cfl 0.35 where 0.25 compressed it; "
      "at 0.5 the rule holds every particle of a wall's first row and Poiseuille's start-up fails (docs/method.md).",
      OFF(implicit.contact_reach_dp)},
-    {"implicit", "added_mass", SURGE_PARAM_REAL, "-", 1, 0, 10, true, NULL,
-     "Implicit scheme: the boulders' added-mass estimate, in fluid masses of the wetted disc (1: a circle in "
-     "unbounded fluid). The fluid answers a disc's acceleration a step late; stepping the disc with this mass on both "
-     "sides keeps a disc lighter than the fluid stable (0: no estimate; docs/method.md, \"Boulders in the implicit "
-     "scheme\").", OFF(implicit.added_mass)},
-    {"implicit", "disc_coupling", SURGE_PARAM_REAL, "-", 1, 0, 100, true, NULL,
-     "Implicit scheme: the discs' coupling limit, dt <= disc_coupling (m + m~) / k for each disc, m its mass, m~ its "
-     "added mass and k its drag stiffness (the fluid's drag on it with the fluid held still). The fluid answers a "
-     "disc's velocity a step late; beyond this step a disc among others in a very viscous fluid follows the flow by "
-     "a small fraction a step and a loaded channel's viscosity came out 8 times too high (0: no limit; docs/method.md, "
-     "\"Boulders in the implicit scheme\").", OFF(implicit.disc_coupling)},
     {"implicit", "pair_distance_dp", SURGE_PARAM_REAL, "dp", 0.5, 0, 0.9, true, NULL,
      "Implicit scheme: two fluid particles closer than this lose their speed toward each other (a perfectly inelastic "
      "collision, momentum kept) and are moved apart to it. A pair that has closed on itself has no kernel gradient "
@@ -621,6 +610,18 @@ static void suggestion(const char *name, char *out, size_t len)
         }
 }
 
+/* Parameters that no longer exist, still accepted in files (and ignored) so that earlier runs' params.ini and
+ * checkpoints load: the implicit scheme's discs' added-mass estimate and coupling limit, which the coupled solve
+ * replaced (docs/method.md, "Boulders in the implicit scheme") */
+static bool retired(const char *name)
+{
+    static const char *const names[] = {"implicit.added_mass", "implicit.disc_coupling"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (!strcmp(names[i], name))
+            return true;
+    return false;
+}
+
 int surge_params_load_text(surge_params *p, const char *text, const char *source, char *err, size_t err_len)
 {
     char section[64] = "";
@@ -682,6 +683,8 @@ int surge_params_load_text(surge_params *p, const char *text, const char *source
         char name[160];
         const int fits = snprintf(name, sizeof name, "%s.%s", section, key) < (int)sizeof name;
         const surge_param_info *info = fits ? surge_param_find(name) : NULL; /* never a truncated name's match */
+        if (!info && fits && retired(name))
+            continue;
         if (!info) {
             char hint[160];
             suggestion(key, hint, sizeof hint);

@@ -137,8 +137,6 @@ typedef struct surge_params {
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
         double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
         double contact_reach_dp;   /* no step or shift ends closer than this to a wall face (dp) */
-        double added_mass;         /* the discs' added-mass estimate, in rho0 pi r^2 of wetted disc */
-        double disc_coupling;      /* dt <= disc_coupling (m + m~) / k per disc (k its drag stiffness); 0: none */
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
         bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */

@@ -35,14 +35,8 @@
     F(ay, "")                                                                                                         \
     F(alpha, "")                                                                                                      \
     F(spin_damping, "-d(torque)/d(omega) / inertia (1/s): the viscous torque's stiffness, implicit")                \
-    F(drag_stiffness, "-d(force)/d(velocity) (kg/(m s)) with the fluid held still: the viscous drag's")             \
     F(omega_forces, "the omega the last fluid forces were computed with")                                            \
     F(angle_build, "orientation at the last neighbour-list build (where the ghosts' lists were made)")              \
-    F(wetted, "the fraction of the disc's surface the fluid wets (boulders_wetted_fraction)")                       \
-    F(step_ax, "implicit scheme: the disc's acceleration over the last step, (v_n+1 - v_n) / dt")                   \
-    F(step_ay, "")                                                                                                    \
-    F(step_ax_n, "and over the one before (a rolled-back step restores them)")                                      \
-    F(step_ay_n, "")                                                                                                  \
     F(cos_angle, "scratch: cos and sin of angle as of the last boulders_orient (one per disc: its particles share")  \
     F(sin_angle, "them)")
 

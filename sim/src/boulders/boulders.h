@@ -31,8 +31,6 @@ void boulders_surface_velocity(const surge_sim *sim, int k, double *vx, double *
 void boulders_save_step_start(boulder_set *b, int i);
 void boulders_restore_step_start(boulder_set *b, int i);
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
-/* each disc's wetted fraction: the mean over its outer ring of wetness (per wall particle, 0 dry to 1 wet) */
-void boulders_wetted_fraction(surge_sim *sim, const real *wetness);
 /* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
  * alpha; the disc particles follow. -1 when the contact solver runs out of memory. */
 int boulders_advance_with_contacts(surge_sim *sim, double dt_s);

@@ -1,4 +1,4 @@
-/* The fluid's forces and torques on the discs (eq. 10), and how much of each disc the fluid wets. */
+/* The fluid's forces and torques on the discs (eq. 10). */
 #include <math.h>
 #include <string.h>
 
@@ -69,7 +69,7 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         b->spin_coupling[k] = total[2];
     }
     for (int i = 0; i < b->count; i++) {
-        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = b->drag_stiffness[i] = 0;
+        b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = 0;
         b->omega_forces[i] = b->omega[i];
     }
     const double mu = sim->rho0 * sim->params.fluid.viscosity_m2ps, dp = sim->params.numerics.dp_m;
@@ -86,7 +86,6 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         /* stiffness: the no-slip velocity 2 v_surface - v_ghost moves by 2 R per unit omega */
         const double lever = sqrt(rx * rx + ry * ry);
         b->spin_damping[i] -= 2 * sim->mass * b->radius[i] * lever * b->spin_coupling[k];
-        b->drag_stiffness[i] -= 2 * sim->mass * b->spin_coupling[k];
         if (lever > b->radius[i] - dp) { /* outer ring; r . n = radius */
             const double a = b->radius[i], arc = 2 * SURGE_PI * a / boulders_ring_particles(a, dp, 0);
             const double wetted = fmin(1.0, (double)sim->ghost_fluid_sum[k]);
@@ -102,17 +101,4 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
             b->fx[sim->face_disc[a]] -= sim->mass * sim->face_push_x[a];
             b->fy[sim->face_disc[a]] -= sim->mass * sim->face_push_y[a];
         }
-}
-
-void boulders_wetted_fraction(surge_sim *sim, const real *wetness)
-{
-    boulder_set *b = &sim->boulders;
-    const double dp = sim->params.numerics.dp_m;
-    for (int i = 0; i < b->count; i++)
-        b->wetted[i] = 0;
-    for (int k = 0; k < sim->wall_count; k++) { /* in index order: the same sums whatever the thread count */
-        const int id = sim->id[k], i = b->of_wall[id];
-        if (i >= 0 && hypot(b->local_x[id], b->local_y[id]) > b->radius[i] - dp) /* the outer ring */
-            b->wetted[i] += wetness[k] / boulders_ring_particles(b->radius[i], dp, 0);
-    }
 }

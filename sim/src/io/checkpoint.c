@@ -18,7 +18,8 @@
  * boulder block), 2 and 3 are still read: 1 and 2 build the lists afresh at the first step, so the restarted run
  * agrees with the saved one to round-off, not bit for bit; so does an implicit run from version 5, which builds its
  * multigrid hierarchies afresh, from version 6, whose rest-density solve starts from 0 at the first step, and from
- * version 7 with boulders, whose first step has no disc-coupling limit (implicit.disc_coupling). */
+ * version 7 with boulders, whose first step had no disc-coupling limit; an implicit run with boulders from versions 5-8,
+ * whose discs were stepped after the fluid, continues with the coupled step (version 9). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -35,7 +36,7 @@
 #include "scene/scene.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 8u
+#define CHECKPOINT_VERSION 9u
 
 /* The least a checkpoint of this version holds with a parameter block of plen bytes and `fluid` fluid particles: the
  * header, the clock and counts, the particles' fields, (version 3 on) their neighbour-list build positions, the state

@@ -1,12 +1,10 @@
-/* What the implicit step hands on after its solves: close fluid pairs parted, and the fluid's forces on the discs
- * (eq. 10). */
+/* What the implicit step does after its solves: close fluid pairs parted. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scheme/implicit/implicit.h"
-#include "boulders/boulders.h"
 
 /* Close pairs (implicit.pair_distance_dp, docs/method.md): each fluid particle closer than the distance to another
  * loses half their speed toward each other and moves half the way to the distance apart (the MPS collision model,
@@ -40,41 +38,4 @@ void implicit_part_close_pairs(surge_sim *sim)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         sim->vx[first + i] += (real)w->pair_dvx[i], sim->vy[first + i] += (real)w->pair_dvy[i];
-}
-
-/* eq. 10 with the step's answer: the fluid's v_n+1 and p_n+1 at the step's start positions (the walls' pressures
- * continued from their ghosts, the disc particles' velocities mirrored about the disc's surface), summed over each
- * disc's particles by boulders_fluid_forces as the explicit scheme's pair forces are, relative to the mean pressure
- * of the disc's particles, and the reactions of the contact rule. The fluid's density is rho0 (the scheme holds
- * it). */
-void implicit_disc_forces(surge_sim *sim)
-{
-    implicit_work *w = implicit_of(sim);
-    const neighbour_lists *nl = &sim->neighbours;
-    const real rho0 = (real)sim->rho0, inv_rho0 = (real)(1.0 / sim->rho0);
-    #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int kw = 0; kw < sim->wall_count; kw++) {
-        if (sim->wall_of[kw] != WALL_BOULDER)
-            continue;
-        double gvx = w->mirror_vx[kw], gvy = w->mirror_vy[kw];
-        if (!w->dry[kw])
-            ghost_velocity(sim, kw, &gvx, &gvy);
-        sim->wall_vx[kw] = (real)(2.0 * w->mirror_vx[kw] - gvx);
-        sim->wall_vy[kw] = (real)(2.0 * w->mirror_vy[kw] - gvy);
-        sim->rho[kw] = rho0, sim->inv_rho[kw] = inv_rho0;
-    }
-    #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int a = sim->wall_count; a < sim->count; a++)
-        sim->pair_state[a] = (pair_state){nl->moved_x[a], nl->moved_y[a], sim->vx[a], sim->vy[a], rho0, inv_rho0,
-                                          sim->pressure[a], (real)sim->surface[a]};
-    const boulder_set *b = &sim->boulders;
-    double *reference = w->disc_reference_pa;
-    memset(reference, 0, (size_t)b->count * sizeof *reference);
-    for (int kw = 0; kw < sim->wall_count; kw++) /* in index order: the same sums whatever the thread count */
-        if (sim->wall_of[kw] == WALL_BOULDER)
-            reference[b->of_wall[sim->id[kw]]] += sim->pressure[kw];
-    for (int i = 0; i < b->count; i++)
-        reference[i] /= boulders_particles_of(sim, i);
-    boulders_fluid_forces(sim, reference);
-    boulders_wetted_fraction(sim, w->wetness);
 }

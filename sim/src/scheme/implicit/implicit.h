@@ -40,8 +40,19 @@ typedef struct implicit_work {
     real *mirror_nw;                     /* and in the derivative along the ghost's normal there */
     real *ghost_w, *ghost_nw;            /* the same for a disc particle's ghost list (ghost_span) */
     double *mirror_vx, *mirror_vy;       /* per wall: the wall velocity no-slip mirrors about (implicit_mirror_velocities) */
-    double *disc_reference_pa;           /* per disc: the mean pressure of its particles (implicit_disc_forces) */
-    int disc_cap;
+    int disc_cap;                        /* discs the per-disc arrays hold */
+    int disc_rows;                       /* the coupled solves' unknowns beyond the fluid's: 3 per disc (disc_coupling.c) */
+    size_t disc_entries;                 /* of disc_entry, which holds as many as the wall lists */
+    int64_t *disc_entry;                 /* the fluid's wall-list entries that are disc particles, in fluid order */
+    int32_t *disc_entry_fluid;           /* and their fluid particle */
+    double *surface_x, *surface_y;       /* per wall: a disc particle's surface point (its mirror line's) from the
+                                          * disc's centre (m) */
+    double *lever_x, *lever_y;           /* per wall: a disc particle's offset from the disc's centre (m) */
+    double *disc_divergence;             /* 3 per disc entry: d(div v*_a)/dU of its disc (disc_coupling.c) */
+    double *disc_velocity;               /* 3 per disc: Vx, Vy (m/s), R Omega (m/s): the coupled solves' answer */
+    double *disc_force;                  /* 3 per disc: force (N/m) and torque (N), scratch */
+    double *disc_reference_pa;           /* per disc: the mean pressure of its particles */
+    double *spin_drag;                   /* per disc: c in the viscous torque's missing part -c Omega (N s) */
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (implicit_assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
     held_multigrid multigrid[2];         /* implicit.preconditioner = amg: the viscous and the pressure hierarchy */
@@ -159,6 +170,16 @@ static inline double ghost_normal_strain(const surge_sim *sim, int kw)
     return s;
 }
 
+/* The weight of wall kw in fluid particle i's row of the pressure operator (implicit_assemble_pressure, which stores
+ * it negated): the Laplacian's weight corrected for truncation, w_ak + wetness_k u_i . V_k f r_ak with
+ * u_i = M_i^-1 sum_b w_ab r_ab, list entry e */
+static inline double pressure_wall_weight(const implicit_work *w, int i, int64_t e, int kw)
+{
+    const double wrx = w->weighted_rx[i], wry = w->weighted_ry[i];
+    const double ux = w->minv_xx[i] * wrx + w->minv_xy[i] * wry, uy = w->minv_xy[i] * wrx + w->minv_yy[i] * wry;
+    return w->wall_w[e] + w->wetness[kw] * (ux * w->wall_gx[e] + uy * w->wall_gy[e]);
+}
+
 /* work.c */
 int implicit_reserve_work(surge_sim *sim); /* sizes the work arrays for the current lists; -1 when out of memory */
 int implicit_create(surge_sim *sim, char *err, size_t err_len);
@@ -188,7 +209,7 @@ int implicit_multigrid(const surge_sim *sim, bool viscous);
 int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const double *diag, const real *fluid_coef,
                              double fluid_scale, const real *wall_coef, double wall_scale, int honour_fixed);
 void implicit_multigrid_record(surge_sim *sim, int which, int iterations);
-int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual);
+int implicit_pressure_solve(surge_sim *sim, affine_operator op, int from_guess, double tolerance, double *residual);
 /* surface_images.c */
 void implicit_surface_images(surge_sim *sim);
 void implicit_image_gradient_sum(const surge_sim *sim, int i, const double *x, double *sx, double *sy);
@@ -196,12 +217,17 @@ void implicit_image_velocity_gradient(const surge_sim *sim, int i, double g[4]);
 double implicit_image_laplacian_row(surge_sim *sim, int i, double ux, double uy);
 /* implicit_report.c */
 void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
-/* implicit_discs.c: the discs' step from the fluid's forces with added_mass (implicit.added_mass; -1 when the contact
- * solver runs out of memory), and its roll-back */
-int implicit_discs_advance(surge_sim *sim, double dt_s, double added_mass);
-void implicit_discs_restore(surge_sim *sim);
+/* disc_coupling.c: the discs' velocities as unknowns of the viscous and the pressure solves */
+void implicit_discs_prepare(surge_sim *sim);
+void implicit_discs_viscous_system(surge_sim *sim, double dt);
+void implicit_coupled_viscous_operator(surge_sim *sim, const double *x, double *out);
+void implicit_discs_mirror(surge_sim *sim, const double *disc_velocity);
+void implicit_coupled_pressure_operator(surge_sim *sim, const double *x, double *out);
+void implicit_discs_pressure_answer(surge_sim *sim, double dt);
+/* implicit_discs.c: the discs' step from the coupled solves' velocities through the contact solver (-1 when it runs
+ * out of memory) */
+int implicit_discs_advance(surge_sim *sim, double dt_s);
 /* coupling.c */
 void implicit_part_close_pairs(surge_sim *sim);
-void implicit_disc_forces(surge_sim *sim);
 
 #endif

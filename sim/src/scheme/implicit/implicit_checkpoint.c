@@ -1,7 +1,8 @@
 /* The implicit scheme's state in a checkpoint, after the particles and the boulders (checkpoint.c has the layout):
  * (version 5) the fluid's pressure[f64] by particle id (the next step's p_n) |
- *     (boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n [f64 each] |
- *         (version 8) their drag stiffness and wetted fraction [f64 each] (the coupling's step limit) |
+ *     (versions 5-8, boulders) the discs' accelerations over the last step and the one before, ax ay ax_n ay_n
+ *         [f64 each], and (version 8) their drag stiffness and wetted fraction [f64 each]: the discs' step before
+ *         they were solved with the fluid, read and not used |
  * (version 6) the solver's state below (version 7 adds the last step's psi and v* - v_n). */
 #include <math.h>
 #include <stdio.h>
@@ -82,14 +83,20 @@ static int read_all(FILE *f, void *data, size_t len) { return fread(data, 1, len
 
 int implicit_checkpoint_write(FILE *f, const surge_sim *sim)
 {
-    const boulder_set *b = &sim->boulders;
-    const size_t n = (size_t)b->count * sizeof(double);
     return write_all(f, implicit_of(sim)->pressure_by_id, (size_t)sim->count * sizeof(double)) |
-           (b->count > 0 ? write_all(f, b->step_ax, n) | write_all(f, b->step_ay, n) | write_all(f, b->step_ax_n, n) |
-                               write_all(f, b->step_ay_n, n) | write_all(f, b->drag_stiffness, n) |
-                               write_all(f, b->wetted, n)
-                         : 0) |
            write_solver_state(f, sim);
+}
+
+/* A version 5-8 checkpoint's per-disc block (4 arrays, 6 from version 8): read past */
+static int skip_disc_block(FILE *f, int discs, uint32_t version)
+{
+    const int arrays = version >= 8 ? 6 : 4;
+    for (int k = 0; k < arrays * discs; k++) {
+        double value;
+        if (read_all(f, &value, sizeof value) != 0 || !isfinite(value))
+            return -1;
+    }
+    return 0;
 }
 
 /* version: the checkpoint's; before 5 an implicit run restarts from the pressure at rest, not bit for bit (and had
@@ -104,21 +111,7 @@ int implicit_checkpoint_read(FILE *f, surge_sim *sim, uint32_t version)
     for (int i = 0; i < sim->count; i++) /* outside the state hash: finite and not absurd (1e12 Pa) */
         if (!(fabs(pressure_by_id[i]) < 1e12))
             return -1;
-    boulder_set *b = &sim->boulders;
-    const size_t n = (size_t)b->count * sizeof(double);
-    if (b->count > 0 && (read_all(f, b->step_ax, n) || read_all(f, b->step_ay, n) || read_all(f, b->step_ax_n, n) ||
-                         read_all(f, b->step_ay_n, n)))
+    if (version <= 8 && skip_disc_block(f, sim->boulders.count, version) != 0)
         return -1;
-    for (int i = 0; i < b->count; i++) /* outside the state hash too: finite and not absurd (1e6 m/s^2) */
-        if (!(fabs(b->step_ax[i]) < 1e6 && fabs(b->step_ay[i]) < 1e6 && fabs(b->step_ax_n[i]) < 1e6 &&
-              fabs(b->step_ay_n[i]) < 1e6))
-            return -1;
-    if (b->count > 0 && version >= 8) {
-        if (read_all(f, b->drag_stiffness, n) || read_all(f, b->wetted, n))
-            return -1;
-        for (int i = 0; i < b->count; i++) /* outside the state hash: finite, not negative, not absurd */
-            if (!(b->drag_stiffness[i] >= 0 && b->drag_stiffness[i] < 1e12 && b->wetted[i] >= 0 && b->wetted[i] <= 2))
-                return -1;
-    }
     return version >= 6 ? read_solver_state(f, sim, version) : 0;
 }

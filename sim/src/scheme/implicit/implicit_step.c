@@ -46,14 +46,7 @@ static double implicit_dt(const surge_sim *sim)
         max_v2 = fmax(max_v2, v * v);
     }
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
-    double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
-    /* the discs' coupling: a disc's drag stiffness k (its last step's) against its mass and added mass
-     * (implicit_discs_advance; docs/method.md) */
-    for (int i = 0; i < b->count && p->implicit.disc_coupling > 0; i++)
-        if (b->drag_stiffness[i] > 0) {
-            const double added = p->implicit.added_mass * sim->rho0 * SURGE_PI * b->radius[i] * b->radius[i] * b->wetted[i];
-            dt = fmin(dt, p->implicit.disc_coupling * (b->mass[i] + added) / b->drag_stiffness[i]);
-        }
+    const double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
     if (isfinite(dt))
         return dt;
     /* no gravity and at rest: the walls' speeds set the scale */
@@ -100,12 +93,9 @@ static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim
         }
 }
 
-/* How far the discs got in a step: the roll-back undoes that much */
-enum { DISCS_UNTOUCHED, DISCS_SAVED, DISCS_ADVANCED };
-
-/* The step's start: its dt, the walls' velocities at its end (backward Euler; the discs' at its start, their fluid
- * forces come after the step), the walls' normals and depths (the contact rule), the step's geometry, and the
- * fluid's state saved for the roll-back */
+/* The step's start: its dt, the walls' velocities at its end (backward Euler; the discs' are unknowns of the solves),
+ * the walls' normals and depths (the contact rule), the step's geometry, and the fluid's state saved for the
+ * roll-back */
 static double begin_step(surge_sim *sim)
 {
     const double dt = implicit_dt(sim);
@@ -120,6 +110,8 @@ static double begin_step(surge_sim *sim)
     }
     implicit_geometry(sim);
     implicit_mirror_velocities(sim);
+    if (sim->boulders.count > 0)
+        implicit_discs_prepare(sim);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = sim->wall_count; a < sim->count; a++)
         fields_save_step_start(sim, a);
@@ -165,15 +157,18 @@ static void viscous_system(surge_sim *sim, double dt)
         w->x[i] = sim->vx_n[a] + w->dvx_by_id[sim->id[a]], w->x[nf + i] = sim->vy_n[a] + w->dvy_by_id[sim->id[a]];
         w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
     }
+    if (sim->boulders.count > 0) /* p_n's walls are still in w->wall_x */
+        implicit_discs_viscous_system(sim, dt);
 }
 
 /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure, into
- * the fluid's velocities; -1 with the health set when the solve fails */
+ * the fluid's velocities, the discs' velocities solved with them (disc_coupling.c) into w->disc_velocity; -1 with the
+ * health set when the solve fails */
 static int viscous_predict(surge_sim *sim, double dt)
 {
     implicit_work *w = implicit_of(sim);
     const surge_params *prm = &sim->params;
-    const int first = sim->wall_count, nf = sim->count - first;
+    const int first = sim->wall_count, nf = sim->count - first, n = 2 * nf + w->disc_rows;
     const double dt_nu = dt * prm->fluid.viscosity_m2ps;
     viscous_system(sim, dt);
     if (dt_nu > 0) {
@@ -186,8 +181,9 @@ static int viscous_predict(surge_sim *sim, double dt)
         }
         double residual = 0;
         w->vcycle_blocks = by_multigrid ? 2 : 0;
-        const int iterations = implicit_solve(sim, implicit_viscous_operator, 2 * nf, AFFINE,
-                                              prm->implicit.viscous_tolerance, prm->implicit.max_iterations, &residual);
+        const affine_operator op = w->disc_rows > 0 ? implicit_coupled_viscous_operator : implicit_viscous_operator;
+        const int iterations = implicit_solve(sim, op, n, AFFINE, prm->implicit.viscous_tolerance,
+                                              prm->implicit.max_iterations, &residual);
         w->vcycle_blocks = 0;
         if (by_multigrid)
             implicit_multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
@@ -197,12 +193,16 @@ static int viscous_predict(surge_sim *sim, double dt)
             return -1;
         }
     } else /* no viscosity: the operator is the identity */
-        memcpy(w->x, w->rhs, 2 * (size_t)nf * sizeof *w->x);
+        memcpy(w->x, w->rhs, (size_t)n * sizeof *w->x);
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
         sim->vx[a] = (real)w->x[i], sim->vy[a] = (real)w->x[nf + i];
         w->dvx_by_id[sim->id[a]] = w->x[i] - sim->vx_n[a], w->dvy_by_id[sim->id[a]] = w->x[nf + i] - sim->vy_n[a];
+    }
+    if (w->disc_rows > 0) {
+        memcpy(w->disc_velocity, w->x + 2 * nf, (size_t)w->disc_rows * sizeof *w->x);
+        implicit_discs_mirror(sim, w->disc_velocity);
     }
     return 0;
 }
@@ -279,8 +279,9 @@ static void projection_sources(surge_sim *sim, double dt)
     }
 }
 
-/* 2. The correction phi: -lap phi = -(rho0/dt) div v*, into w->x and phi_by_id; -1 with the health set when the
- * multigrid cannot be built or the solve fails */
+/* 2. The correction phi: -lap phi = -(rho0/dt) div v*, the discs' velocities moved by phi's force within the solve
+ * (disc_coupling.c), into w->x and phi_by_id; -1 with the health set when the multigrid cannot be built or the solve
+ * fails */
 static int project(surge_sim *sim, double dt)
 {
     implicit_work *w = implicit_of(sim);
@@ -309,7 +310,8 @@ static int project(surge_sim *sim, double dt)
     if (prm->implicit.wall_neumann_offset > 0)
         implicit_wall_offsets_to_rhs(sim, w->neumann_pa);
     double residual = 0;
-    const int iterations = implicit_pressure_solve(sim, 1, prm->implicit.pressure_tolerance, &residual);
+    const affine_operator op = w->disc_rows > 0 ? implicit_coupled_pressure_operator : implicit_pressure_operator;
+    const int iterations = implicit_pressure_solve(sim, op, 1, prm->implicit.pressure_tolerance, &residual);
     if (w->pressure_by_multigrid)
         implicit_multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
     w->pressure_iterations = iterations, w->pressure_residual = residual;
@@ -325,6 +327,8 @@ static int project(surge_sim *sim, double dt)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         w->phi_by_id[sim->id[first + i]] = w->x[i];
+    if (w->disc_rows > 0)
+        implicit_discs_pressure_answer(sim, dt);
     return 0;
 }
 
@@ -377,7 +381,8 @@ static int rest_density(surge_sim *sim, double dt)
     for (int i = 0; i < nf; i++)
         w->x[i] = w->fixed[i] ? 0.0 : w->psi_by_id[sim->id[first + i]];
     double residual = 0;
-    const int iterations = implicit_pressure_solve(sim, 1, prm->implicit.density_tolerance, &residual);
+    const int iterations = implicit_pressure_solve(sim, implicit_pressure_operator, 1, prm->implicit.density_tolerance,
+                                                   &residual);
     if (iterations < 0) {
         fail_solve(sim, "rest-density", prm->implicit.max_iterations, residual, sim->time_s);
         return -1;
@@ -459,8 +464,6 @@ static void move_particles(surge_sim *sim, double dt)
         memset(w->pair_dx, 0, (size_t)nf * sizeof *w->pair_dx);
         memset(w->pair_dy, 0, (size_t)nf * sizeof *w->pair_dy);
     }
-    if (sim->boulders.count > 0)
-        implicit_disc_forces(sim);
     #pragma omp parallel
     shifting_compute(sim, dt);
     /* Lind's shift is a displacement a step (shifting.c); in the free-surface layer, below the scheme's own step at
@@ -485,14 +488,12 @@ static void move_particles(surge_sim *sim, double dt)
     }
 }
 
-/* Back to the step's start after a failure: the fluid, the discs as far as they got, time, step and the walls */
-static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs)
+/* Back to the step's start after a failure: the fluid, the discs where they moved, time, step and the walls */
+static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs_moved)
 {
     fields_restore_step_start(sim);
-    if (discs == DISCS_SAVED)
+    if (discs_moved)
         boulders_restore(sim);
-    else if (discs == DISCS_ADVANCED)
-        implicit_discs_restore(sim);
     sim->time_s = t_n;
     sim->step = step_n;
     boundary_wall_speeds(sim, t_n);
@@ -509,7 +510,7 @@ static int implicit_step(surge_sim *sim)
         return -1;
     }
     const double dt = begin_step(sim);
-    int discs = DISCS_UNTOUCHED;
+    int discs_moved = 0;
     int rc = viscous_predict(sim, dt);
     if (rc == 0)
         rc = project(sim, dt);
@@ -520,14 +521,13 @@ static int implicit_step(surge_sim *sim)
         contact_velocities(sim, dt);
         move_particles(sim, dt);
         if (sim->boulders.count > 0) {
-            discs = DISCS_SAVED;
-            if (implicit_discs_advance(sim, dt, sim->params.implicit.added_mass) != 0) {
+            discs_moved = 1;
+            if (implicit_discs_advance(sim, dt) != 0) {
                 sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1,
                                              .step = step_n + 1, .time_s = t_n + dt};
                 snprintf(sim->health.message, sizeof sim->health.message, "out of memory in the contact solver");
                 rc = -1;
-            } else
-                discs = DISCS_ADVANCED;
+            }
         }
     }
     if (rc == 0) {
@@ -536,7 +536,7 @@ static int implicit_step(surge_sim *sim)
         rc = health_check(sim);
     }
     if (rc != 0)
-        roll_back(sim, t_n, step_n, discs);
+        roll_back(sim, t_n, step_n, discs_moved);
     return rc == 0 ? 0 : -1;
 }
 

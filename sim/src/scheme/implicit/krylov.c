@@ -37,7 +37,8 @@ static void apply_linear(surge_sim *sim, affine_operator op, int linear, const d
         out[i] -= offset[i];
 }
 
-/* out = M^-1 in: the diagonal (Jacobi) or one V-cycle per block of nf unknowns; -1 when hypre fails */
+/* out = M^-1 in: the diagonal (Jacobi) or one V-cycle per block of nf unknowns (the fluid's) and the diagonal on the
+ * rows after them (the discs'); -1 when hypre fails */
 static int precondition(surge_sim *sim, const double *in, double *out, int n)
 {
     implicit_work *w = implicit_of(sim);
@@ -47,9 +48,11 @@ static int precondition(surge_sim *sim, const double *in, double *out, int n)
             out[i] = in[i] / w->diag[i];
         return 0;
     }
-    const int nf = n / w->vcycle_blocks;
+    const int nf = sim->count - sim->wall_count;
     if (amg_vcycle(w->amg, w->vcycle_blocks, in, out) != 0)
         return -1;
+    for (int i = w->vcycle_blocks * nf; i < n; i++)
+        out[i] = in[i] / w->diag[i];
     if (w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
         for (int i = 0; i < nf; i++)
             if (w->fixed[i])

@@ -56,14 +56,15 @@ void implicit_multigrid_record(surge_sim *sim, int which, int iterations)
     m->last_iterations = iterations;
 }
 
-/* A solve of the pressure operator (phi or psi; linear, the walls' Neumann offsets being 0 in step 2) from x = 0
- * or (from_guess) the guess in x, by the preconditioner the parameters choose */
-int implicit_pressure_solve(surge_sim *sim, int from_guess, double tolerance, double *residual)
+/* A solve of a pressure operator op (phi's, coupled to the discs or not, or psi's; linear, the walls' Neumann offsets
+ * being on the right-hand side) from x = 0 or (from_guess) the guess in x, by the preconditioner the parameters
+ * choose */
+int implicit_pressure_solve(surge_sim *sim, affine_operator op, int from_guess, double tolerance, double *residual)
 {
     const int nf = sim->count - sim->wall_count, max_iterations = sim->params.implicit.max_iterations;
     implicit_of(sim)->vcycle_blocks = implicit_of(sim)->vcycle_honours_fixed = implicit_of(sim)->pressure_by_multigrid;
-    const int iterations = implicit_solve(sim, implicit_pressure_operator, nf, from_guess ? LINEAR_FROM_GUESS : LINEAR_FROM_ZERO,
-                                 tolerance, max_iterations, residual);
+    const int iterations = implicit_solve(sim, op, nf, from_guess ? LINEAR_FROM_GUESS : LINEAR_FROM_ZERO, tolerance,
+                                          max_iterations, residual);
     implicit_of(sim)->vcycle_blocks = implicit_of(sim)->vcycle_honours_fixed = 0;
     return iterations;
 }

@@ -130,7 +130,7 @@ void implicit_assemble_pressure(surge_sim *sim)
             w->fluid_pc[e] = (real)(w->fixed[nl->fluid_index[e] - sim->wall_count] ? 0.0 : -c);
         }
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
-            const double c = w->wall_w[e] + w->wetness[nl->wall_index[e]] * (ux * w->wall_gx[e] + uy * w->wall_gy[e]);
+            const double c = pressure_wall_weight(w, i, e, nl->wall_index[e]);
             diag += c;
             w->wall_pc[e] = (real)-c;
         }

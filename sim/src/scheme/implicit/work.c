@@ -24,6 +24,7 @@ int implicit_reserve_work(surge_sim *sim)
     implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
     const size_t nf = (size_t)(sim->count - sim->wall_count), nw = (size_t)sim->wall_count;
+    const size_t discs = (size_t)sim->boulders.count;
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
     const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
@@ -34,7 +35,8 @@ int implicit_reserve_work(surge_sim *sim)
     }
     if (we > w->wall_cap || !w->wall_w) {
         if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we) ||
-            GROW(wall_iw, we) || GROW(wall_igx, we) || GROW(wall_igy, we) || GROW(wall_side, we))
+            GROW(wall_iw, we) || GROW(wall_igx, we) || GROW(wall_igy, we) || GROW(wall_side, we) ||
+            (discs > 0 && (GROW(disc_entry, we) || GROW(disc_entry_fluid, we) || GROW(disc_divergence, 3 * we))))
             return -1;
         w->wall_cap = we;
     }
@@ -44,7 +46,8 @@ int implicit_reserve_work(surge_sim *sim)
         w->mirror_cap = me;
     }
     if (sim->boulders.count > w->disc_cap || !w->disc_reference_pa) {
-        if (GROW(disc_reference_pa, (size_t)sim->boulders.count))
+        if (GROW(disc_reference_pa, discs) || GROW(spin_drag, discs) || GROW(disc_velocity, 3 * discs) ||
+            GROW(disc_force, 3 * discs))
             return -1;
         w->disc_cap = sim->boulders.count;
     }
@@ -58,7 +61,7 @@ int implicit_reserve_work(surge_sim *sim)
         if (!*by_id[k] && !(*by_id[k] = calloc((size_t)sim->count + 1, sizeof **by_id[k])))
             return -1;
     if (!w->minv_xx) {
-        const size_t n2 = 2 * nf, nblocks = n2 / DOT_BLOCK + 2;
+        const size_t n2 = 2 * nf + 3 * discs, nblocks = n2 / DOT_BLOCK + 2; /* the fluid's velocities, the discs' */
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
             GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
@@ -70,7 +73,8 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
             GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) ||
             GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
-            GROW(mirror_vx, nw) || GROW(mirror_vy, nw))
+            GROW(mirror_vx, nw) || GROW(mirror_vy, nw) || GROW(surface_x, nw) || GROW(surface_y, nw) ||
+            GROW(lever_x, nw) || GROW(lever_y, nw))
             return -1;
     }
     return 0;
@@ -103,6 +107,8 @@ void implicit_destroy(surge_sim *sim)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->mirror_nw, w->ghost_w, w->ghost_nw, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
+                      w->disc_entry, w->disc_entry_fluid, w->surface_x, w->surface_y, w->lever_x, w->lever_y, w->disc_divergence,
+                      w->disc_velocity, w->disc_force, w->spin_drag,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
