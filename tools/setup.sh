@@ -20,7 +20,7 @@ apt_install() {
     pid=$!
     while kill -0 "$pid" 2>/dev/null; do
         sleep 10
-        echo "setup: $(grep -c '^Get:' "$log") packages downloaded, $(grep -c '^Setting up' "$log") set up"
+        echo "setup: $(grep -c '^Get:' "$log") packages downloaded, $(grep -c '^Unpacking' "$log") unpacked, $(grep -c '^Setting up' "$log") set up"
     done
     if ! wait "$pid"; then
         cat "$log" >&2
