@@ -486,24 +486,20 @@ def with_checksum(body):
 def group_sizes():
     tank, boulders = make_base_runs("sizes")
     first = sorted(f for f in os.listdir(tank) if f.endswith(".vtp"))[0]
-    vtp = open(os.path.join(tank, first), "rb").read()
-    huge = with_points(vtp, 2147483647)
-    render_with(tank, first, huge, "snapshot declaring 2147483647 points",
-                r"%s: bad NumberOfPoints 2147483647: the file holds %d bytes" % (re.escape(first), len(huge)))
-    # a count its Points alone could hold (24 bytes a point) but not the arrays read with them (49 bytes a point)
-    thin = with_points(vtp, appended_bytes(vtp) // 30)
-    render_with(tank, first, thin, "snapshot declaring more points than its arrays hold",
-                r"%s: bad NumberOfPoints %d: the file holds %d bytes, too few for that many points \(49 bytes each"
-                % (re.escape(first), appended_bytes(vtp) // 30, len(thin)))
     body = sorted(f for f in os.listdir(boulders) if f.startswith("boulders_") and f.endswith(".vtp"))[0]
-    bvtp = open(os.path.join(boulders, body), "rb").read()
-    bhuge = with_points(bvtp, 1000000000)
-    render_with(boulders, body, bhuge, "boulder snapshot declaring 10^9 discs",
-                r"%s: bad NumberOfPoints 1000000000: the file holds %d bytes" % (re.escape(body), len(bhuge)))
-    bthin = with_points(bvtp, appended_bytes(bvtp) // 30)
-    render_with(boulders, body, bthin, "boulder snapshot declaring more discs than its arrays hold",
-                r"%s: bad NumberOfPoints %d: the file holds %d bytes, too few for that many points \(72 bytes each"
-                % (re.escape(body), appended_bytes(bvtp) // 30, len(bthin)))
+    # per snapshot kind: a count no file holds, and one its Points alone could hold (24 bytes a point) but not the
+    # arrays read with them (49 bytes a particle, 72 a disc)
+    for folder, name, what, huge_count, point_bytes in ((tank, first, "snapshot declaring", 2147483647, 49),
+                                                        (boulders, body, "boulder snapshot declaring", 1000000000, 72)):
+        vtp = open(os.path.join(folder, name), "rb").read()
+        huge = with_points(vtp, huge_count)
+        render_with(folder, name, huge, "%s %d points" % (what, huge_count),
+                    r"%s: bad NumberOfPoints %d: the file holds %d bytes" % (re.escape(name), huge_count, len(huge)))
+        thin_count = appended_bytes(vtp) // 30
+        thin = with_points(vtp, thin_count)
+        render_with(folder, name, thin, "%s more points than its arrays hold" % what,
+                    r"%s: bad NumberOfPoints %d: the file holds %d bytes, too few for that many points \(%d bytes each"
+                    % (re.escape(name), thin_count, len(thin), point_bytes))
     render_with(tank, "run.pvd", None, "run.pvd a pipe", r"run\.pvd' is not a regular file")
 
     checkpoint = open(os.path.join(tank, "checkpoint.bin"), "rb").read()
@@ -544,6 +540,7 @@ def group_sizes():
     bplen = struct.unpack_from("<Q", bcheckpoint, 16)[0]
     real_bytes = struct.unpack_from("<I", bcheckpoint, 12)[0]
     bcount, bwalls = struct.unpack_from("<ii", bcheckpoint, 24 + bplen + 32)
+    bvtp = open(os.path.join(boulders, body), "rb").read()
     discs = int(re.search(rb'NumberOfPoints="([0-9]+)"', bvtp).group(1))
     at = 24 + bplen + 40 + (bcount - bwalls) * (8 + 8 + 3 * real_bytes + 4) + 4 + (bcount - bwalls) * 16 + discs * 7 * 8
     contacts = struct.unpack_from("<i", bcheckpoint, at)[0]
