@@ -109,6 +109,7 @@ static double begin_step(surge_sim *sim)
         boundary_update(sim);
     }
     implicit_geometry(sim);
+    implicit_assemble_pressure(sim); /* the pressure's operator, for the relaxation of p_n and the projection */
     implicit_mirror_velocities(sim);
     if (sim->boulders.count > 0)
         implicit_discs_prepare(sim);
@@ -135,10 +136,8 @@ static void viscous_system(surge_sim *sim, double dt)
     for (int kw = 0; kw < first; kw++)
         w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
     const double relaxation = sim->params.implicit.pressure_relaxation;
-    if (w->any_imaged && relaxation > 0) {
-        implicit_assemble_pressure(sim);
+    if (w->any_imaged && relaxation > 0)
         implicit_relax_pressure(sim, w->pressure_n, w->neumann_pa, relaxation);
-    }
     implicit_wall_pressures(sim, w->pressure_n, w->neumann_pa);
     implicit_pressure_gradient(sim, w->pressure_n);
     #pragma omp parallel for schedule(static) if (wide(sim))
@@ -289,7 +288,6 @@ static int project(surge_sim *sim, double dt)
     const int first = sim->wall_count, nf = sim->count - first;
     wall_neumann_offsets(sim, dt);
     projection_sources(sim, dt);
-    implicit_assemble_pressure(sim);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
      * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
     int free_surface = w->any_imaged;
