@@ -205,6 +205,11 @@ expect("freydier_convergence run --end-s nan", tool(FC, "run", "--surge", refusi
 expect("freydier_convergence run --dp inf", tool(FC, "run", "--surge", refusing, "--dp", "inf"), "--dp")
 expect("freydier_convergence run --surge a folder", tool(FC, "run", "--surge", WORK), "--surge", "not an executable")
 expect("stability_map run --end-s -1", tool(SM, "run", "--surge", refusing, "--end-s", "-1"), "--end-s")
+expect("stability_map implicit-run --steps-ms -1", tool(SM, "implicit-run", "--surge", refusing, "--steps-ms", "1,-1"),
+       "--steps-ms", "-1")
+expect("stability_map implicit-run: surge exits 2 at once: its message",
+       tool(SM, "implicit-run", "--surge", refusing, "--steps-ms", "2", "--runs-dir", path("sm_runs"),
+            "--implicit-csv", path("sm_implicit.csv")), "surge: bad option (stand-in)")
 expect("poiseuille_loaded run --c0 -1", tool(PL, "run", "--surge", refusing, "--c0", "-1"), "--c0")
 
 # ---- 3. park and unpark: bad checkpoints, progress files, archives; nothing half-written ----

@@ -221,6 +221,14 @@ static const surge_param_info registry[] = {
      "incremental step carries undamped, decays (0: none; docs/method.md, \"Relaxation of the last step's "
      "pressure\").",
      OFF(implicit.pressure_relaxation)},
+    {"implicit", "disc_pressure_passes", SURGE_PARAM_INT, "-", 6, 1, 100, true, NULL,
+     "Implicit scheme, with discs: passes of the viscous and pressure solves a step. Between passes the pressure "
+     "takes p + phi - rho0 nu (div v* - div v_n+1) (Uzawa's iteration on the step's velocity-pressure "
+     "system, the rotational update its preconditioner), so the pressure around a disc (its stresslet) is built "
+     "within the step whatever dt nu / a^2; one pass builds about 1/(dt nu k^2) of it a step, k the disc's scale, "
+     "and the loaded channel's viscosity then depends on the step (1: one pass; docs/method.md, \"Boulders in the "
+     "implicit scheme\"). Without discs a step makes one pass.",
+     OFF(implicit.disc_pressure_passes)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

@@ -141,6 +141,7 @@ typedef struct surge_params {
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
         bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */
         double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
+        int disc_pressure_passes;  /* with discs: passes of the viscous and pressure solves a step (Uzawa) */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */

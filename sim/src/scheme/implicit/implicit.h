@@ -57,6 +57,7 @@ typedef struct implicit_work {
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
     held_multigrid multigrid[2];         /* implicit.preconditioner = amg: the viscous and the pressure hierarchy */
     amg_system *amg;                     /* this solve's: one of multigrid[] */
+    int free_surface;                    /* this step: a free-surface particle (else the pressure is fixed up to a constant) */
     int pressure_by_multigrid;           /* this step's pressure solves use amg (there is a free surface) */
     int vcycle_blocks;                   /* implicit_solve()'s preconditioner: 0 the diagonal, else one V-cycle of amg's
                                           * hierarchy on each of this many blocks of nf unknowns */
@@ -83,6 +84,7 @@ typedef struct implicit_work {
     double *neumann_pa;                  /* per wall: p_w - p_ghost, the Neumann offset of the field being set */
     double *rhs, *x, *offset, *diag;     /* solves: 2 nf at most */
     double *density_rhs, *phi_saved;     /* the rest-density source; the correction phi while psi is solved */
+    double *divergence;                  /* per fluid particle: div v* (the passes' update with discs) */
     double *phi_by_id, *psi_by_id;       /* per particle id: the last step's phi and psi, the next one's guesses */
     double *dvx_by_id, *dvy_by_id;       /* per particle id: the last step's v* - v_n, the next viscous solve's guess */
     double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */

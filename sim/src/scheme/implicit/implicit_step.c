@@ -119,19 +119,22 @@ static double begin_step(surge_sim *sim)
     return dt;
 }
 
-/* Step 1's system: the right-hand side v_n + dt (g - grad p_n / rho0), the first guess v_n plus the last step's
- * change (a slow flow's is much the same from step to step) and the diagonal 1 + dt nu sum_b w_ab */
-static void viscous_system(surge_sim *sim, double dt)
+/* Step 1's system: the right-hand side v_n + dt (g - grad p / rho0), p the last step's pressure p_n on the step's first
+ * pass (w->pressure_n as the last pass left it on the others), the first guess v_n plus the last change (a slow
+ * flow's is much the same from step to step) and the diagonal 1 + dt nu sum_b w_ab */
+static void viscous_system(surge_sim *sim, double dt, int first_pass)
 {
     implicit_work *w = implicit_of(sim);
     const neighbour_lists *nl = &sim->neighbours;
     const int first = sim->wall_count, nf = sim->count - first;
     const double rho0 = sim->rho0, dt_nu = dt * sim->params.fluid.viscosity_m2ps;
     const double *by_id = w->pressure_by_id;
-    #pragma omp parallel for schedule(static) if (wide(sim))
-    for (int i = 0; i < nf; i++)
-        w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
-    /* the walls' p_n: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
+    if (first_pass) {
+        #pragma omp parallel for schedule(static) if (wide(sim))
+        for (int i = 0; i < nf; i++)
+            w->pressure_n[i] = w->fixed[i] ? 0.0 : by_id[sim->id[first + i]];
+    }
+    /* the walls' p: the fluid's at the ghost node continued by the body force's hydrostatic gradient rho0 g */
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < first; kw++)
         w->neumann_pa[kw] = -rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]);
@@ -163,13 +166,13 @@ static void viscous_system(surge_sim *sim, double dt)
 /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure, into
  * the fluid's velocities, the discs' velocities solved with them (disc_coupling.c) into w->disc_velocity; -1 with the
  * health set when the solve fails */
-static int viscous_predict(surge_sim *sim, double dt)
+static int viscous_predict(surge_sim *sim, double dt, int first_pass)
 {
     implicit_work *w = implicit_of(sim);
     const surge_params *prm = &sim->params;
     const int first = sim->wall_count, nf = sim->count - first, n = 2 * nf + w->disc_rows;
     const double dt_nu = dt * prm->fluid.viscosity_m2ps;
-    viscous_system(sim, dt);
+    viscous_system(sim, dt, first_pass);
     if (dt_nu > 0) {
         /* by multigrid: one hierarchy for both components (the walls mirror each component on its own) */
         const int by_multigrid = implicit_multigrid(sim, true);
@@ -184,15 +187,17 @@ static int viscous_predict(surge_sim *sim, double dt)
         const int iterations = implicit_solve(sim, op, n, AFFINE, prm->implicit.viscous_tolerance,
                                               prm->implicit.max_iterations, &residual);
         w->vcycle_blocks = 0;
-        if (by_multigrid)
+        if (by_multigrid && first_pass) /* the hierarchy's rebuild rule reads the step's first solve */
             implicit_multigrid_record(sim, MULTIGRID_VISCOUS, iterations);
         w->viscous_iterations = iterations, w->viscous_residual = residual;
         if (iterations < 0) {
             fail_solve(sim, "viscous", prm->implicit.max_iterations, residual, sim->time_s);
             return -1;
         }
-    } else /* no viscosity: the operator is the identity */
+    } else { /* no viscosity: the operator is the identity */
         memcpy(w->x, w->rhs, (size_t)n * sizeof *w->x);
+        w->viscous_iterations = 0, w->viscous_residual = 0;
+    }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
@@ -238,32 +243,38 @@ static void wall_neumann_offsets(surge_sim *sim, double dt)
     }
 }
 
+/* div v* = tr(G M^-1) at fluid particle i, G from the fluid's velocities and the walls' mirrored ones (w->wall_x,
+ * wall_y), with the images beyond the free surface where its kernel reaches it; its Laplacian weights' sum into
+ * sum_w */
+static double velocity_divergence(const surge_sim *sim, int i, double *sum_w)
+{
+    const implicit_work *w = implicit_of(sim);
+    const neighbour_lists *nl = &sim->neighbours;
+    const int a = sim->wall_count + i;
+    const double vxa = sim->vx[a], vya = sim->vy[a];
+    gradient_lanes lanes;
+    memset(&lanes, 0, sizeof lanes);
+    gradient_pairs(sim, vxa, vya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &lanes);
+    gradient_pairs(sim, vxa, vya, nl->wall_first[i], nl->wall_first[i + 1], 1, &lanes);
+    double g[4] = {lanes_total(lanes.xx), lanes_total(lanes.xy), lanes_total(lanes.yx), lanes_total(lanes.yy)};
+    *sum_w = lanes_total(lanes.w);
+    if (w->imaged[i]) /* a full kernel with the images beyond the free surface */
+        implicit_image_velocity_gradient(sim, i, g);
+    return g[0] * w->minv_xx[i] + (g[1] + g[2]) * w->minv_xy[i] + g[3] * w->minv_yy[i];
+}
+
 /* Step 2's sources: -(rho0/dt) div v* for phi and the rest-density source for psi, the diagonal and phi's first
  * guess (the last step's: a steady flow's is much the same from step to step) */
 static void projection_sources(surge_sim *sim, double dt)
 {
     implicit_work *w = implicit_of(sim);
-    const neighbour_lists *nl = &sim->neighbours;
     const int first = sim->wall_count, nf = sim->count - first;
     const double rho0 = sim->rho0, alpha = sim->params.implicit.density_correction;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {
         const int a = first + i;
-        const double vxa = sim->vx[a], vya = sim->vy[a];
-        gradient_lanes lanes;
-        memset(&lanes, 0, sizeof lanes);
-        gradient_pairs(sim, vxa, vya, nl->fluid_first[i], nl->fluid_first[i + 1], 0, &lanes);
-        gradient_pairs(sim, vxa, vya, nl->wall_first[i], nl->wall_first[i + 1], 1, &lanes);
-        double g_xx = lanes_total(lanes.xx), g_xy = lanes_total(lanes.xy), g_yx = lanes_total(lanes.yx);
-        double g_yy = lanes_total(lanes.yy);
-        const double sum_w = lanes_total(lanes.w);
-        if (w->imaged[i]) { /* a full kernel with the images beyond the free surface */
-            double g[4];
-            implicit_image_velocity_gradient(sim, i, g);
-            g_xx = g[0], g_xy = g[1], g_yx = g[2], g_yy = g[3];
-        }
-        /* div v = tr(G M^-1) */
-        const double div_v = g_xx * w->minv_xx[i] + (g_xy + g_yx) * w->minv_xy[i] + g_yy * w->minv_yy[i];
+        double sum_w;
+        const double div_v = w->divergence[i] = velocity_divergence(sim, i, &sum_w);
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
          * where that cannot be read (a partly dry wall in reach), a deficit is not an expansion and only an excess
          * counts (clumped particles, which nothing else pushes apart where the pressure is near 0) */
@@ -281,7 +292,7 @@ static void projection_sources(surge_sim *sim, double dt)
 /* 2. The correction phi: -lap phi = -(rho0/dt) div v*, the discs' velocities moved by phi's force within the solve
  * (disc_coupling.c), into w->x and phi_by_id; -1 with the health set when the multigrid cannot be built or the solve
  * fails */
-static int project(surge_sim *sim, double dt)
+static int project(surge_sim *sim, double dt, int first_pass)
 {
     implicit_work *w = implicit_of(sim);
     const surge_params *prm = &sim->params;
@@ -293,14 +304,15 @@ static int project(surge_sim *sim, double dt)
     int free_surface = w->any_imaged;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
+    w->free_surface = free_surface;
     /* ... and, with a disc, need not be consistent either: the ghosts' normal velocities over a disc need not sum to
      * zero. There the fluid takes the explicit scheme's compressibility, -lap phi + phi/(c0 dt)^2 (the Tait equation
      * of state linearised, p = c0^2 (rho - rho0)): a source the incompressible equation cannot meet becomes a
      * uniform pressure instead of a solve that does not converge (docs/method.md, "Closed domains") */
     const double closed_kappa = free_surface ? 0.0 : 1.0 / (sim->derived.c0_mps * sim->derived.c0_mps * dt * dt);
-    if (!free_surface)
+    if (!free_surface) /* the operator's diagonal once a step (the passes share it), the preconditioner's each pass */
         for (int i = 0; i < nf; i++)
-            w->pressure_diag[i] += closed_kappa, w->diag[i] += closed_kappa;
+            w->pressure_diag[i] += first_pass ? closed_kappa : 0.0, w->diag[i] += closed_kappa;
     w->pressure_by_multigrid = implicit_multigrid(sim, false) && free_surface;
     if (w->pressure_by_multigrid &&
         implicit_multigrid_setup(sim, MULTIGRID_PRESSURE, "pressure", w->pressure_diag, w->fluid_pc, 1.0, w->wall_pc, 1.0, 1))
@@ -310,7 +322,7 @@ static int project(surge_sim *sim, double dt)
     double residual = 0;
     const affine_operator op = w->disc_rows > 0 ? implicit_coupled_pressure_operator : implicit_pressure_operator;
     const int iterations = implicit_pressure_solve(sim, op, 1, prm->implicit.pressure_tolerance, &residual);
-    if (w->pressure_by_multigrid)
+    if (w->pressure_by_multigrid && first_pass)
         implicit_multigrid_record(sim, MULTIGRID_PRESSURE, iterations);
     w->pressure_iterations = iterations, w->pressure_residual = residual;
     if (iterations < 0) {
@@ -394,6 +406,65 @@ static int rest_density(surge_sim *sim, double dt)
     density_displacements(sim, dt);
     memcpy(w->x, w->phi_saved, (size_t)nf * sizeof *w->x);
     return 0;
+}
+
+/* With discs, between passes of the viscous and pressure solves, the update p <- p + phi - rho0 nu (div v* - div v_n+1) (Uzawa's
+ * iteration on the step's coupled velocity-pressure system, preconditioned as Cahouet and Chabard's: the Laplacian's
+ * inverse for the inertia, rho0 nu for the viscosity; the rotational update of Timmermans et al. 1996). The incremental
+ * step alone builds the pressure a disc's stresslet needs by about 1/(dt nu k^2) of it a step, k the disc's scale
+ * (docs/method.md, "Boulders in the implicit scheme"). The divergence taken is the part the projection removes,
+ * div v* - div(v* - dt grad phi / rho0): the rest, which alternates from particle to particle and which no pressure's
+ * gradient meets, would add to p at every pass (over-relaxed by 1.5, the update set the debris surge's thin films
+ * between discs and the belt jetting). Particles whose kernel reaches the free surface take none: there the iteration
+ * diverged next to a disc at the surge's front by the belt (1.1-1.2 times a pass, a jet within 0.1 s), and their
+ * pressure is held by the surface's images. Into w->divergence; its root mean square (Pa) */
+static double disc_pressure_update(surge_sim *sim, double dt)
+{
+    implicit_work *w = implicit_of(sim);
+    const int first = sim->wall_count, nf = sim->count - first;
+    const double rho0 = sim->rho0, mu = rho0 * sim->params.fluid.viscosity_m2ps;
+    double *v_star = w->rhs, *removed = w->divergence; /* the projection's sources are spent */
+    implicit_wall_pressures(sim, w->x, w->neumann_pa);
+    implicit_pressure_gradient(sim, w->x);
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        const int a = first + i;
+        v_star[i] = sim->vx[a], v_star[nf + i] = sim->vy[a];
+        sim->vx[a] = (real)(sim->vx[a] - dt / rho0 * w->grad_x[i]);
+        sim->vy[a] = (real)(sim->vy[a] - dt / rho0 * w->grad_y[i]);
+    }
+    wall_neumann_offsets(sim, dt); /* the walls' mirrors of v_n+1, the discs' at their corrected velocities */
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        double sum_w;
+        removed[i] -= velocity_divergence(sim, i, &sum_w);
+    }
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        sim->vx[first + i] = (real)v_star[i], sim->vy[first + i] = (real)v_star[nf + i];
+    /* without a free surface the pressure is fixed up to a constant: the update's mean is removed, as phi's */
+    double mean = 0;
+    if (!w->free_surface) {
+        for (int i = 0; i < nf; i++)
+            mean += w->x[i] - mu * removed[i];
+        mean /= nf;
+    }
+    double update2 = 0;
+    for (int i = 0; i < nf; i++) { /* in index order: the same sum whatever the thread count */
+        removed[i] = w->fixed[i] || sim->near_surface[first + i] ? 0.0 : w->x[i] - mu * removed[i] - mean;
+        update2 += removed[i] * removed[i];
+    }
+    return sqrt(update2 / nf);
+}
+
+/* The update disc_pressure_update left in w->divergence, into the pressure */
+static void disc_pressure_apply(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    const int nf = sim->count - sim->wall_count;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++)
+        w->pressure_n[i] += w->divergence[i];
 }
 
 /* 3. v_n+1 = v* - dt grad phi / rho0 (into w->x), p_n+1 = p_n + phi, the walls' pressure for the outputs */
@@ -499,6 +570,7 @@ static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs_move
 
 static int implicit_step(surge_sim *sim)
 {
+    implicit_work *w = implicit_of(sim);
     const double t_n = sim->time_s;
     const int64_t step_n = sim->step;
     if (neighbours_update(sim) != 0 || implicit_reserve_work(sim) != 0) {
@@ -508,10 +580,30 @@ static int implicit_step(surge_sim *sim)
         return -1;
     }
     const double dt = begin_step(sim);
-    int discs_moved = 0;
-    int rc = viscous_predict(sim, dt);
-    if (rc == 0)
-        rc = project(sim, dt);
+    int discs_moved = 0, rc = 0;
+    /* with discs, several passes of the viscous and pressure solves (disc_pressure_pass) */
+    const int passes = sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_passes : 1;
+    int viscous_iterations = 0, pressure_iterations = 0;
+    double last_update_pa = INFINITY;
+    for (int pass = 1; rc == 0 && pass <= passes; pass++) {
+        rc = viscous_predict(sim, dt, pass == 1);
+        if (rc == 0)
+            rc = project(sim, dt, pass == 1);
+        if (rc != 0)
+            break;
+        viscous_iterations += w->viscous_iterations, pressure_iterations += w->pressure_iterations;
+        if (pass == passes)
+            break;
+        /* an update larger than the last pass's: the iteration diverges somewhere (a disc at the free surface by the
+         * belt: 1.1-1.2 times a pass, then a jet), and the step ends with this pass as one without them */
+        const double update_pa = disc_pressure_update(sim, dt);
+        if (!(update_pa < last_update_pa))
+            break;
+        disc_pressure_apply(sim);
+        last_update_pa = update_pa;
+    }
+    if (rc == 0) /* a failed solve's count (and code) stays as fail_solve reported it */
+        w->viscous_iterations = viscous_iterations, w->pressure_iterations = pressure_iterations;
     if (rc == 0)
         rc = rest_density(sim, dt);
     if (rc == 0) {

@@ -67,7 +67,7 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
-            GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
+            GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(divergence, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
             GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
             GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) ||
@@ -107,7 +107,7 @@ void implicit_destroy(surge_sim *sim)
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
-                      w->neumann_pa, w->density_rhs, w->phi_saved, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
+                      w->neumann_pa, w->density_rhs, w->phi_saved, w->divergence, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial, w->imaged, w->fluid_iw, w->fluid_igx, w->fluid_igy, w->wall_iw, w->wall_igx,
                       w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
