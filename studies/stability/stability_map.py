@@ -159,8 +159,8 @@ def run_outcome(name, folder, r):
 def kinetic_energy_at(folder, times):
     """The kinetic energy (J/m) of diagnostics.csv's row nearest each time (nan past the run's end) and the last
     time reached."""
-    rows = study.read_rows("stability_map", os.path.join(folder, "diagnostics.csv"),
-                           dict(time_s=float, kinetic_energy_jpm=float))
+    rows = [{k: float(r[k]) for k in ("time_s", "kinetic_energy_jpm")} for r in study.read_rows(
+        "stability_map", os.path.join(folder, "diagnostics.csv"), dict(time_s=float, kinetic_energy_jpm=float))]
     end = rows[-1]["time_s"] if rows else 0.0
     values = []
     for t in times:

@@ -408,9 +408,9 @@ static int rest_density(surge_sim *sim, double dt)
     return 0;
 }
 
-/* With discs, between passes of the viscous and pressure solves, the update p <- p + phi - rho0 nu (div v* - div v_n+1) (Uzawa's
- * iteration on the step's coupled velocity-pressure system, preconditioned as Cahouet and Chabard's: the Laplacian's
- * inverse for the inertia, rho0 nu for the viscosity; the rotational update of Timmermans et al. 1996). The incremental
+/* With discs, between passes of the viscous and pressure solves, the update p <- p + phi - rho0 nu (div v* - div v_n+1)
+ * (Uzawa's iteration on the step's coupled velocity-pressure system, preconditioned as Cahouet and Chabard's: the
+ * Laplacian's inverse for the inertia, rho0 nu for the viscosity; the rotational update of Timmermans et al. 1996). The incremental
  * step alone builds the pressure a disc's stresslet needs by about 1/(dt nu k^2) of it a step, k the disc's scale
  * (docs/method.md, "Boulders in the implicit scheme"). The divergence taken is the part the projection removes,
  * div v* - div(v* - dt grad phi / rho0): the rest, which alternates from particle to particle and which no pressure's
@@ -581,7 +581,7 @@ static int implicit_step(surge_sim *sim)
     }
     const double dt = begin_step(sim);
     int discs_moved = 0, rc = 0;
-    /* with discs, several passes of the viscous and pressure solves (disc_pressure_pass) */
+    /* with discs, several passes of the viscous and pressure solves (disc_pressure_update) */
     const int passes = sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_passes : 1;
     int viscous_iterations = 0, pressure_iterations = 0;
     double last_update_pa = INFINITY;
