@@ -37,13 +37,13 @@ static void update_body_force(surge_sim *sim)
 
 surge_sim *surge_sim_create(const surge_params *params, char *err, size_t err_len)
 {
-    return sim_create_checked(params, NULL, NULL, err, err_len);
+    return sim_create_checked(params, NULL, NULL, 0, err, err_len);
 }
 
 surge_sim *sim_create_checked(const surge_params *params,
                               int (*check)(const surge_sim *sim, long long walls, long long fluid, void *user,
                                            char *err, size_t err_len),
-                              void *user, char *err, size_t err_len)
+                              void *user, int narrow_gap_sites, char *err, size_t err_len)
 {
     if (surge_params_validate(params, err, err_len) != 0)
         return NULL;
@@ -54,6 +54,7 @@ surge_sim *sim_create_checked(const surge_params *params,
     }
     sim->scene_check = check;
     sim->scene_check_user = user;
+    sim->narrow_gap_sites = narrow_gap_sites;
     sim->params = *params;
     sim->params.walls.layers = surge_params_wall_layers(params); /* resolve the automatic value */
     const surge_params *p = &sim->params;

@@ -61,14 +61,16 @@ struct surge_sim {
      * them, with the boulders defined; 0 to go on, or -1 with err to refuse the scene */
     int (*scene_check)(const surge_sim *sim, long long walls, long long fluid, void *user, char *err, size_t err_len);
     void *scene_check_user;
+    int narrow_gap_sites; /* the scene keeps fluid sites in gaps too narrow beside a disc (checkpoints up to version 9) */
 };
 
 /* surge_sim_create, with check (may be NULL) called with the scene's particle counts before they are allocated (a
- * checkpoint's reader compares them with what the file holds) */
+ * checkpoint's reader compares them with what the file holds); narrow_gap_sites 1 builds the scene of a checkpoint
+ * written before fluid sites in gaps too narrow beside a disc were left out (boulders_cover) */
 surge_sim *sim_create_checked(const surge_params *params,
                               int (*check)(const surge_sim *sim, long long walls, long long fluid, void *user,
                                            char *err, size_t err_len),
-                              void *user, char *err, size_t err_len);
+                              void *user, int narrow_gap_sites, char *err, size_t err_len);
 
 /* Particle a's copies at the step's start (the step fields of particles/fields.h) */
 static inline void fields_save_step_start(surge_sim *sim, int a)

@@ -238,7 +238,8 @@ static void print_progress(const surge_sim *sim, double start_wall, double held_
     const double end = surge_sim_params(sim)->time.end_s;
     const double steps = (double)(surge_sim_step_count(sim) - start_step);
     const double rate = elapsed > 0 ? steps / elapsed : 0;
-    const double eta = t > start_time ? elapsed * (end - t) / (t - start_time) : 0;
+    /* the last step may end past end_s (a step is not cut to land on it): then nothing is left */
+    const double eta = t > start_time ? elapsed * fmax(0.0, end - t) / (t - start_time) : 0;
     fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.4g steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d\n",
             t, end, (long long)surge_sim_step_count(sim), surge_sim_last_dt(sim), rate,
             rate * surge_sim_derived(sim)->fluid_count, (int)(eta / 3600), (int)fmod(eta / 60, 60), (int)fmod(eta, 60));
