@@ -3,14 +3,17 @@
  * or slips (free) as Coulomb friction says; a disc set on a moving belt ends rolling at a third of its speed; a
  * bouncing disc keeps e^2 of its height; a head-on elastic collision swaps velocities across the periodic
  * boundary; discs blown up to non-finite or huge positions neither crash the broad phase nor disturb a resting
- * disc.
- * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up */
+ * disc. Lubrication: the film's force (lubrication.h) against Reynolds' equation integrated on the exact circular gap;
+ * a disc driven onto a wall, and two discs driven together, approach at the force over the film's damping at every
+ * gap below the cut-off, and at free fall above it.
+ * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "boulders/contact_solver.h"
+#include "boulders/lubrication.h"
 
 enum { MAX_DISCS = 16 };
 
@@ -260,6 +263,84 @@ static int test_blown_up(void)
     return failures;
 }
 
+/* The squeeze film's force per unit approach speed under a disc of radius r at gap h0 above a plane, from Reynolds'
+ * equation h^3 dp/dx = -12 mu U x on the exact gap h(x) = h0 + r - sqrt(r^2 - x^2), p = 0 at |x| = r (midpoint rule
+ * in x = r sin(theta), fine near the gap) */
+static double reynolds_damping(double mu, double r, double h0)
+{
+    enum { N = 400000 };
+    double force = 0, p = 0; /* integrate p from x = r inwards, then F = 2 int_0^r p dx */
+    const double dth = 0.5 * 3.14159265358979323846 / N;
+    for (int k = N - 1; k >= 0; k--) {
+        const double th = (k + 0.5) * dth, x = r * sin(th), dx = r * cos(th) * dth;
+        const double h = h0 + r - r * cos(th);
+        p += 12 * mu * x / (h * h * h) * dx; /* dp = -12 mu U x / h^3 dx, going inwards: p grows */
+        force += 2 * p * dx;
+    }
+    return force;
+}
+
+static int test_lubrication(void)
+{
+    const double mu = 467, r = 0.02, dp = 0.02 / 11.8;
+    /* the film's formula against Reynolds' equation: the paraboloid gap's result, exact as h0 / r -> 0 */
+    const double ratios[] = {1e-4, 1e-3, 1e-2};
+    const double bounds[] = {0.001, 0.006, 0.05}; /* the paraboloid's error, about 3.4 h/r */
+    for (int k = 0; k < 3; k++) {
+        const double h0 = ratios[k] * r, numeric = reynolds_damping(mu, r, h0);
+        char what[96];
+        snprintf(what, sizeof what, "lubrication: film formula against Reynolds' equation, h/r = %g", ratios[k]);
+        expect_below(what, fabs(lubrication_film_damping(mu, r, h0) / numeric - 1), bounds[k]);
+    }
+    /* a disc driven onto a plane (and, by symmetry, two discs driven together) by a = 10 m/s2 */
+    for (int pair = 0; pair <= 1; pair++) {
+        world w;
+        world_init(&w, 0, 0);
+        w.settings.lubrication_viscosity_pa_s = mu;
+        w.settings.lubrication_cutoff_m = dp;
+        w.settings.lubrication_min_gap_m = 0.01 * dp;
+        const double a = 100.0, start_gap = 2.5 * dp;
+        int disc;
+        if (pair) {
+            add_disc(&w, 0.5, 0.5, r, 0);
+            disc = add_disc(&w, 0.5, 0.5 + 2 * r + start_gap, r, 0);
+            w.ay[0] = a, w.ay[1] = -a;
+        } else {
+            add_plane(&w, 0, 1, 0);
+            disc = add_disc(&w, 0.5, r + start_gap, r, 0);
+            w.ay[disc] = -a;
+        }
+        const double mass = 1 / w.inv_mass[disc], radius = pair ? 0.5 * r : r;
+        const double targets[] = {1.5, 0.8, 0.5, 0.2, 0.1}; /* gaps in dp */
+        int next = 0;
+        double worst = 0, free_fall = 0;
+        for (int step = 0; step < 100000 && next < 5; step++) {
+            const double gap = pair ? w.y[1] - w.y[0] - 2 * r : w.y[disc] - r;
+            run(&w, gap > 1.2 * dp ? 1e-5 : 1e-3, 1); /* free fall finely, the film's creep coarsely */
+            if (gap > targets[next] * dp)
+                continue;
+            const double approach = pair ? w.vy[0] - w.vy[1] : -w.vy[disc];
+            if (targets[next] > 1) { /* beyond the cut-off: free fall from rest over one dp */
+                free_fall = fabs(approach / sqrt(2 * (pair ? 2 * a : a) * (start_gap - gap)) - 1);
+            } else {
+                /* the terminal speed: the driving force over the film's damping (relative speed for the pair) */
+                const double gap_after = pair ? w.y[1] - w.y[0] - 2 * r : w.y[disc] - r, mid = 0.5 * (gap + gap_after);
+                const double expected = mass * a / lubrication_damping(mu, radius, mid, dp, 0.01 * dp);
+                worst = fmax(worst, fabs(approach / expected - 1));
+            }
+            next++;
+        }
+        char what[96];
+        snprintf(what, sizeof what, "lubrication, %s: approach speed at 0.8-0.1 dp against F / c(h), worst",
+                 pair ? "two discs" : "disc on a wall");
+        expect_below(what, next == 5 ? worst : INFINITY, 0.02);
+        snprintf(what, sizeof what, "lubrication, %s: beyond the cut-off, free fall", pair ? "two discs" : "disc");
+        expect_below(what, free_fall, 0.02);
+        contact_solver_destroy(w.solver);
+    }
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     const char *which = argc > 1 ? argv[1] : "";
@@ -277,6 +358,8 @@ int main(int argc, char **argv)
         return test_collision() != 0;
     if (!strcmp(which, "blown_up"))
         return test_blown_up() != 0;
-    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up\n");
+    if (!strcmp(which, "lubrication"))
+        return test_lubrication() != 0;
+    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication\n");
     return 2;
 }

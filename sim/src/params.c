@@ -297,6 +297,15 @@ static const surge_param_info registry[] = {
      "Discs touch each other and the walls this far apart, in dp (0: at their surfaces): a gap narrower than the "
      "particle spacing holds fluid particles the SPH cannot resolve (docs/validation/debris_surge.md).",
      OFF(contacts.margin_dp)},
+    {"contacts", "lubrication", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+     "Add the lubrication force of gaps between discs, and between a disc and a wall, narrower than "
+     "lubrication_cutoff_dp: the 2D (cylinder) squeeze-film force less its value at the cut-off, which the SPH "
+     "resolves (docs/boulders.md).", OFF(contacts.lubrication)},
+    {"contacts", "lubrication_cutoff_dp", SURGE_PARAM_REAL, "dp", 1, 0.1, 10, true, NULL,
+     "Gap (surface to surface, in dp) below which the lubrication force acts.", OFF(contacts.lubrication_cutoff_dp)},
+    {"contacts", "lubrication_min_gap_dp", SURGE_PARAM_REAL, "dp", 0.01, 1e-4, 1, true, NULL,
+     "The lubrication force is taken at this gap (dp) where the gap is narrower (surface roughness; it keeps the "
+     "force finite at contact).", OFF(contacts.lubrication_min_gap_dp)},
 
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",

@@ -2,6 +2,7 @@
  * contact_solver.h. Normal n points from body a to body b (a is the wall for disc-wall contacts); the
  * tangent is t = (-n_y, n_x). */
 #include "boulders/contact_solver.h"
+#include "boulders/lubrication.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -17,6 +18,8 @@ typedef struct contact {
     double k_n, k_t;  /* effective masses' inverses along n and t */
     double target_vn; /* smallest normal relative velocity allowed */
     double lambda_n, lambda_t; /* accumulated impulses */
+    double lubrication;   /* the film's force per unit approach speed (lubrication.h); 0: none */
+    double lambda_l;      /* its impulse in this sub-step */
     double wall_vx, wall_vy;
 } contact;
 
@@ -292,6 +295,12 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         c->target_vn = c->gap_m > 0 ? -c->gap_m / h : set->erp * -c->gap_m / h;
         if (vn0 < -set->restitution_min_mps && -vn0 * h > c->gap_m)
             c->target_vn = fmax(c->target_vn, -set->restitution * vn0);
+        /* the lubrication film, between the surfaces (radii and gap without the contact margin) */
+        const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
+        c->lubrication = lubrication_damping(set->lubrication_viscosity_pa_s, c->a >= 0 ? ra * rb / (ra + rb) : rb,
+                                             c->gap_m + set->gap_offset_m, set->lubrication_cutoff_m,
+                                             set->lubrication_min_gap_m);
+        c->lambda_l = 0;
         const contact *old = find_before(s, c->key);
         c->lambda_n = old ? old->lambda_n : 0;
         c->lambda_t = old ? old->lambda_t : 0;
@@ -299,7 +308,7 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
     }
 }
 
-static void solve(contact_solver *s, contact_discs *d, const contact_settings *set)
+static void solve(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
 {
     for (int it = 0; it < set->iterations; it++) {
         for (int k = 0; k < s->now_count; k++) {
@@ -308,6 +317,14 @@ static void solve(contact_solver *s, contact_discs *d, const contact_settings *s
                 continue;
             double vn, vt;
             relative_velocity(c, d, &vn, &vt);
+            if (c->lubrication > 0) {
+                /* the film's impulse -c h vn at the sub-step's end velocity: vn + lambda_l / (c h) = 0 */
+                const double compliance = 1.0 / (c->lubrication * h);
+                const double delta = -(vn + c->lambda_l * compliance) / (c->k_n + compliance);
+                apply_impulse(c, d, delta, 0);
+                c->lambda_l += delta;
+                relative_velocity(c, d, &vn, &vt);
+            }
             const double lambda_n = fmax(0, c->lambda_n - (vn - c->target_vn) / c->k_n);
             apply_impulse(c, d, lambda_n - c->lambda_n, 0);
             c->lambda_n = lambda_n;
@@ -344,7 +361,10 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
                 d->omega[i] = 0;
             v_max = fmax(v_max, sqrt(d->vx[i] * d->vx[i] + d->vy[i] * d->vy[i]) + fabs(d->omega[i]) * d->radius[i]);
         }
-        const double margin = 0.1 * r_min + 2 * h * v_max;
+        /* pairs that may touch within the sub-step, and those within the lubrication cut-off */
+        double margin = 0.1 * r_min + 2 * h * v_max;
+        if (set->lubrication_viscosity_pa_s > 0)
+            margin = fmax(margin, set->lubrication_cutoff_m - set->gap_offset_m);
         s->now_count = 0;
         for (int i = 0; i < d->count; i++) {
             for (int w = 0; w < wall_count; w++) {
@@ -363,7 +383,7 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         for (int k = 0; k < s->now_count; k++)
             s->stats.max_overlap_m = fmax(s->stats.max_overlap_m, -s->now[k].gap_m);
         prepare(s, d, set, h);
-        solve(s, d, set);
+        solve(s, d, set, h);
         for (int i = 0; i < d->count; i++) {
             d->x[i] += h * d->vx[i];
             d->y[i] += h * d->vy[i];

@@ -38,6 +38,10 @@ typedef struct contact_settings {
     int substeps, iterations;
     double erp;                 /* fraction of an overlap removed per sub-step */
     double period_m;            /* > 0: periodic in x with this period, positions kept in [0, period) */
+    /* the lubrication force of gaps narrower than lubrication_cutoff_m (lubrication.h), solved implicitly with the
+     * contacts; viscosity 0: none. Gaps and radii are the surfaces' (the solver's less gap_offset_m, a contact
+     * margin that the discs' radii and the walls carry half each) */
+    double lubrication_viscosity_pa_s, lubrication_cutoff_m, lubrication_min_gap_m, gap_offset_m;
 } contact_settings;
 
 typedef struct contact_stats {

@@ -151,9 +151,14 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
     const int wall_count = contact_walls(sim, walls);
     contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
                            b->inv_inertia, b->spin_damping};
-    const contact_settings settings = {p->contacts.friction, p->contacts.restitution, p->contacts.restitution_min_mps,
-                                       p->contacts.substeps, p->contacts.iterations, p->contacts.erp,
-                                       sim->grid.period_m};
+    const double dp = p->numerics.dp_m;
+    const contact_settings settings = {
+        .friction = p->contacts.friction, .restitution = p->contacts.restitution,
+        .restitution_min_mps = p->contacts.restitution_min_mps, .substeps = p->contacts.substeps,
+        .iterations = p->contacts.iterations, .erp = p->contacts.erp, .period_m = sim->grid.period_m,
+        .lubrication_viscosity_pa_s = p->contacts.lubrication ? p->fluid.density_kgpm3 * p->fluid.viscosity_m2ps : 0,
+        .lubrication_cutoff_m = p->contacts.lubrication_cutoff_dp * dp,
+        .lubrication_min_gap_m = p->contacts.lubrication_min_gap_dp * dp, .gap_offset_m = p->contacts.margin_dp * dp};
     if (contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay, b->alpha) != 0)
         return -1;
     boulders_place_particles(sim);

@@ -1,0 +1,31 @@
+/* The lubrication force of a thin fluid gap between two discs, or a disc and a wall, in 2D (per metre of width).
+ * Reynolds' equation for the squeeze film, d/dx (h^3 dp/dx) = 12 mu dh/dt, with the gap near its narrowest point
+ * h(x) = h0 + x^2 / (2 R), R = r_a r_b / (r_a + r_b) (a wall: R = r), gives the pressure p = 6 mu U R / h(x)^2 and
+ * the normal force F = 3 sqrt(2) pi mu U (R / h0)^(3/2) for the approach speed U (docs/boulders.md, "Lubrication").
+ * The SPH resolves the film down to about a particle spacing, so only the part above the force at the cut-off gap is
+ * added: c(h) = 3 sqrt(2) pi mu [(R / max(h, h_min))^(3/2) - (R / h_c)^(3/2)] for h < h_c, F = -c U. */
+#ifndef SURGE_LUBRICATION_H
+#define SURGE_LUBRICATION_H
+
+#include <math.h>
+
+/* The squeeze film's force per unit approach speed (N s m^-2 per metre of width) at gap h0: 3 sqrt(2) pi mu
+ * (R / h0)^(3/2) */
+static inline double lubrication_film_damping(double viscosity_pa_s, double radius_m, double gap_m)
+{
+    const double ratio = radius_m / gap_m;
+    return 3.0 * sqrt(2.0) * 3.14159265358979323846 * viscosity_pa_s * ratio * sqrt(ratio);
+}
+
+/* The part the SPH does not resolve: 0 at and beyond the cut-off gap, the film's force less its value at the
+ * cut-off below it, the gap taken at least min_gap_m */
+static inline double lubrication_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
+                                         double min_gap_m)
+{
+    if (!(gap_m < cutoff_m) || !(viscosity_pa_s > 0) || !(radius_m > 0))
+        return 0.0;
+    return lubrication_film_damping(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) -
+           lubrication_film_damping(viscosity_pa_s, radius_m, cutoff_m);
+}
+
+#endif
