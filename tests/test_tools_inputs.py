@@ -341,6 +341,14 @@ d = driven("measure_bad_pvd", 1, 0.02)
 write(os.path.join(d, "run.pvd"), "<VTKFile")
 expect("poiseuille_loaded measure: malformed run.pvd", tool(PL, "measure", d), "run.pvd")
 
+# ---- 8b. disc_on_bed measure ----
+DB = os.path.join(SOURCE, "studies", "boulders", "disc_on_bed.py")
+expect("disc_on_bed measure: a missing folder", tool(DB, "measure", path("no_such_run")), "no_such_run")
+expect("disc_on_bed measure: a run without discs", tool(DB, "measure", folder("no_discs", RUN_FILES)), "boulders.pvd")
+d = folder("one_disc_file", RUN_FILES)
+vtp.write_pvd(os.path.join(d, "boulders.pvd"), [(0.0, "boulders_000000000.vtp")])
+expect("disc_on_bed measure: one disc file", tool(DB, "measure", d), "at least 3")
+
 # ---- 9. surge_watch ----
 SW = "surge_watch.py"
 expect("surge_watch -e foo", tool(SW, "-e", "foo", "--record", path("rec")), "endpoint", "foo")

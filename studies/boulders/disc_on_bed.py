@@ -1,0 +1,124 @@
+#!/usr/bin/python3
+"""A disc settling onto the bed: how fast it closes the gap, against the squeeze film's own speed, and where the
+SPH's pressure force on it comes from (docs/boulders.md, "Lubrication").
+
+  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s "boulders.list_m=0.05 0.01875 0.0125" \\
+      [-s contacts.lubrication=1] -s time.end_s=6 -s output.snapshot_interval_s=0.02 --threads 1
+  studies/boulders/disc_on_bed.py measure RUN_DIR
+
+For each gap h/a in 0.4, 0.2, 0.1, 0.05 and 0.02 (the first snapshot at or below it) it prints the approach speed U
+(from the disc's heights, centred differences), the film's own speed W / (3 sqrt(2) pi mu (a/h)^(3/2)) for the disc's
+buoyant weight W = (rho_disc - rho) g pi a^2, their ratio, and the vertical pressure force of the SPH pair sums on
+the disc's particles (eq. 10's pressure term, -m (p_a + p_k)/(rho_a rho_k) grad W summed over its fluid neighbours),
+and the same sum over the wall particles within reach, taken as if they were fluid: the support the bed takes out of
+the disc's kernels. The run's first disc is the one measured; the bed is y = 0.
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+from surgepy import cli_checks, study, vtp
+from surgepy.run_params import RunParams
+
+TOOL = "disc_on_bed"
+GAPS = (0.4, 0.2, 0.1, 0.05, 0.02)
+KIND_FLUID, KIND_DISC = 0, 3
+
+
+def fail(message):
+    study.fail(TOOL, message)
+
+
+def pressure_force_y(points, pressure, rho, disc, others, h, mass):
+    """The vertical force on the disc's particles from the pair pressure terms with the particles `others`."""
+    alpha = 7.0 / (4.0 * np.pi * h * h)
+    grad_coef = -5.0 * alpha / (h * h)
+    total = 0.0
+    for k in disc:
+        r = points[others] - points[k]
+        dist = np.hypot(r[:, 0], r[:, 1])
+        near = (dist > 0) & (dist < 2 * h)
+        o, r, dist = others[near], r[near], dist[near]
+        grad = grad_coef * (1 - 0.5 * dist / h) ** 3
+        coef = -mass * (pressure[o] + pressure[k]) / (rho[o] * rho[k])
+        total -= mass * np.sum(coef * grad * r[:, 1])  # minus the force on the neighbours
+    return total
+
+
+def measure(folder):
+    params = RunParams(folder)
+    dp, ch = params.positive("numerics", "dp_m"), params.positive("numerics", "ch")
+    rho0, nu = params.positive("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
+    ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
+    h = ch * np.sqrt(2.0) * dp
+    mass = rho0 * dp * dp
+    discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+    snaps = dict(vtp.read_pvd(os.path.join(folder, "run.pvd")))
+    if len(discs) < 3:
+        raise ValueError("%s: boulders.pvd lists %d disc files; the approach speed needs at least 3" %
+                         (folder, len(discs)))
+    times, heights, radius = [], [], None
+    for t, name in discs:
+        d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
+        if len(d["radius_m"]) == 0:
+            raise ValueError("%s: no disc in %s" % (folder, name))
+        times.append(t)
+        heights.append(float(d["points"][0, 1]))
+        radius = float(d["radius_m"][0])
+    times, heights = np.array(times), np.array(heights)
+    gaps = heights - radius
+    speeds = -np.gradient(heights, times)
+    weight = (ratio - 1.0) * rho0 * g * np.pi * radius * radius
+    mu = rho0 * nu
+    rows = []
+    for target in GAPS:
+        reached = np.nonzero(gaps <= target * radius)[0]
+        if len(reached) == 0:
+            rows.append((target, None))
+            continue
+        k = int(reached[0])
+        film = weight / (3.0 * np.sqrt(2.0) * np.pi * mu * (radius / max(gaps[k], 1e-12 * radius)) ** 1.5)
+        fluid_fy = wall_fy = float("nan")
+        snap = min(snaps, key=lambda t: abs(t - times[k])) if snaps else None
+        if snap is not None and abs(snap - times[k]) < 1e-9 + 1e-6 * abs(times[k]):
+            s = vtp.read_vtp(os.path.join(folder, snaps[snap]), ("kind", "pressure_pa", "density_kgpm3"), finite=True)
+            kind = s["kind"]
+            points = s["points"][:, :2].astype(float)
+            pressure, rho = s["pressure_pa"].astype(float), s["density_kgpm3"].astype(float)
+            disc = np.nonzero(kind == KIND_DISC)[0]
+            if len(disc) == 0:
+                raise ValueError("%s: %s holds no disc particles (kind %d)" % (folder, snaps[snap], KIND_DISC))
+            fluid = np.nonzero(kind == KIND_FLUID)[0]
+            walls = np.nonzero((kind != KIND_FLUID) & (kind != KIND_DISC))[0]
+            fluid_fy = pressure_force_y(points, pressure, rho, disc, fluid, h, mass)
+            wall_fy = pressure_force_y(points, pressure, rho, disc, walls, h, mass)
+        rows.append((target, (gaps[k] / radius, times[k], speeds[k], film, fluid_fy, wall_fy)))
+    return weight, rows
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = parser.add_subparsers(dest="command", required=True)
+    meas = sub.add_parser("measure")
+    meas.add_argument("run_dir", type=cli_checks.folder)
+    args = parser.parse_args()
+    try:
+        weight, rows = measure(args.run_dir)
+    except (OSError, ValueError) as e:
+        fail(str(e))
+    print("buoyant weight W = %.4g N/m" % weight)
+    print("h/a      t (s)   U (m/s)     film (m/s)  U/film   SPH pressure Fy: fluid (N/m)  wall particles as fluid")
+    for target, row in rows:
+        if row is None:
+            print("%-6.2f   not reached" % target)
+            continue
+        gap, t, speed, film, fluid_fy, wall_fy = row
+        print("%-6.3f   %6.2f  %.3e   %.3e   %7.2f  %12.3f                  %8.3f" %
+              (gap, t, speed, film, speed / film, fluid_fy, wall_fy))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(cli_checks.run(main))
