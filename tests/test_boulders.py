@@ -13,7 +13,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   hash as the uninterrupted run; the boulders' .vtp files and boulders.pvd are written.
   GROUP stream    a pyzmq subscriber's `bodies` messages of a paused-then-resumed run carry the discs, and the
                   final one equals the run's last boulders .vtp bit for bit.
-  GROUP inputs    bad boulder lists and placements get clear errors naming the parameter (exit 2 or 3).
+  GROUP inputs    bad boulder lists, placements and contact parameters (the lubrication's too) get clear errors
+                  naming the parameter (exit 2 or 3).
   GROUP implicit  the implicit scheme's discs (docs/method.md, "Boulders in the implicit scheme"), in the settling
                   tank under a free surface: the terminal speed against Faxen's at a step of 6 ms
                   (implicit.force_cfl 0.1; +13.1 % measured, the explicit scheme's bound 15 %) and at the default
@@ -273,6 +274,11 @@ def group_inputs():
          "does not fit"),
         (["-s", "boulders.placement=sideways"], "boulders.placement"),
         (["-s", "contacts.friction=-1"], "contacts.friction"),
+        (["-s", "contacts.lubrication=maybe"], "contacts.lubrication"),
+        (["-s", "contacts.lubrication_cutoff_dp=0"], "contacts.lubrication_cutoff_dp"),
+        (["-s", "contacts.lubrication_min_gap_dp=abc"], "contacts.lubrication_min_gap_dp"),
+        (["-s", "contacts.lubrication_min_gap_dp=0.5", "-s", "contacts.lubrication_cutoff_dp=0.4"],
+         "must be below contacts.lubrication_cutoff_dp"),
     ]
     for extra, words in bad:
         out, p, cmd = surge("inputs", ["check", "boulder_settling.ini"] + extra, timeout_s=60)

@@ -947,10 +947,22 @@ static int validate_walls_and_size(const surge_params *p, char *err, size_t err_
     return 0;
 }
 
+/* The lubrication force is the film's less its value at the cut-off: a floor at or above the cut-off would make it
+ * pull approaching surfaces together */
+static int validate_contacts(const surge_params *p, char *err, size_t err_len)
+{
+    if (p->contacts.lubrication_min_gap_dp >= p->contacts.lubrication_cutoff_dp) {
+        fail(err, err_len, "contacts.lubrication_min_gap_dp (%g) must be below contacts.lubrication_cutoff_dp (%g)",
+             p->contacts.lubrication_min_gap_dp, p->contacts.lubrication_cutoff_dp);
+        return -1;
+    }
+    return 0;
+}
+
 int surge_params_validate(const surge_params *p, char *err, size_t err_len)
 {
     return validate_outputs(p, err, err_len) != 0 || validate_fluid(p, err, err_len) != 0 ||
-                   validate_walls_and_size(p, err, err_len) != 0
+                   validate_walls_and_size(p, err, err_len) != 0 || validate_contacts(p, err, err_len) != 0
                ? -1
                : 0;
 }
