@@ -29,7 +29,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   speed at its height (within 2 %; 0.5 % measured). Stepped after the fluid, without the coupling limit, the
                   disc lagged it by 4 % at 58 ms (0.924 of its speed at 5.8 ms). A disc 0.6 dp under the lid at dp =
                   r/11.8 runs (no fluid site is left in a gap narrower than twice the contact distance; with one,
-                  the run stopped on the density check at its second step).
+                  the run stopped on the density check at its second step); its checkpoint restarts, and marked as
+                  version 9 (whose scene kept that site) it is refused on its particle counts.
 
 Each check prints "name: ok" or "name: FAILED" with details; the script exits 1 if any failed.
 """
@@ -509,6 +510,28 @@ def group_implicit_steps():
         if p.returncode == 0 else float("nan")
     check("implicit: a disc 0.6 dp under the lid runs 0.3 s (largest density deviation %.3f, bound 0.08)" % deviation,
           p.returncode == 0 and deviation < 0.08, cmd + "\n" + p.stderr[-1500:])
+    # its checkpoint restarts; written by a build that kept the gap's fluid site (version 9 and before), the scene is
+    # built with that site, so this file, marked version 9, no longer matches its counts and is refused
+    checkpoint = os.path.join(lid, "checkpoint.bin")
+    if p.returncode != 0 or not os.path.exists(checkpoint):
+        return
+    again = subprocess.run([SURGE, "run", "--restart", checkpoint, "-o", os.path.join(WORK, "lid_restart"),
+                            "--overwrite", "-s", "time.end_s=0.35", "--threads", "1"], capture_output=True, text=True,
+                           timeout=300, env=ENV)
+    check("implicit: the lid-gap run restarts from its checkpoint", again.returncode == 0, again.stderr[-1500:])
+    raw = bytearray(open(checkpoint, "rb").read())
+    raw[8:12] = struct.pack("<I", 9)
+    body = bytes(raw[:-8])
+    digest = 0xcbf29ce484222325
+    for byte in body:
+        digest = ((digest ^ byte) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    older = os.path.join(WORK, "lid_gap_v9.bin")
+    open(older, "wb").write(body + struct.pack("<Q", digest))
+    refused = subprocess.run([SURGE, "run", "--restart", older, "-o", os.path.join(WORK, "lid_restart_v9"),
+                              "--overwrite", "--threads", "1"], capture_output=True, text=True, timeout=300, env=ENV)
+    check("implicit: marked version 9, the same checkpoint builds the scene with the gap's fluid site and is refused",
+          refused.returncode == 2 and "particle counts do not match" in refused.stderr,
+          "exit %d\n%s" % (refused.returncode, refused.stderr[-1500:]))
 
 
 {"implicit": group_implicit, "implicit_steps": group_implicit_steps, "scene": group_scene, "settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()

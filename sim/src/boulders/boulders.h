@@ -16,8 +16,8 @@ int boulders_particle_count(const surge_sim *sim);
 int boulders_particles_of(const surge_sim *sim, int disc);   /* the particles of one disc */
 /* Appends disc particles to the wall arrays from index first (ids too); ghost offsets follow the discs. */
 void boulders_create_particles(surge_sim *sim, int first);
-int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc or in a
-                                                               gap narrower than a spacing beside one */
+int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc, or in a
+                                                               gap beside one narrower than twice the contact distance */
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);
