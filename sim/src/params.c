@@ -297,6 +297,10 @@ static const surge_param_info registry[] = {
      "Discs touch each other and the walls this far apart, in dp (0: at their surfaces): a gap narrower than the "
      "particle spacing holds fluid particles the SPH cannot resolve (docs/validation/debris_surge.md).",
      OFF(contacts.margin_dp)},
+    {"contacts", "solid_pressure", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
+     "A disc's particles feel the pressure of the particles of walls and of other discs within the kernel's reach as "
+     "they feel the fluid's: the pressure across gaps narrower than the kernel, which the fluid alone leaves out "
+     "(docs/boulders.md).", OFF(contacts.solid_pressure)},
     {"contacts", "lubrication", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "Add the lubrication force of gaps between discs, and between a disc and a wall, narrower than "
      "lubrication_cutoff_dp: the 2D (cylinder) squeeze-film force less its value at the cut-off, which the SPH "

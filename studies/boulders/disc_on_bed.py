@@ -10,8 +10,9 @@ For each gap h/a in 0.4, 0.2, 0.1, 0.05 and 0.02 (the first snapshot at or below
 (from the disc's heights, centred differences), the film's own speed W / (3 sqrt(2) pi mu (a/h)^(3/2)) for the disc's
 buoyant weight W = (rho_disc - rho) g pi a^2, their ratio, and the vertical pressure force of the SPH pair sums on
 the disc's particles (eq. 10's pressure term, -m (p_a + p_k)/(rho_a rho_k) grad W summed over its fluid neighbours),
-and the same sum over the wall particles within reach, taken as if they were fluid: the support the bed takes out of
-the disc's kernels. The run's first disc is the one measured; the bed is y = 0.
+and the same sum over the bed's particles within reach: the support the bed takes out of the disc's kernels, whose
+pressure acts on the disc with contacts.solid_pressure (on by default; "acts: no" where the run had it off). The run's
+first disc is the one measured; the bed is y = 0.
 """
 import argparse
 import os
@@ -106,10 +107,12 @@ def main():
     args = parser.parse_args()
     try:
         weight, rows = measure(args.run_dir)
+        solid = RunParams(args.run_dir).flag("contacts", "solid_pressure", False)  # absent: a run from before the key
     except (OSError, ValueError) as e:
         fail(str(e))
     print("buoyant weight W = %.4g N/m" % weight)
-    print("h/a      t (s)   U (m/s)     film (m/s)  U/film   SPH pressure Fy: fluid (N/m)  wall particles as fluid")
+    print("h/a      t (s)   U (m/s)     film (m/s)  U/film   SPH pressure Fy: fluid (N/m)  bed particles (acts: %s)"
+          % ("yes" if solid else "no"))
     for target, row in rows:
         if row is None:
             print("%-6.2f   not reached" % target)

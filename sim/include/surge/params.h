@@ -169,6 +169,7 @@ typedef struct surge_params {
         int iterations;          /* projected Gauss-Seidel sweeps per sub-step */
         double erp;              /* fraction of an overlap removed per sub-step */
         double margin_dp;        /* discs touch each other and walls this far apart (dp): fluid gaps below dp */
+        bool solid_pressure;     /* discs feel the pressure of wall and other discs' particles in reach (fluid_forces.c) */
         bool lubrication;        /* the lubrication force of gaps narrower than the cut-off (lubrication.h) */
         double lubrication_cutoff_dp;  /* gaps below this (dp) take the unresolved part of the lubrication force */
         double lubrication_min_gap_dp; /* the force's gap is at least this (dp): surface roughness */

@@ -15,7 +15,11 @@
  * particle weighted by how wetted its ghost node is.
  * A uniform pressure exerts no force on a closed surface, but the discrete sum of (p_a + p_k) grad W around a disc
  * is not zero on an irregular arrangement: reference_pa[disc] is subtracted from the pressures, where given (the
- * implicit scheme's pressure in a closed domain carries an arbitrary constant). */
+ * implicit scheme's pressure in a closed domain carries an arbitrary constant).
+ * Where a wall or another disc comes within the kernel's reach, its particles take the place of fluid particles in a
+ * disc particle's support: with contacts.solid_pressure they exert eq. 7's pressure term as the fluid does (equal and
+ * opposite between two discs), so that the pressure in a gap narrower than the kernel, and a uniform pressure around
+ * a disc near a wall, act on the disc (docs/boulders.md, "Pressure across narrow gaps"). */
 void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
 {
     boulder_set *b = &sim->boulders;
@@ -27,6 +31,7 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
     const real four_nu = (real)(4.0 * sim->params.fluid.viscosity_m2ps);
     const real *restrict rho = sim->rho, *restrict inv_rho = sim->inv_rho, *restrict pres = sim->pressure;
     const pair_state *restrict st = sim->pair_state;
+    const int solid_pressure = sim->params.contacts.solid_pressure;
     real *restrict fx = sim->ax, *restrict fy = sim->ay; /* wall entries are free scratch */
     #pragma omp parallel for schedule(static)
     for (int k = 0; k < sim->wall_count; k++) {
@@ -67,6 +72,22 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         fx[k] = -mass * total[0];
         fy[k] = -mass * total[1];
         b->spin_coupling[k] = total[2];
+        if (solid_pressure) { /* eq. 7's pressure term with the particles of walls and other discs in reach */
+            real solid_x = 0, solid_y = 0;
+            for (int64_t e = nl->solid_first[k]; e < nl->solid_first[k + 1]; e++) {
+                const int j = nl->solid_index[e];
+                /* r_k - r_j */
+                const real dx = nl->solid_dx0[e] + (mxk - nl->moved_x[j]), dy = nl->solid_dy0[e] + (myk - nl->moved_y[j]);
+                const real r2 = dx * dx + dy * dy;
+                if (!(r2 < support2))
+                    continue;
+                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                const real pressure_coef = pair_pressure_coef(mass, pk - reference, pres[j] - reference, inv_rhok, inv_rho[j]);
+                solid_x += pressure_coef * f * dx, solid_y += pressure_coef * f * dy;
+            }
+            fx[k] += mass * solid_x;
+            fy[k] += mass * solid_y;
+        }
     }
     for (int i = 0; i < b->count; i++) {
         b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = 0;

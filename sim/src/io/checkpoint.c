@@ -20,7 +20,8 @@
  * multigrid hierarchies afresh, from version 6, whose rest-density solve starts from 0 at the first step, and from
  * version 7 with boulders, whose first step had no disc-coupling limit; an implicit run with boulders from versions 5-8,
  * whose discs were stepped after the fluid, continues with the coupled step (version 9). A scene from versions 1-9 is
- * built with the fluid sites it had in gaps too narrow beside a disc, which version 10 leaves out. */
+ * built with the fluid sites it had in gaps too narrow beside a disc, which version 10 leaves out; a run from versions
+ * 1-10 continues without the pressure between discs and walls (contacts.solid_pressure 0), as it was run. */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -37,7 +38,7 @@
 #include "scene/scene.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 10u
+#define CHECKPOINT_VERSION 11u
 
 /* The least a checkpoint of this version holds with a parameter block of plen bytes and `fluid` fluid particles: the
  * header, the clock and counts, the particles' fields, (version 3 on) their neighbour-list build positions, the state
@@ -377,6 +378,7 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         return NULL;
     }
     surge_params params = surge_default_params();
+    params.contacts.solid_pressure = *version >= 11; /* its key is in the text from version 11 on */
     char msg[512];
     surge_sim *sim = NULL;
     if (surge_params_load_text(&params, text, path, msg, sizeof msg) != 0)

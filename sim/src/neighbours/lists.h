@@ -35,6 +35,13 @@ typedef struct neighbour_lists {
     int32_t *ghost_fluid_index;
     real *ghost_fluid_dx0, *ghost_fluid_dy0, *ghost_dx_build, *ghost_dy_build;
     size_t ghost_fluid_capacity;
+    /* a boulder's particle k: the particles of fixed walls and of other discs within 2h + skin of it at the build,
+     * solid_index[solid_first[k] .. solid_first[k+1]) with r_k - r_j in solid_dx0/dy0 (not padded: its loops are
+     * scalar; boulders/fluid_forces.c) */
+    int64_t *solid_first;
+    int32_t *solid_index;
+    real *solid_dx0, *solid_dy0;
+    size_t solid_capacity;
 } neighbour_lists;
 
 #endif

@@ -56,12 +56,13 @@ int neighbours_init(surge_sim *sim, char *err, size_t err_len)
     nl->wall_first = calloc(nf + 1, sizeof *nl->wall_first);
     nl->wall_fluid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->wall_fluid_first);
     nl->ghost_fluid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_fluid_first);
+    nl->solid_first = calloc((size_t)sim->wall_count + 1, sizeof *nl->solid_first);
     nl->ghost_dx_build = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_dx_build);
     nl->ghost_dy_build = calloc((size_t)sim->wall_count + 1, sizeof *nl->ghost_dy_build);
     nl->moved_x = calloc(n + 1, sizeof *nl->moved_x);
     nl->moved_y = calloc(n + 1, sizeof *nl->moved_y);
     if (!nl->x_build || !nl->y_build || !nl->fluid_first || !nl->wall_first || !nl->wall_fluid_first || !nl->moved_x ||
-        !nl->ghost_fluid_first || !nl->ghost_dx_build || !nl->ghost_dy_build ||
+        !nl->ghost_fluid_first || !nl->ghost_dx_build || !nl->ghost_dy_build || !nl->solid_first ||
         !nl->moved_y) {
         snprintf(err, err_len, "out of memory for the neighbour lists of %zu particles", n);
         return -1;
@@ -78,7 +79,8 @@ void neighbours_free(neighbour_lists *nl)
                       nl->fluid_dx0, nl->fluid_dy0, nl->wall_first, nl->wall_index, nl->wall_dx0, nl->wall_dy0,
                       nl->wall_fluid_first, nl->wall_fluid_index, nl->wall_fluid_dx0, nl->wall_fluid_dy0,
                       nl->ghost_fluid_first, nl->ghost_fluid_index, nl->ghost_fluid_dx0, nl->ghost_fluid_dy0,
-                      nl->ghost_dx_build, nl->ghost_dy_build};
+                      nl->ghost_dx_build, nl->ghost_dy_build, nl->solid_first, nl->solid_index, nl->solid_dx0,
+                      nl->solid_dy0};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     memset(nl, 0, sizeof *nl);
@@ -177,6 +179,31 @@ static void list_fluid_around(surge_sim *sim, double xs, double ys, double reach
                     dy0 + first[k]);
 }
 
+/* Counts (fill = 0: into solid_first[k + 1]) or writes (fill = 1: from solid_first[k]) boulder particle k's list of the
+ * particles of fixed walls and of other discs within reach of (xs, ys), its build position, in the grid's order */
+static void list_solids_around(surge_sim *sim, int k, double xs, double ys, double reach2, int fill)
+{
+    neighbour_lists *nl = &sim->neighbours;
+    const int32_t *of_wall = sim->boulders.of_wall;
+    const int disc = of_wall[sim->id[k]];
+    neighbour_ranges walls;
+    grid_neighbour_ranges(&sim->grid, sim->grid.wall_start, xs, ys, &walls);
+    int64_t e = fill ? nl->solid_first[k] : 0;
+    for (int r = 0; r < walls.count; r++) {
+        const double x_shifted = xs - walls.shift_x[r];
+        for (int j = walls.begin[r]; j < walls.end[r]; j++) {
+            const double dx = x_shifted - nl->x_build[j], dy = ys - nl->y_build[j];
+            if (!(dx * dx + dy * dy < reach2) || of_wall[sim->id[j]] == disc)
+                continue;
+            if (fill)
+                nl->solid_index[e] = j, nl->solid_dx0[e] = (real)dx, nl->solid_dy0[e] = (real)dy;
+            e++;
+        }
+    }
+    if (!fill)
+        nl->solid_first[k + 1] = e;
+}
+
 /* Counts (fill = 0) or writes (fill = 1) the lists of particle a (a fluid particle's fluid and wall lists, or a
  * wall particle's lists of the fluid around it and, for a boulder's, around its ghost). */
 static void list_particle(surge_sim *sim, int a, double reach2, int fill)
@@ -189,9 +216,10 @@ static void list_particle(surge_sim *sim, int a, double reach2, int fill)
                           nl->wall_fluid_dx0, nl->wall_fluid_dy0);
         if (sim->wall_of[a] != WALL_BOULDER) {
             if (!fill)
-                nl->ghost_fluid_first[a + 1] = 0;
+                nl->ghost_fluid_first[a + 1] = nl->solid_first[a + 1] = 0;
             return;
         }
+        list_solids_around(sim, a, xs, ys, reach2, fill);
         /* a boulder's ghost node as it was at the disc's build orientation */
         real gdx, gdy;
         boulders_ghost_offset(sim, a, sim->boulders.angle_build[sim->boulders.of_wall[sim->id[a]]], &gdx, &gdy);
@@ -235,12 +263,14 @@ static int build_lists(surge_sim *sim)
     prefix_sum(nl->wall_first, nf);
     prefix_sum(nl->wall_fluid_first, nw);
     prefix_sum(nl->ghost_fluid_first, nw);
+    prefix_sum(nl->solid_first, nw);
     if (reserve(&nl->fluid_index, &nl->fluid_dx0, &nl->fluid_dy0, &nl->fluid_capacity, (size_t)nl->fluid_first[nf]) ||
         reserve(&nl->wall_index, &nl->wall_dx0, &nl->wall_dy0, &nl->wall_capacity, (size_t)nl->wall_first[nf]) ||
         reserve(&nl->wall_fluid_index, &nl->wall_fluid_dx0, &nl->wall_fluid_dy0, &nl->wall_fluid_capacity,
                 (size_t)nl->wall_fluid_first[nw]) ||
         reserve(&nl->ghost_fluid_index, &nl->ghost_fluid_dx0, &nl->ghost_fluid_dy0, &nl->ghost_fluid_capacity,
-                (size_t)nl->ghost_fluid_first[nw]))
+                (size_t)nl->ghost_fluid_first[nw]) ||
+        reserve(&nl->solid_index, &nl->solid_dx0, &nl->solid_dy0, &nl->solid_capacity, (size_t)nl->solid_first[nw]))
         return -1;
     #pragma omp parallel for schedule(static)
     for (int a = 0; a < sim->count; a++)

@@ -111,7 +111,8 @@ void implicit_discs_mirror(surge_sim *sim, const double *disc_velocity)
  * r_k) of the fluid's pressures p (by fluid index; free-surface particles at 0) and the walls'
  * in w->wall_x, the pair sum m_a m_k (p_a + p_k) f r_ak / rho0^2 of the explicit scheme, each pressure taken relative
  * to the mean of the disc's own particles: a uniform pressure exerts no force on a closed surface, but the pair sum
- * around a disc on an irregular arrangement does not vanish. Into force (3 per disc: Fx, Fy and T/R, N/m) */
+ * around a disc on an irregular arrangement does not vanish; with contacts.solid_pressure, the same pair term with the
+ * particles of walls and other discs in reach (boulders_fluid_forces). Into force (3 per disc: Fx, Fy and T/R, N/m) */
 static void disc_pressure_forces(surge_sim *sim, const double *p, double *force)
 {
     implicit_work *w = implicit_of(sim);
@@ -146,6 +147,21 @@ static void disc_pressure_forces(surge_sim *sim, const double *p, double *force)
             const double pa = (w->fixed[a - first] ? 0.0 : p[a - first]) - reference[d];
             fx += (pa + pk) * f * dx, fy += (pa + pk) * f * dy;
         }
+        if (sim->params.contacts.solid_pressure) /* the particles of walls and other discs in reach (fluid_forces.c) */
+            for (int64_t e = nl->solid_first[kw]; e < nl->solid_first[kw + 1]; e++) {
+                const int j = nl->solid_index[e], other = disc_of(sim, j);
+                /* r_k - r_j */
+                const real dx = nl->solid_dx0[e] + (nl->moved_x[kw] - nl->moved_x[j]);
+                const real dy = nl->solid_dy0[e] + (nl->moved_y[kw] - nl->moved_y[j]);
+                const real r2 = dx * dx + dy * dy;
+                if (!(r2 < support2))
+                    continue;
+                const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                /* between two discs, one reference for both sides: the pair's forces stay equal and opposite */
+                const double shared = other < 0 ? reference[d] : 0.5 * (reference[d] + reference[other]);
+                const double pair = (w->wall_x[j] - shared) + (w->wall_x[kw] - shared);
+                fx -= pair * f * dx, fy -= pair * f * dy;
+            }
         force[3 * d] += scale * fx, force[3 * d + 1] += scale * fy;
         force[3 * d + 2] += scale * (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
     }
