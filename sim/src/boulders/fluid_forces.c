@@ -6,6 +6,30 @@
 #include "boulders/boulders.h"
 #include "physics/pair_terms.h"
 
+/* eq. 7's pressure term between disc particle k and the particles of walls and other discs in its list (lists.h),
+ * pressures relative to reference: the force on k added to fx, fy */
+static void solid_pressure_force(const surge_sim *sim, int k, real reference, real *fx, real *fy)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, support2 = sim->kernel.support2;
+    const real mass = (real)sim->mass, pk = sim->pressure[k] - reference, inv_rhok = sim->inv_rho[k];
+    real sum_x = 0, sum_y = 0;
+    for (int64_t e = nl->solid_first[k]; e < nl->solid_first[k + 1]; e++) {
+        const int j = nl->solid_index[e];
+        /* r_k - r_j */
+        const real dx = nl->solid_dx0[e] + (nl->moved_x[k] - nl->moved_x[j]);
+        const real dy = nl->solid_dy0[e] + (nl->moved_y[k] - nl->moved_y[j]);
+        const real r2 = dx * dx + dy * dy;
+        if (!(r2 < support2))
+            continue;
+        const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+        const real pressure_coef = pair_pressure_coef(mass, pk, sim->pressure[j] - reference, inv_rhok, sim->inv_rho[j]);
+        sum_x += pressure_coef * f * dx, sum_y += pressure_coef * f * dy;
+    }
+    *fx += mass * sum_x;
+    *fy += mass * sum_y;
+}
+
 /* eq. 10: the force on each disc particle is minus the pair forces it exerts on its fluid neighbours
  * (the terms of interaction.c's wall loop), so momentum is exchanged exactly.
  * The viscous pair force (Lo & Shao) is the Laplacian form: it carries the traction mu (grad v) n, not
@@ -72,22 +96,8 @@ void boulders_fluid_forces(surge_sim *sim, const double *reference_pa)
         fx[k] = -mass * total[0];
         fy[k] = -mass * total[1];
         b->spin_coupling[k] = total[2];
-        if (solid_pressure) { /* eq. 7's pressure term with the particles of walls and other discs in reach */
-            real solid_x = 0, solid_y = 0;
-            for (int64_t e = nl->solid_first[k]; e < nl->solid_first[k + 1]; e++) {
-                const int j = nl->solid_index[e];
-                /* r_k - r_j */
-                const real dx = nl->solid_dx0[e] + (mxk - nl->moved_x[j]), dy = nl->solid_dy0[e] + (myk - nl->moved_y[j]);
-                const real r2 = dx * dx + dy * dy;
-                if (!(r2 < support2))
-                    continue;
-                const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                const real pressure_coef = pair_pressure_coef(mass, pk - reference, pres[j] - reference, inv_rhok, inv_rho[j]);
-                solid_x += pressure_coef * f * dx, solid_y += pressure_coef * f * dy;
-            }
-            fx[k] += mass * solid_x;
-            fy[k] += mass * solid_y;
-        }
+        if (solid_pressure)
+            solid_pressure_force(sim, k, reference, &fx[k], &fy[k]);
     }
     for (int i = 0; i < b->count; i++) {
         b->fx[i] = b->fy[i] = b->torque[i] = b->spin_damping[i] = 0;
