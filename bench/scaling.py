@@ -49,7 +49,7 @@ DEBRIS = ["-s", "numerics.dp_m=0.04", "-s", "boulders.placement=graded", "-s", "
 SCENES = {
     "film": ("incline_film.ini", "1.0", "4", [], {"explicit": 0.05, "implicit": 0.1}),
     "film_fine": ("incline_film.ini", "1.0", "4", ["-s", "numerics.dp_m=0.0025"], {"explicit": 0.02, "implicit": 0.05}),
-    "debris": ("debris_surge.ini", "1.8", "0", DEBRIS, {"explicit": 0.2, "implicit": 0.5}),
+    "debris": ("debris_surge.ini", "1.8", "0", DEBRIS, {"explicit": 0.2, "implicit": 0.3}),
     "freydier": ("freydier_id1.ini", "1.8", "0", ["-s", "numerics.dp_m=0.0005"], {"implicit": 0.3}),
 }
 QUICK = {"tiny": ("incline_film.ini", "1.0", "4", ["-s", "numerics.dp_m=0.02"], {"explicit": 0.005, "implicit": 0.1})}
