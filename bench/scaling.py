@@ -3,15 +3,16 @@
 
   bench/scaling.py [--bench build/surge-bench] [--max-threads N] [--scene NAME,...] [--quick]
 
-For each scene and scheme it runs surge-bench once per thread count, 1, 2, 4, ... up to the machine's cores (or N,
-which is the last count when it is not a power of two), and prints one table, a row per run: the fluid particles,
-steps, the steps' wall time, the rate in million fluid particle-steps/s, the speed-up against 1 thread, two
-estimates of the serial fraction and the phase that took most of the time. Then, per scene and scheme, each phase's
-seconds at every thread count and its own speed-up. The phases are surge-bench's (surge_phase_times in
-sim/include/surge/sim.h; docs/performance.md, "Where a step's time goes").
+For each scene and scheme it runs surge-bench once per thread count, 1, 2, 4, ... up to the machine's physical cores,
+or the CPUs this process may use where fewer (or N, the last count also when it is not a power of two), and prints
+one table, a row per run: the fluid particles, steps, the steps' wall time, the rate in million fluid
+particle-steps/s, the speed-up against 1 thread, two estimates of the serial fraction and the phase that took most of
+the time. Then, per scene and scheme, each phase's seconds at every thread count and its own speed-up. The phases
+are surge-bench's (surge_phase_times in sim/include/surge/sim.h; docs/performance.md, "Where a step's time goes").
 
 - serial: the share of the run's time in the phases that run on one thread, the contact solver and the rest of the
-  step outside the named phases (other). At 1 thread it is Amdahl's serial fraction of the named phases' split.
+  step outside the named phases (other). At 1 thread it is Amdahl's serial fraction, as far as the phases tell
+  serial work from shared.
 - karp-flatt: the serial fraction the measured speed-up S on p threads implies, (1/S - 1/p) / (1 - 1/p). It also
   counts what holds the parallel phases back: waits at their barriers, memory bandwidth, loops a scene is too small
   to share (the implicit scheme keeps its loops on one thread below 20,000 fluid particles), serial loops inside
