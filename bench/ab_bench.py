@@ -6,7 +6,8 @@
 
 A is the commit --base, exported with `git archive` into build/ab/<commit>/ and built there in Release with the
 current bench/bench.c (the public API it uses has not changed since f50cf94, but for the program and machine lines
-it prints, left out for a base older than 87303e8), so that A and B run the same driver
+it prints, left out for a base older than 87303e8, and the phase times, left out for a base without
+surge_sim_phase_times), so that A and B run the same driver
 on the same case file (this checkout's cases/incline_film.ini). For each configuration (C_h, threads) it runs
 surge-bench A B A B ... --pairs times, one at a time, with OMP_WAIT_POLICY=PASSIVE, and prints each run's
 particle-steps/s, the medians, each pair's ratio B/A, and the velocity error of both (which must agree). At
@@ -51,10 +52,16 @@ def build_base(revision):
     # the base's own place for bench.c: bench/, or tools/ in commits before the benchmarks had their folder
     bench_folder = "bench" if os.path.isfile(os.path.join(tree, "bench", "bench.c")) else "tools"
     shutil.copyfile(os.path.join(ROOT, "bench", "bench.c"), os.path.join(tree, bench_folder, "bench.c"))
-    # a base older than 87303e8 has no surge_build_description(): bench.c then leaves out its program/machine lines
+    # a base older than 87303e8 has no surge_build_description(), one without the phase timers no
+    # surge_sim_phase_times(): bench.c then leaves out its program/machine lines, its phase lines
+    defines = []
     with open(os.path.join(tree, "sim", "include", "surge", "platform.h")) as f:
-        has_build_info = "surge_build_description" in f.read()
-    flags = [] if has_build_info else ["-DCMAKE_C_FLAGS=-DSURGE_BENCH_WITHOUT_BUILD_INFO"]
+        if "surge_build_description" not in f.read():
+            defines.append("-DSURGE_BENCH_WITHOUT_BUILD_INFO")
+    with open(os.path.join(tree, "sim", "include", "surge", "sim.h")) as f:
+        if "surge_sim_phase_times" not in f.read():
+            defines.append("-DSURGE_BENCH_WITHOUT_PHASE_TIMES")
+    flags = ["-DCMAKE_C_FLAGS=" + " ".join(defines)] if defines else []
     for cmd in (["cmake", "-S", tree, "-B", os.path.join(tree, "build"), "-DCMAKE_BUILD_TYPE=Release"] + flags,
                 ["cmake", "--build", os.path.join(tree, "build"), "--target", "surge-bench", "-j%d" % os.cpu_count()]):
         proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)

@@ -3,11 +3,13 @@
  * and 2 threads; with --ch, --threads or --layers it runs that one configuration, so that an outside harness
  * (bench/ab_bench.py) can time it. Prints one line per configuration containing "particle-steps/s", the ratio
  * of each to the first, and the accuracy reached: the RMS error of the fluid's x velocity against the analytic
- * start-up of the film, relative to the steady surface speed.
+ * start-up of the film, relative to the steady surface speed; then the seconds and share of the steps' time of each
+ * phase of the step the run went through (surge_phase_times; docs/performance.md, "Where a step's time goes").
  * Usage: surge-bench [CASE] [--end-s T] [--ch C] [--threads N] [--layers L] [-s NAME=VALUE]... */
 #define _POSIX_C_SOURCE 200809L
 #include <math.h>
 #include <omp.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -52,6 +54,43 @@ static double film_error(const surge_sim *sim)
     surge_snapshot_free(&s);
     return sqrt(sum / n) / (G * H * H / (2 * nu));
 }
+
+#ifndef SURGE_BENCH_WITHOUT_PHASE_TIMES /* bench/ab_bench.py builds this file against commits without the timers */
+/* The phases of surge_phase_times in the order they are printed */
+static const struct {
+    const char *name;
+    size_t offset;
+} phases[] = {
+    {"neighbours", offsetof(surge_phase_times, neighbours_s)},
+    {"interaction", offsetof(surge_phase_times, interaction_s)},
+    {"boundary", offsetof(surge_phase_times, boundary_s)},
+    {"discs", offsetof(surge_phase_times, discs_s)},
+    {"contacts", offsetof(surge_phase_times, contacts_s)},
+    {"geometry", offsetof(surge_phase_times, geometry_s)},
+    {"surface", offsetof(surge_phase_times, surface_s)},
+    {"assembly", offsetof(surge_phase_times, assembly_s)},
+    {"viscous_solve", offsetof(surge_phase_times, viscous_solve_s)},
+    {"pressure_solve", offsetof(surge_phase_times, pressure_solve_s)},
+    {"disc_coupling", offsetof(surge_phase_times, disc_coupling_s)},
+    {"update", offsetof(surge_phase_times, update_s)},
+    {"other", offsetof(surge_phase_times, other_s)},
+};
+
+/* The run's phases: seconds and share of the steps' time, one line each, the phases it did not go through left out
+ * (other always printed) */
+static void print_phases(const surge_sim *sim)
+{
+    surge_phase_times t;
+    surge_sim_phase_times(sim, &t);
+    printf("  phases over %lld steps, %.6f s:\n", (long long)t.steps, t.total_s);
+    for (size_t k = 0; k < sizeof phases / sizeof phases[0]; k++) {
+        const double seconds = *(const double *)((const char *)&t + phases[k].offset);
+        if (seconds > 0 || !strcmp(phases[k].name, "other"))
+            printf("    %-15s %12.6f s %6.1f %%\n", phases[k].name, seconds,
+                   t.total_s > 0 ? 100 * seconds / t.total_s : 0.0);
+    }
+}
+#endif
 
 static double now_s(void)
 {
@@ -124,6 +163,9 @@ static int run_one(const bench_config *c, double *first_rate)
            c->ch, c->threads, c->threads > 1 ? "s" : "", d->fluid_count, d->wall_count, steps, wall, rate / 1e6,
            steps * (d->fluid_count + d->wall_count) / wall / 1e6, rate / *first_rate, film_error(sim),
            (unsigned long long)surge_sim_state_hash(sim));
+#ifndef SURGE_BENCH_WITHOUT_PHASE_TIMES
+    print_phases(sim);
+#endif
     fflush(stdout);
     surge_sim_destroy(sim);
     return 0;

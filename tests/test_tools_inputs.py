@@ -30,6 +30,7 @@ SM = os.path.join(SOURCE, "studies", "stability", "stability_map.py")
 PL = os.path.join(SOURCE, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
 RB = os.path.join(SOURCE, "bench", "render_bench.py")
 AB = os.path.join(SOURCE, "bench", "ab_bench.py")
+SC = os.path.join(SOURCE, "bench", "scaling.py")
 from checks import check, finish, load_module  # noqa: E402
 from surgepy import vtp  # noqa: E402
 freydier_convergence = load_module(FC)
@@ -386,6 +387,12 @@ expect("ab_bench --ch 0", tool(AB, "--new", BUILD, "--ch", "1.0,0"), "--ch")
 expect("ab_bench --threads x", tool(AB, "--new", BUILD, "--threads", "x"), "--threads")
 expect("ab_bench --pairs 0", tool(AB, "--pairs", "0"), "--pairs")
 expect("ab_bench --set-b without =", tool(AB, "--new", BUILD, "--set-b", "numerics.cfl"), "--set-b")
+expect("scaling --max-threads 0", tool(SC, "--max-threads", "0"), "--max-threads", "0")
+expect("scaling --max-threads x", tool(SC, "--max-threads", "x"), "--max-threads", "'x'")
+expect("scaling --max-threads 1.5", tool(SC, "--max-threads", "1.5"), "--max-threads", "1.5")
+expect("scaling --scene unknown", tool(SC, "--scene", "film,nope"), "--scene", "nope")
+expect("scaling --quick with --scene", tool(SC, "--quick", "--scene", "film"), "--quick", "--scene")
+expect("scaling --bench a folder", tool(SC, "--bench", WORK), "--bench")
 
 
 def bench(*args):

@@ -1,8 +1,10 @@
 /* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
  * periodic wrap, the neighbour lists against brute force over many steps of reuse, live parameter changes, the continuity rate at the belt-wall corner, density diffusion of a
- * linear field, the threads' shares of the fluid lists. usage: test_unit NAME (the names in main) */
+ * linear field, the threads' shares of the fluid lists, the step's phase timers.
+ * usage: test_unit NAME (the names in main) */
 #include <math.h>
 #include <omp.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -1267,6 +1269,110 @@ static int test_implicit_disc_momentum(void)
     return failures;
 }
 
+/* A phase of surge_phase_times by name, for the checks below */
+typedef struct named_phase {
+    const char *name;
+    size_t offset;
+} named_phase;
+
+#define NAMED_PHASE(field) {#field, offsetof(surge_phase_times, field)}
+static const named_phase phases[] = {
+    NAMED_PHASE(neighbours_s), NAMED_PHASE(interaction_s), NAMED_PHASE(boundary_s), NAMED_PHASE(discs_s),
+    NAMED_PHASE(contacts_s), NAMED_PHASE(geometry_s), NAMED_PHASE(surface_s), NAMED_PHASE(assembly_s),
+    NAMED_PHASE(viscous_solve_s), NAMED_PHASE(pressure_solve_s), NAMED_PHASE(disc_coupling_s), NAMED_PHASE(update_s),
+};
+#undef NAMED_PHASE
+enum { PHASE_COUNT = sizeof phases / sizeof phases[0] };
+
+static double phase_of(const surge_phase_times *t, int k)
+{
+    return *(const double *)((const char *)t + phases[k].offset);
+}
+
+/* The phase timers of cases/<name> with the scheme named: after a few steps every phase in exercised (a ' '-separated
+ * list of names) is above zero and every other is zero, the named phases add up to no more than the total, the step
+ * count is the steps taken; a reset zeroes them, and one more step counts again. No bound on any time: only which
+ * are set. */
+static void check_phase_times(const char *name, const char *scheme, const char *exercised)
+{
+    surge_params p = surge_default_params();
+    char path[512], err[256], setting[64];
+    snprintf(path, sizeof path, "%s/cases/%s", SURGE_SOURCE_DIR, name);
+    snprintf(setting, sizeof setting, "numerics.scheme=%s", scheme);
+    if (surge_params_load(&p, path, err, sizeof err) != 0 ||
+        surge_params_override(&p, setting, false, err, sizeof err) != 0) {
+        fprintf(stderr, "%s\n", err);
+        failures++;
+        return;
+    }
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        failures++;
+        return;
+    }
+    const int steps = 4;
+    for (int k = 0; k < steps; k++)
+        if (surge_sim_step(sim) != 0) {
+            fprintf(stderr, "%s\n", surge_sim_health(sim)->message);
+            failures++;
+        }
+    surge_phase_times t;
+    surge_sim_phase_times(sim, &t);
+    char what[160];
+    double named_s = 0;
+    for (int k = 0; k < PHASE_COUNT; k++) {
+        const double seconds = phase_of(&t, k);
+        named_s += seconds;
+        char word[40];
+        snprintf(word, sizeof word, " %s ", phases[k].name);
+        char padded[200];
+        snprintf(padded, sizeof padded, " %s ", exercised);
+        const int expected = strstr(padded, word) != NULL;
+        printf("phase_times %s %s: %-18s %.6f s\n", name, scheme, phases[k].name, seconds);
+        snprintf(what, sizeof what, "phase_times %s %s: %s %s (1 = not)", name, scheme, phases[k].name,
+                 expected ? "above zero" : "zero, the scheme has no such phase");
+        expect_below(what, expected ? !(seconds > 0) : seconds != 0, 0);
+    }
+    printf("phase_times %s %s: total %.6f s, other %.6f s, %lld steps\n", name, scheme, t.total_s, t.other_s,
+           (long long)t.steps);
+    snprintf(what, sizeof what, "phase_times %s %s: named phases over the total, less 1", name, scheme);
+    expect_below(what, named_s / t.total_s - 1, 1e-12);
+    snprintf(what, sizeof what, "phase_times %s %s: |other_s - (total - named)| s", name, scheme);
+    expect_below(what, fabs(t.other_s - (t.total_s - named_s)), 1e-12 * t.total_s);
+    snprintf(what, sizeof what, "phase_times %s %s: |steps counted - steps taken|", name, scheme);
+    expect_below(what, fabs((double)t.steps - steps), 0);
+    surge_sim_reset_phase_times(sim);
+    surge_sim_phase_times(sim, &t);
+    double after_reset = fabs(t.total_s) + fabs(t.other_s) + fabs((double)t.steps);
+    for (int k = 0; k < PHASE_COUNT; k++)
+        after_reset += fabs(phase_of(&t, k));
+    snprintf(what, sizeof what, "phase_times %s %s: after a reset, the sum of |every field|", name, scheme);
+    expect_below(what, after_reset, 0);
+    if (surge_sim_step(sim) != 0)
+        failures++;
+    surge_sim_phase_times(sim, &t);
+    snprintf(what, sizeof what, "phase_times %s %s: one step after the reset counts 1 step with time (1 = not)", name,
+             scheme);
+    expect_below(what, !(t.steps == 1 && t.total_s > 0), 0);
+    surge_sim_destroy(sim);
+}
+
+/* A disc in a closed box and the still tank without discs, with each scheme */
+static int test_phase_times(void)
+{
+    const char *implicit = "neighbours_s boundary_s geometry_s surface_s assembly_s viscous_solve_s pressure_solve_s "
+                           "update_s";
+    char implicit_discs[256];
+    snprintf(implicit_discs, sizeof implicit_discs, "%s discs_s contacts_s disc_coupling_s", implicit);
+    check_phase_times("boulder_settling.ini", "explicit",
+                      "neighbours_s interaction_s boundary_s discs_s contacts_s update_s");
+    check_phase_times("boulder_settling.ini", "implicit", implicit_discs);
+    check_phase_times("still_tank.ini", "explicit", "neighbours_s interaction_s boundary_s update_s");
+    check_phase_times("still_tank.ini", "implicit", implicit);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -1315,5 +1421,7 @@ int main(int argc, char **argv)
         return test_implicit_clump() ? 1 : 0;
     if (!strcmp(argv[1], "fluid_share"))
         return test_fluid_share() ? 1 : 0;
+    if (!strcmp(argv[1], "phase_times"))
+        return test_phase_times() ? 1 : 0;
     return 2;
 }

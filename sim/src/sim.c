@@ -126,7 +126,28 @@ void surge_sim_destroy(surge_sim *sim)
 
 int surge_sim_step(surge_sim *sim)
 {
-    return sim->scheme->step(sim);
+    const double start_s = omp_get_wtime();
+    sim->phase_mark_s = start_s;
+    const int rc = sim->scheme->step(sim);
+    sim->phase_times.total_s += omp_get_wtime() - start_s;
+    sim->phase_times.steps++;
+    return rc;
+}
+
+void surge_sim_phase_times(const surge_sim *sim, surge_phase_times *times)
+{
+    const surge_phase_times *t = &sim->phase_times;
+    *times = *t;
+    const double named_s = t->neighbours_s + t->interaction_s + t->boundary_s + t->discs_s + t->contacts_s +
+                           t->geometry_s + t->surface_s + t->assembly_s + t->viscous_solve_s + t->pressure_solve_s +
+                           t->disc_coupling_s + t->update_s;
+    /* the phases are disjoint spans of each step: only rounding takes their sum past the total */
+    times->other_s = fmax(0.0, t->total_s - named_s);
+}
+
+void surge_sim_reset_phase_times(surge_sim *sim)
+{
+    sim->phase_times = (surge_phase_times){0};
 }
 
 double surge_sim_time(const surge_sim *sim) { return sim->time_s; }

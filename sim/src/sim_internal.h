@@ -4,6 +4,7 @@
 #define SURGE_SIM_INTERNAL_H
 
 #include <math.h>
+#include <omp.h>
 #include <stdint.h>
 
 #include "boulders/boulder_set.h"
@@ -62,6 +63,9 @@ struct surge_sim {
     int (*scene_check)(const surge_sim *sim, long long walls, long long fluid, void *user, char *err, size_t err_len);
     void *scene_check_user;
     int narrow_gap_sites; /* the scene keeps fluid sites in gaps too narrow beside a disc (checkpoints up to version 9) */
+
+    surge_phase_times phase_times; /* the steps' time by phase (surge_sim_phase_times; other_s stays 0 here) */
+    double phase_mark_s;           /* omp_get_wtime() where the running phase began */
 };
 
 /* surge_sim_create, with check (may be NULL) called with the scene's particle counts before they are allocated (a
@@ -78,6 +82,24 @@ static inline void fields_save_step_start(surge_sim *sim, int a)
 #define SAVE_FIELD(name, type, extent, roles, meaning) sim->name##_n[a] = sim->name[a];
     SURGE_STEP_FIELDS(SAVE_FIELD)
 #undef SAVE_FIELD
+}
+
+/* Phase timers (surge_phase_times): a phase runs from a mark to the phase_end that names it. The stepping thread reads
+ * the clock outside parallel regions (or, inside one, as its master thread just after a barrier), a few reads a step
+ * that change no result. */
+/* Starts a phase: the time since the last mark is no named phase's (other_s) */
+static inline void phase_begin(surge_sim *sim)
+{
+    sim->phase_mark_s = omp_get_wtime();
+}
+
+/* Ends a phase: the time since the last mark is added to *phase_s (a member of sim->phase_times), and the next phase
+ * starts here */
+static inline void phase_end(surge_sim *sim, double *phase_s)
+{
+    const double now_s = omp_get_wtime();
+    *phase_s += now_s - sim->phase_mark_s;
+    sim->phase_mark_s = now_s;
 }
 
 /* x wrapped into [0, period) in a periodic domain (positions are wrapped only at neighbour-list builds) */

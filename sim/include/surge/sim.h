@@ -99,6 +99,38 @@ void surge_sim_check_report(const surge_sim *sim, FILE *out, int verbose);
  * equal hashes mean bit-identical states. */
 uint64_t surge_sim_state_hash(const surge_sim *sim);
 
+/* Wall-clock seconds the steps spent in each phase since the simulation was created or its times were reset, read on
+ * the thread that steps, at the phases' boundaries: a phase that several threads share ends at their barrier, so its
+ * time includes their waits there. A phase the scheme or the scene does not have stays 0 (docs/performance.md,
+ * "Where a step's time goes"). */
+typedef struct surge_phase_times {
+    int64_t steps;           /* surge_sim_step calls timed, failed ones included */
+    double total_s;          /* their wall time */
+    double neighbours_s;     /* the neighbour lists: the rebuild test, the cell sort and the lists' build */
+    double interaction_s;    /* explicit: the fluid's pair loops (the rates of density and velocity, the wall-face
+                              * repulsion) and the packed records they read */
+    double boundary_s;       /* the walls' mDBC states at their ghost nodes; implicit: also the velocities no-slip
+                              * mirrors about and the walls' conditions on the projection */
+    double discs_s;          /* the fluid's forces on the discs and the discs' motion outside the contact solver */
+    double contacts_s;       /* the contact solver's sub-steps (one thread) */
+    double geometry_s;       /* implicit: the step's pair coefficients, moment matrices, kernel sums, mirror weights */
+    double surface_s;        /* implicit: the free-surface layer and the surface's mirror images */
+    double assembly_s;       /* implicit: the operators' coefficients, the solves' right-hand sides and diagonals, the
+                              * multigrid hierarchies' set-up */
+    double viscous_solve_s;  /* implicit: the viscous solve's iterations */
+    double pressure_solve_s; /* implicit: the pressure and rest-density solves' iterations and their gradients */
+    double disc_coupling_s;  /* implicit: the discs' rows of the coupled solves outside their iterations, and the
+                              * pressure passes between them */
+    double update_s;         /* the time step, the particles' new state (shifting and the contact rule included), the
+                              * health check */
+    double other_s;          /* total_s less the phases above: the rest of the step, on the stepping thread alone */
+} surge_phase_times;
+
+/* The phase times so far (other_s computed from the rest) */
+void surge_sim_phase_times(const surge_sim *sim, surge_phase_times *times);
+/* Sets the phase times and their step count to zero */
+void surge_sim_reset_phase_times(surge_sim *sim);
+
 /* Checkpoint: everything needed to continue bit-for-bit. */
 int surge_sim_checkpoint_write(const surge_sim *sim, const char *path, char *err, size_t err_len);
 /* Restores a checkpoint; overrides are "section.key=value" of live parameters (may be NULL/0). */

@@ -142,7 +142,8 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_
 }
 
 /* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
- * alpha; the disc particles follow. -1 when the contact solver runs out of memory. */
+ * alpha; the disc particles follow. -1 when the contact solver runs out of memory. The time since the caller's last
+ * phase mark (its accelerations) is the discs' phase, the solver's sub-steps the contacts'. */
 int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
 {
     boulder_set *b = &sim->boulders;
@@ -159,9 +160,14 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
         .lubrication_viscosity_pa_s = p->contacts.lubrication ? p->fluid.density_kgpm3 * p->fluid.viscosity_m2ps : 0,
         .lubrication_cutoff_m = p->contacts.lubrication_cutoff_dp * dp,
         .lubrication_min_gap_m = p->contacts.lubrication_min_gap_dp * dp, .gap_offset_m = p->contacts.margin_dp * dp};
-    if (contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay, b->alpha) != 0)
+    phase_end(sim, &sim->phase_times.discs_s);
+    const int advanced = contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay,
+                                                b->alpha);
+    phase_end(sim, &sim->phase_times.contacts_s);
+    if (advanced != 0)
         return -1;
     boulders_place_particles(sim);
+    phase_end(sim, &sim->phase_times.discs_s);
     return 0;
 }
 

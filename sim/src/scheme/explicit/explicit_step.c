@@ -29,16 +29,51 @@ static double variable_dt(const surge_sim *sim, double max_acc2, double max_visc
 }
 
 /* One force evaluation (the predictor's or the corrector's): displacements since the list build, the walls' mDBC
- * state, the fluid's rates, in one parallel region (waking the threads once, not three times), then the discs' */
+ * state, the fluid's rates, in one parallel region (waking the threads once, not three times), then the discs'. The
+ * phases split at the barriers that end interaction_prepare's and boundary_update's loops: the master thread reads
+ * the clock as it leaves each (the records and the pair loops are the interaction's, the walls' states the
+ * boundary's). */
 static void evaluate_rates(surge_sim *sim, int corrector)
 {
+    surge_phase_times *t = &sim->phase_times;
     #pragma omp parallel
     {
         interaction_prepare(sim);
+        #pragma omp master
+        phase_end(sim, &t->interaction_s);
         boundary_update(sim);
+        #pragma omp master
+        phase_end(sim, &t->boundary_s);
         interaction_compute(sim, corrector);
     }
-    boulders_fluid_forces(sim, NULL);
+    phase_end(sim, &t->interaction_s);
+    if (sim->boulders.count > 0) {
+        boulders_fluid_forces(sim, NULL);
+        phase_end(sim, &t->discs_s);
+    }
+}
+
+/* The step's end at t_n + dt: its time, step count and the walls' speeds, then the health check; a failed check takes
+ * the state back to the step's start (-1) */
+static int end_step(surge_sim *sim, double t_n, double dt)
+{
+    sim->time_s = t_n + dt;
+    sim->dt_s = dt;
+    sim->step++;
+    boundary_wall_speeds(sim, sim->time_s);
+
+    phase_begin(sim);
+    const int healthy = health_check(sim);
+    phase_end(sim, &sim->phase_times.update_s);
+    if (healthy != 0) {
+        fields_restore_step_start(sim);
+        boulders_restore(sim);
+        sim->time_s = t_n;
+        sim->step--;
+        boundary_wall_speeds(sim, t_n);
+        return -1;
+    }
+    return 0;
 }
 
 static int explicit_step(surge_sim *sim)
@@ -47,13 +82,17 @@ static int explicit_step(surge_sim *sim)
     const double t_n = sim->time_s;
 
     const int boulders = sim->boulders.count > 0;
-    if (neighbours_update(sim) != 0) {
+    surge_phase_times *t = &sim->phase_times;
+    const int lists = neighbours_update(sim);
+    phase_end(sim, &t->neighbours_s);
+    if (lists != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
                                      .time_s = t_n};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the neighbour lists");
         return -1;
     }
     boundary_wall_speeds(sim, t_n);
+    phase_begin(sim);
     evaluate_rates(sim, 0);
     /* the time step from the predictor's rates, and the predictor's half step (workshop paper eq. 5a-b), in one
      * parallel region */
@@ -82,12 +121,16 @@ static int explicit_step(surge_sim *sim)
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
     const double half = 0.5 * dt;
+    phase_end(sim, &t->update_s);
 
-    if (boulders)
+    if (boulders) {
         explicit_discs_predict(sim, half);
+        phase_end(sim, &t->discs_s);
+    }
 
     /* corrector: rates at the half step, full step from the start (eq. 5c-d and the density update) */
     boundary_wall_speeds(sim, t_n + half);
+    phase_begin(sim);
     evaluate_rates(sim, 1);
     if (boulders && explicit_discs_correct(sim, dt) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
@@ -120,20 +163,8 @@ static int explicit_step(surge_sim *sim)
             sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
         }
     }
-    sim->time_s = t_n + dt;
-    sim->dt_s = dt;
-    sim->step++;
-    boundary_wall_speeds(sim, sim->time_s);
-
-    if (health_check(sim) != 0) {
-        fields_restore_step_start(sim);
-        boulders_restore(sim);
-        sim->time_s = t_n;
-        sim->step--;
-        boundary_wall_speeds(sim, t_n);
-        return -1;
-    }
-    return 0;
+    phase_end(sim, &t->update_s);
+    return end_step(sim, t_n, dt);
 }
 
 

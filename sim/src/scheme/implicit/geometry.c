@@ -281,13 +281,16 @@ static void surface_layer(surge_sim *sim)
 }
 
 /* The pair coefficients of the step (fluid and wall entries), the inverse moment matrices, kernel sums, the
- * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. */
+ * free-surface flags and what shifting needs (div r, grad C, the surface layer); the walls' Shepard weights. The
+ * surface layer and the surface's images are the surface phase, the rest the geometry's. */
 void implicit_geometry(surge_sim *sim)
 {
     if (!implicit_of(sim)->wall_sum_ready || sim->boulders.count > 0)
         implicit_wall_sums(sim);
     mirror_weights(sim);
     fluid_geometry(sim);
+    phase_end(sim, &sim->phase_times.geometry_s);
     surface_layer(sim);
     implicit_surface_images(sim);
+    phase_end(sim, &sim->phase_times.surface_s);
 }

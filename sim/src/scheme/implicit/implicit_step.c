@@ -95,27 +95,40 @@ static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim
 
 /* The step's start: its dt, the walls' velocities at its end (backward Euler; the discs' are unknowns of the solves),
  * the walls' normals and depths (the contact rule), the step's geometry, and the fluid's state saved for the
- * roll-back */
+ * roll-back. The displacements since the list build (interaction_prepare) are the geometry's phase, up to the barrier
+ * that ends their loop */
 static double begin_step(surge_sim *sim)
 {
+    surge_phase_times *t = &sim->phase_times;
+    phase_begin(sim);
     const double dt = implicit_dt(sim);
     sim->dt_s = dt;
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
+    phase_end(sim, &t->update_s);
     boundary_wall_speeds(sim, sim->time_s + dt);
+    phase_begin(sim);
     #pragma omp parallel
     {
         interaction_prepare(sim);
+        #pragma omp master
+        phase_end(sim, &t->geometry_s);
         boundary_update(sim);
     }
+    phase_end(sim, &t->boundary_s);
     implicit_geometry(sim);
     implicit_assemble_pressure(sim); /* the pressure's operator, for the relaxation of p_n and the projection */
+    phase_end(sim, &t->assembly_s);
     implicit_mirror_velocities(sim);
-    if (sim->boulders.count > 0)
+    phase_end(sim, &t->boundary_s);
+    if (sim->boulders.count > 0) {
         implicit_discs_prepare(sim);
+        phase_end(sim, &t->disc_coupling_s);
+    }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int a = sim->wall_count; a < sim->count; a++)
         fields_save_step_start(sim, a);
+    phase_end(sim, &t->update_s);
     return dt;
 }
 
@@ -159,8 +172,11 @@ static void viscous_system(surge_sim *sim, double dt, int first_pass)
         w->x[i] = sim->vx_n[a] + w->dvx_by_id[sim->id[a]], w->x[nf + i] = sim->vy_n[a] + w->dvy_by_id[sim->id[a]];
         w->diag[i] = w->diag[nf + i] = 1.0 + dt_nu * sum_w;
     }
-    if (sim->boulders.count > 0) /* p_n's walls are still in w->wall_x */
+    phase_end(sim, &sim->phase_times.assembly_s);
+    if (sim->boulders.count > 0) { /* p_n's walls are still in w->wall_x */
         implicit_discs_viscous_system(sim, dt);
+        phase_end(sim, &sim->phase_times.disc_coupling_s);
+    }
 }
 
 /* 1. v* = v_n + dt (g - grad p_n / rho0 + nu lap v*): backward-Euler viscosity with the last step's pressure, into
@@ -181,6 +197,7 @@ static int viscous_predict(surge_sim *sim, double dt, int first_pass)
             w->viscous_iterations = -2, w->viscous_residual = 0;
             return -1;
         }
+        phase_end(sim, &sim->phase_times.assembly_s);
         double residual = 0;
         w->vcycle_blocks = by_multigrid ? 2 : 0;
         const affine_operator op = w->disc_rows > 0 ? implicit_coupled_viscous_operator : implicit_viscous_operator;
@@ -204,9 +221,11 @@ static int viscous_predict(surge_sim *sim, double dt, int first_pass)
         sim->vx[a] = (real)w->x[i], sim->vy[a] = (real)w->x[nf + i];
         w->dvx_by_id[sim->id[a]] = w->x[i] - sim->vx_n[a], w->dvy_by_id[sim->id[a]] = w->x[nf + i] - sim->vy_n[a];
     }
+    phase_end(sim, &sim->phase_times.viscous_solve_s);
     if (w->disc_rows > 0) {
         memcpy(w->disc_velocity, w->x + 2 * nf, (size_t)w->disc_rows * sizeof *w->x);
         implicit_discs_mirror(sim, w->disc_velocity);
+        phase_end(sim, &sim->phase_times.disc_coupling_s);
     }
     return 0;
 }
@@ -297,7 +316,9 @@ static int project(surge_sim *sim, double dt, int first_pass)
     implicit_work *w = implicit_of(sim);
     const surge_params *prm = &sim->params;
     const int first = sim->wall_count, nf = sim->count - first;
+    surge_phase_times *t = &sim->phase_times;
     wall_neumann_offsets(sim, dt);
+    phase_end(sim, &t->boundary_s);
     projection_sources(sim, dt);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
      * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
@@ -319,6 +340,7 @@ static int project(surge_sim *sim, double dt, int first_pass)
         return -1;
     if (prm->implicit.wall_neumann_offset > 0)
         implicit_wall_offsets_to_rhs(sim, w->neumann_pa);
+    phase_end(sim, &t->assembly_s);
     double residual = 0;
     const affine_operator op = w->disc_rows > 0 ? implicit_coupled_pressure_operator : implicit_pressure_operator;
     const int iterations = implicit_pressure_solve(sim, op, 1, prm->implicit.pressure_tolerance, &residual);
@@ -337,8 +359,11 @@ static int project(surge_sim *sim, double dt, int first_pass)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++)
         w->phi_by_id[sim->id[first + i]] = w->x[i];
-    if (w->disc_rows > 0)
+    phase_end(sim, &t->pressure_solve_s);
+    if (w->disc_rows > 0) {
         implicit_discs_pressure_answer(sim, dt);
+        phase_end(sim, &t->disc_coupling_s);
+    }
     return 0;
 }
 
@@ -571,9 +596,12 @@ static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs_move
 static int implicit_step(surge_sim *sim)
 {
     implicit_work *w = implicit_of(sim);
+    surge_phase_times *t = &sim->phase_times;
     const double t_n = sim->time_s;
     const int64_t step_n = sim->step;
-    if (neighbours_update(sim) != 0 || implicit_reserve_work(sim) != 0) {
+    const int lists = neighbours_update(sim);
+    phase_end(sim, &t->neighbours_s);
+    if (lists != 0 || implicit_reserve_work(sim) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = step_n + 1,
                                      .time_s = t_n};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
@@ -597,19 +625,25 @@ static int implicit_step(surge_sim *sim)
         /* an update larger than the last pass's: the iteration diverges somewhere (a disc at the free surface by the
          * belt: 1.1-1.2 times a pass, then a jet), and the step ends with this pass as one without them */
         const double update_pa = disc_pressure_update(sim, dt);
-        if (!(update_pa < last_update_pa))
+        const int diverges = !(update_pa < last_update_pa);
+        if (!diverges)
+            disc_pressure_apply(sim);
+        phase_end(sim, &t->disc_coupling_s);
+        if (diverges)
             break;
-        disc_pressure_apply(sim);
         last_update_pa = update_pa;
     }
     if (rc == 0) /* a failed solve's count (and code) stays as fail_solve reported it */
         w->viscous_iterations = viscous_iterations, w->pressure_iterations = pressure_iterations;
-    if (rc == 0)
+    if (rc == 0) {
         rc = rest_density(sim, dt);
+        phase_end(sim, &t->pressure_solve_s);
+    }
     if (rc == 0) {
         correct_velocities(sim, dt);
         contact_velocities(sim, dt);
         move_particles(sim, dt);
+        phase_end(sim, &t->update_s);
         if (sim->boulders.count > 0) {
             discs_moved = 1;
             if (implicit_discs_advance(sim, dt) != 0) {
@@ -623,7 +657,9 @@ static int implicit_step(surge_sim *sim)
     if (rc == 0) {
         sim->time_s = t_n + dt;
         sim->step = step_n + 1;
+        phase_begin(sim);
         rc = health_check(sim);
+        phase_end(sim, &t->update_s);
     }
     if (rc != 0)
         roll_back(sim, t_n, step_n, discs_moved);
