@@ -4,6 +4,7 @@
 
 #include "sim_internal.h"
 #include "boulders/boulders.h"
+#include "neighbours/neighbours.h"
 #include "physics/pair_terms.h"
 
 /* eq. 7's pressure term between disc particle k and the particles of walls and other discs in its list (lists.h),
@@ -16,10 +17,8 @@ static void solid_pressure_force(const surge_sim *sim, int k, real reference, re
     real sum_x = 0, sum_y = 0;
     for (int64_t e = nl->solid_first[k]; e < nl->solid_first[k + 1]; e++) {
         const int j = nl->solid_index[e];
-        /* r_k - r_j */
-        const real dx = nl->solid_dx0[e] + (nl->moved_x[k] - nl->moved_x[j]);
-        const real dy = nl->solid_dy0[e] + (nl->moved_y[k] - nl->moved_y[j]);
-        const real r2 = dx * dx + dy * dy;
+        real dx, dy; /* r_k - r_j */
+        const real r2 = neighbours_solid_offset(nl, k, e, &dx, &dy);
         if (!(r2 < support2))
             continue;
         const real f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));

@@ -34,4 +34,14 @@ static inline void neighbours_track_particle(surge_sim *sim, int a)
     nl->moved_y[a] = (real)(sim->y[a] - nl->y_build[a]);
 }
 
+/* Boulder particle k's entry e of its list of wall particles and other discs' (lists.h): r_k - r_j now into dx, dy;
+ * returns its square */
+static inline real neighbours_solid_offset(const neighbour_lists *nl, int k, int64_t e, real *dx, real *dy)
+{
+    const int j = nl->solid_index[e];
+    *dx = nl->solid_dx0[e] + (nl->moved_x[k] - nl->moved_x[j]);
+    *dy = nl->solid_dy0[e] + (nl->moved_y[k] - nl->moved_y[j]);
+    return *dx * *dx + *dy * *dy;
+}
+
 #endif

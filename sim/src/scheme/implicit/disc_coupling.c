@@ -19,6 +19,7 @@
 
 #include "scheme/implicit/implicit.h"
 #include "boulders/boulders.h"
+#include "neighbours/neighbours.h"
 
 /* The disc a wall particle belongs to, -1 for a fixed wall */
 static inline int disc_of(const surge_sim *sim, int kw)
@@ -150,10 +151,8 @@ static void disc_pressure_forces(surge_sim *sim, const double *p, double *force)
         if (sim->params.contacts.solid_pressure) /* the particles of walls and other discs in reach (fluid_forces.c) */
             for (int64_t e = nl->solid_first[kw]; e < nl->solid_first[kw + 1]; e++) {
                 const int j = nl->solid_index[e], other = disc_of(sim, j);
-                /* r_k - r_j */
-                const real dx = nl->solid_dx0[e] + (nl->moved_x[kw] - nl->moved_x[j]);
-                const real dy = nl->solid_dy0[e] + (nl->moved_y[kw] - nl->moved_y[j]);
-                const real r2 = dx * dx + dy * dy;
+                real dx, dy; /* r_k - r_j */
+                const real r2 = neighbours_solid_offset(nl, kw, e, &dx, &dy);
                 if (!(r2 < support2))
                     continue;
                 const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
