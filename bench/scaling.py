@@ -15,7 +15,7 @@ are surge-bench's (surge_phase_times in sim/include/surge/sim.h; docs/performanc
   serial work from shared.
 - karp-flatt: the serial fraction the measured speed-up S on p threads implies, (1/S - 1/p) / (1 - 1/p). It also
   counts what holds the parallel phases back: waits at their barriers, memory bandwidth, loops a scene is too small
-  to share (the implicit scheme keeps its loops on one thread below 20,000 fluid particles), serial loops inside
+  to share (the implicit scheme keeps its loops on one thread below 10,000 fluid particles), serial loops inside
   them. Where it is far above serial, the loss is in the phases the per-phase tables show not speeding up.
 
 The scenes: film, the benchmark film (cases/incline_film.ini, dp = 5 mm, C_h 1.0, 20,000 fluid particles); film_fine,

@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """The implicit scheme with discs gives the same state whatever the thread count: runs on 1 and 2 threads end in the
 same state hash. Two scenes from cases/boulder_settling.ini:
-- the case itself (one disc, 4,000 fluid particles), 0.1 s: below the implicit scheme's 20,000 fluid particles its
+- the case itself (one disc, 4,000 fluid particles), 0.1 s: below the implicit scheme's 10,000 fluid particles its
   solves' loops stay on one thread, and the neighbour lists, the walls' mDBC states, the disc particles' placement
   and the health check are shared;
 - three discs at dp = 1 mm (23,428 fluid particles), 0.05 s: the solves' loops, the disc coupling's and the
@@ -20,7 +20,7 @@ SCENES = {
 }
 # the fluid particles each scene must have: below and above the implicit scheme's threshold for shared loops
 # (WIDE_FLUID_PARTICLES, sim/src/scheme/implicit/implicit.h)
-WIDE = 20000
+WIDE = 10000
 
 failures = 0
 for name, settings in SCENES.items():

@@ -110,9 +110,10 @@ typedef void (*affine_operator)(surge_sim *sim, const double *x, double *out);
 enum { AFFINE, LINEAR_FROM_ZERO, LINEAR_FROM_GUESS }; /* implicit_solve()'s operator and first guess */
 
 /* Whether the scene is large enough for the solves' loops to run on several threads: a BiCGSTAB iteration is ten or
- * so short loops, and below this size waking the other threads at each costs more than it saves (the 800-particle
- * tank: 0.53 s on one thread, 4.75 s on two with passive waiting; docs/method.md) */
-#define WIDE_FLUID_PARTICLES 20000
+ * so short loops, and below this size waking the other threads at each costs more than it saves (passive waiting,
+ * the 2-core Xeon VM: the 800-particle tank 0.53 s on one thread, 4.75 s on two; Freydier ID1 at 4,590 fluid
+ * particles 3.2 s and 4.2 s; at 10,075, 5.23 and 4.77 s; docs/performance.md) */
+#define WIDE_FLUID_PARTICLES 10000
 static inline int wide(const surge_sim *sim) { return sim->count - sim->wall_count >= WIDE_FLUID_PARTICLES; }
 
 /* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the
