@@ -274,6 +274,8 @@ def group_inputs():
     bad = [
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1"], "has 2 numbers"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 x"], "is not a number"),
+        (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 0.01 0.02 0.1 0.01 0.08 0.1 0.01"],
+         "has 9 numbers; expected 'x y r' or 'x y r vx vy omega' (discs are separated by commas)"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 -0.01"], "positive radius"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 0.001"], "below 1.5 dp"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.09 0.1 0.0125"], "not inside the domain"),

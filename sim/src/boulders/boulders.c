@@ -70,30 +70,33 @@ static int parse_list(boulder_set *b, const char *text, char *err, size_t err_le
     }
     const char *cursor = text;
     for (int i = 0; i < n; i++) {
-        double v[7];
+        double v[6];
         int got = 0;
         const size_t len = strcspn(cursor, ",");
         char entry[SURGE_TEXT_PARAM_BYTES];
         memcpy(entry, cursor, len);
         entry[len] = '\0';
         char *s = entry;
-        while (got < 7) {
+        for (;;) { /* every number counted, the first six kept */
             while (isspace((unsigned char)*s))
                 s++;
             if (!*s)
                 break;
             char *end;
-            v[got] = strtod(s, &end);
-            if (end == s || !isfinite(v[got])) {
+            const double value = strtod(s, &end);
+            if (end == s || !isfinite(value)) {
                 snprintf(err, err_len, "boulders.list_m: disc %d ('%s'): '%s' is not a number", i + 1, entry, s);
                 return -1;
             }
+            if (got < 6)
+                v[got] = value;
             got++;
             s = end;
         }
         if (got != 3 && got != 6) {
             snprintf(err, err_len, "boulders.list_m: disc %d ('%s') has %d numbers; expected 'x y r' or "
-                     "'x y r vx vy omega'", i + 1, entry, got);
+                     "'x y r vx vy omega'%s", i + 1, entry, got,
+                     got > 6 ? " (discs are separated by commas)" : "");
             return -1;
         }
         if (!(v[2] > 0)) {
