@@ -229,6 +229,12 @@ static const surge_param_info registry[] = {
      "and the loaded channel's viscosity then depends on the step (1: one pass; docs/method.md, \"Boulders in the "
      "implicit scheme\"). Without discs a step makes one pass.",
      OFF(implicit.disc_pressure_passes)},
+    {"implicit", "disc_pressure_history", SURGE_PARAM_INT, "-", 4, 0, 16, true, NULL,
+     "Implicit scheme, with discs: the earlier passes each pass's pressure is combined from (Anderson's acceleration "
+     "of the Uzawa iteration, GMRES's on a linear map): the pressure that makes the last differences of the updates "
+     "smallest in the least-squares sense (0: each pass takes its own update; docs/method.md, \"Boulders in the "
+     "implicit scheme\").",
+     OFF(implicit.disc_pressure_history)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

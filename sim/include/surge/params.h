@@ -142,6 +142,7 @@ typedef struct surge_params {
         bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */
         double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
         int disc_pressure_passes;  /* with discs: passes of the viscous and pressure solves a step (Uzawa) */
+        int disc_pressure_history; /* and the earlier passes each pass's pressure is combined from (Anderson; 0: none) */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */

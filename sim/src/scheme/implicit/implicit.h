@@ -99,6 +99,10 @@ typedef struct implicit_work {
     real *wall_side;                     /* per wall-list entry of an imaged particle: 1 on its side of the surface */
     double *own_iw, *own_igx, *own_igy;  /* per fluid particle: its own image's */
     double *wet_grad_x, *wet_grad_y;     /* per fluid particle: the colour gradient, walls by their wetness */
+    /* Anderson's acceleration of the passes (pass_mixing.c): per fluid particle x_k, g_k and f_k, and a ring of
+     * mixing_cap differences g_j+1 - g_j and f_j+1 - f_j */
+    double *mixing_x, *mixing_g, *mixing_f, *mixing_dg, *mixing_df;
+    int mixing_cap, mixing_count, mixing_next;
     int32_t pressure_iterations, viscous_iterations; /* the last step's solves (diagnostics) */
     double pressure_residual, viscous_residual;
 } implicit_work;
@@ -230,6 +234,9 @@ void implicit_discs_pressure_answer(surge_sim *sim, double dt);
 /* implicit_discs.c: the discs' step from the coupled solves' velocities through the contact solver (-1 when it runs
  * out of memory) */
 int implicit_discs_advance(surge_sim *sim, double dt_s);
+/* pass_mixing.c: Anderson's acceleration of the passes with discs */
+int implicit_mixing_reserve(implicit_work *w, int depth, int nf);
+void implicit_mix_pressure(surge_sim *sim, int pass);
 /* coupling.c */
 void implicit_part_close_pairs(surge_sim *sim);
 

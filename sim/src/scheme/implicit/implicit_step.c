@@ -601,7 +601,9 @@ static int implicit_step(surge_sim *sim)
     const int64_t step_n = sim->step;
     const int lists = neighbours_update(sim);
     phase_end(sim, &t->neighbours_s);
-    if (lists != 0 || implicit_reserve_work(sim) != 0) {
+    if (lists != 0 || implicit_reserve_work(sim) != 0 ||
+        implicit_mixing_reserve(w, sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_history : 0,
+                                sim->count - sim->wall_count) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = step_n + 1,
                                      .time_s = t_n};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
@@ -609,8 +611,10 @@ static int implicit_step(surge_sim *sim)
     }
     const double dt = begin_step(sim);
     int discs_moved = 0, rc = 0;
-    /* with discs, several passes of the viscous and pressure solves (disc_pressure_update) */
+    /* with discs, several passes of the viscous and pressure solves (disc_pressure_update), each pass's pressure
+     * combined from the last passes' (pass_mixing.c) */
     const int passes = sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_passes : 1;
+    const int history = passes > 1 ? sim->params.implicit.disc_pressure_history : 0;
     int viscous_iterations = 0, pressure_iterations = 0;
     double last_update_pa = INFINITY;
     for (int pass = 1; rc == 0 && pass <= passes; pass++) {
@@ -626,7 +630,9 @@ static int implicit_step(surge_sim *sim)
          * belt: 1.1-1.2 times a pass, then a jet), and the step ends with this pass as one without them */
         const double update_pa = disc_pressure_update(sim, dt);
         const int diverges = !(update_pa < last_update_pa);
-        if (!diverges)
+        if (!diverges && history > 0)
+            implicit_mix_pressure(sim, pass);
+        else if (!diverges)
             disc_pressure_apply(sim);
         phase_end(sim, &t->disc_coupling_s);
         if (diverges)
