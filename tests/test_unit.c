@@ -1,6 +1,7 @@
 /* Unit tests: kernel normalisation and gradient, equation of state, neighbour search against brute force with
  * periodic wrap, the neighbour lists against brute force over many steps of reuse, live parameter changes, the continuity rate at the belt-wall corner, density diffusion of a
- * linear field, the threads' shares of the fluid lists, the step's phase timers.
+ * linear field, the threads' shares of the fluid lists, the step's phase timers, a socket that works on once its peer
+ * guard (stream/src) has stopped.
  * usage: test_unit NAME (the names in main) */
 #include <math.h>
 #include <omp.h>
@@ -8,7 +9,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <zmq.h>
 
+#include "peer_guard.h"
 #include "physics/eos.h"
 #include "sim_internal.h"
 #include "boulders/boulders.h"
@@ -1373,6 +1376,42 @@ static int test_phase_times(void)
     return failures;
 }
 
+/* A socket whose peer guard has stopped takes connections as before: ZeroMQ reports them to no monitor, where a
+ * monitor left without its reader would hold up the socket's I/O thread (and, on closing, lose the event's frame). */
+static int test_peer_guard_stop(void)
+{
+    void *context = zmq_ctx_new();
+    void *server = zmq_socket(context, ZMQ_ROUTER), *client = zmq_socket(context, ZMQ_DEALER);
+    const int linger_ms = 0;
+    zmq_setsockopt(server, ZMQ_LINGER, &linger_ms, sizeof linger_ms);
+    zmq_setsockopt(client, ZMQ_LINGER, &linger_ms, sizeof linger_ms);
+    char endpoint[256], err[256];
+    size_t endpoint_len = sizeof endpoint;
+    peer_guard *guard = NULL;
+    if (zmq_bind(server, "tcp://127.0.0.1:*") != 0 ||
+        zmq_getsockopt(server, ZMQ_LAST_ENDPOINT, endpoint, &endpoint_len) != 0)
+        snprintf(err, sizeof err, "bind: %s", zmq_strerror(zmq_errno()));
+    else
+        guard = peer_guard_start(context, server, 4, 60, err, sizeof err);
+    if (!guard) {
+        fprintf(stderr, "%s\n", err);
+        failures++;
+    } else {
+        peer_guard_stop(guard);
+        /* the guard's end of the monitor closes in ZeroMQ's threads, after peer_guard_stop has returned */
+        zmq_pollitem_t item = {.socket = server, .events = ZMQ_POLLIN};
+        zmq_poll(&item, 1, 100);
+        zmq_connect(client, endpoint);
+        zmq_send(client, "status", 6, 0);
+        expect_below("peer_guard_stop: a connection made after it delivers its request within 5 s (1 = not)",
+                     zmq_poll(&item, 1, 5000) != 1, 0);
+    }
+    zmq_close(client);
+    zmq_close(server);
+    zmq_ctx_term(context);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2)
@@ -1423,5 +1462,7 @@ int main(int argc, char **argv)
         return test_fluid_share() ? 1 : 0;
     if (!strcmp(argv[1], "phase_times"))
         return test_phase_times() ? 1 : 0;
+    if (!strcmp(argv[1], "peer_guard_stop"))
+        return test_peer_guard_stop() ? 1 : 0;
     return 2;
 }

@@ -25,6 +25,7 @@ typedef struct peer {
 } peer;
 
 struct peer_guard {
+    void *socket;  /* the watched socket, whose monitor peer_guard_stop ends */
     void *monitor; /* PAIR end of the monitor, used by the guard thread only */
     pthread_t thread;
     pthread_mutex_t lock; /* peers, count: the guard thread and peer_guard_touch */
@@ -173,6 +174,7 @@ peer_guard *peer_guard_start(void *context, void *socket, int max_peers, double 
         free(g);
         return NULL;
     }
+    g->socket = socket;
     g->max_peers = max_peers;
     g->idle_s = idle_s;
     pthread_mutex_init(&g->lock, NULL);
@@ -180,6 +182,7 @@ peer_guard *peer_guard_start(void *context, void *socket, int max_peers, double 
         !(g->monitor = zmq_socket(context, ZMQ_PAIR)) || zmq_connect(g->monitor, endpoint) != 0 ||
         pthread_create(&g->thread, NULL, guard_main, g) != 0) {
         snprintf(err, err_len, "cannot watch the socket's connections: %s", zmq_strerror(zmq_errno()));
+        zmq_socket_monitor(socket, NULL, 0);
         if (g->monitor)
             zmq_close(g->monitor);
         pthread_mutex_destroy(&g->lock);
@@ -212,6 +215,10 @@ void peer_guard_stop(peer_guard *g)
 {
     if (!g)
         return;
+    /* The monitor goes first, while the guard thread still reads its events: ZeroMQ's I/O thread sends an event to
+     * a monitor whose reader has gone with a blocking send that never completes, stalling the socket's connections
+     * until zmq_ctx_term, which then fails the send and loses the event's frame (a leak) */
+    zmq_socket_monitor(g->socket, NULL, 0);
     atomic_store(&g->stopping, 1);
     pthread_join(g->thread, NULL);
     pthread_mutex_destroy(&g->lock);

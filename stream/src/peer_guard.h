@@ -21,7 +21,8 @@ void peer_guard_touch(peer_guard *guard, int fd);
 /* Connections closed so far for going over max_peers, and for idling. */
 void peer_guard_counts(peer_guard *guard, long *over_limit, long *idle);
 
-/* Stops the thread; the socket's connections stay as they are. */
+/* Stops watching the socket and the thread (call from the thread that owns the socket); the socket's connections
+ * stay as they are and it works on unwatched. */
 void peer_guard_stop(peer_guard *guard);
 
 #endif
