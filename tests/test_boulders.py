@@ -277,6 +277,8 @@ def group_inputs():
     bad = [
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1"], "has 2 numbers"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 x"], "is not a number"),
+        (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1\x170.0125"],
+         "disc 1: character 0x17 is not part of a number"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 0.01 0.02 0.1 0.01 0.08 0.1 0.01"],
          "has 9 numbers; expected 'x y r' or 'x y r vx vy omega' (discs are separated by commas)"),
         (["-s", "boulders.placement=list", "-s", "boulders.list_m=0.05 0.1 -0.01"], "positive radius"),

@@ -84,6 +84,11 @@ static int parse_list(boulder_set *b, const char *text, char *err, size_t err_le
                 break;
             char *end;
             const double value = strtod(s, &end);
+            if (end == s && !isprint((unsigned char)*s)) {
+                snprintf(err, err_len, "boulders.list_m: disc %d: character 0x%02x is not part of a number", i + 1,
+                         (unsigned char)*s);
+                return -1;
+            }
             if (end == s || !isfinite(value)) {
                 snprintf(err, err_len, "boulders.list_m: disc %d ('%s'): '%s' is not a number", i + 1, entry, s);
                 return -1;

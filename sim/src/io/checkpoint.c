@@ -314,7 +314,6 @@ static int scene_fits(const surge_params *params, const char *path, long long fi
 
 /* The checkpoint's counts and size, for the scene's own check while it is built (check_scene) */
 typedef struct checkpoint_counts {
-    const char *path;
     long long file_bytes;
     uint32_t version;
     uint64_t plen;
@@ -322,22 +321,22 @@ typedef struct checkpoint_counts {
 } checkpoint_counts;
 
 /* Called with the scene's exact counts, its boulders defined, before anything is allocated for its particles: they
- * must be the checkpoint's, and the file must hold the boulders' state too. 0, or -1 with err. */
+ * must be the checkpoint's, and the file must hold the boulders' state too. 0, or -1 with err (which the loader
+ * prefixes with the checkpoint's path, as every error of building its scene). */
 static int check_scene(const surge_sim *sim, long long walls, long long fluid, void *user, char *err, size_t err_len)
 {
     const checkpoint_counts *c = user;
     if (walls != c->wall_count || walls + fluid != c->count) {
-        snprintf(err, err_len, "%s: particle counts do not match the scene its parameters describe (the checkpoint "
-                 "holds %d particles, %d of them walls; the scene %lld, %lld walls)", c->path, c->count,
-                 c->wall_count, walls + fluid, walls);
+        snprintf(err, err_len, "particle counts do not match the scene its parameters describe (the checkpoint "
+                 "holds %d particles, %d of them walls; the scene %lld, %lld walls)", c->count, c->wall_count,
+                 walls + fluid, walls);
         return -1;
     }
     const long long least = checkpoint_bytes(c->version, c->plen, fluid) +
                             boulder_bytes(c->version, sim->boulders.count, walls);
     if (least > c->file_bytes) {
-        snprintf(err, err_len, "%s: its scene has %d boulders and %lld wall particles: a checkpoint of it holds at "
-                 "least %lld bytes; the file holds %lld bytes", c->path, sim->boulders.count, walls, least,
-                 c->file_bytes);
+        snprintf(err, err_len, "its scene has %d boulders and %lld wall particles: a checkpoint of it holds at least "
+                 "%lld bytes; the file holds %lld bytes", sim->boulders.count, walls, least, c->file_bytes);
         return -1;
     }
     return 0;
@@ -373,7 +372,7 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         return NULL;
     }
     text[plen] = '\0';
-    checkpoint_counts counts = {.path = path, .file_bytes = file_bytes, .version = *version, .plen = plen};
+    checkpoint_counts counts = {.file_bytes = file_bytes, .version = *version, .plen = plen};
     if (read_counts(f, path, file_bytes, *version, plen, &counts.count, &counts.wall_count, err, err_len) != 0) {
         free(text);
         return NULL;
@@ -391,8 +390,9 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
         for (int i = 0; i < override_count && overridden; i++)
             overridden = surge_params_override(&params, overrides[i], true, err, err_len) == 0;
         if (overridden && scene_fits(&params, path, file_bytes, *version, plen, counts.count, counts.wall_count, err,
-                                     err_len) == 0)
-            sim = sim_create_checked(&params, check_scene, &counts, *version < 10, err, err_len);
+                                     err_len) == 0 &&
+            !(sim = sim_create_checked(&params, check_scene, &counts, *version < 10, msg, sizeof msg)))
+            snprintf(err, err_len, "%s: %s", path, msg);
     }
     free(text);
     return sim;
