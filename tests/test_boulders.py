@@ -297,6 +297,8 @@ def group_inputs():
         (["-s", "boulders.placement=sideways"], "boulders.placement"),
         (["-s", "contacts.friction=-1"], "contacts.friction"),
         (["-s", "contacts.lubrication=maybe"], "contacts.lubrication"),
+        (["-s", "implicit.disc_pressure_history=17"], "implicit.disc_pressure_history: 17 is out of range"),
+        (["-s", "implicit.disc_pressure_history=2.5"], "implicit.disc_pressure_history: '2.5' is not an integer"),
         (["-s", "contacts.lubrication_cutoff_dp=0"], "contacts.lubrication_cutoff_dp"),
         (["-s", "contacts.lubrication_min_gap_dp=abc"], "contacts.lubrication_min_gap_dp"),
         (["-s", "contacts.lubrication_min_gap_dp=0.5", "-s", "contacts.lubrication_cutoff_dp=0.4"],
