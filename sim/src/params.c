@@ -187,6 +187,12 @@ static const surge_param_info registry[] = {
      "row under a flat free surface (0.988, 0.946, 0.869 at C_h 1.0, 1.3, 1.8) by more than this is on the free "
      "surface too: at a contact line (a front's foot on the bed) the wall raises div r but not the kernel sum.",
      OFF(implicit.surface_kernel_margin)},
+    {"implicit", "surface_scan_dp", SURGE_PARAM_REAL, "dp", 1.5, 0, 2.5, true, NULL,
+     "Implicit scheme: within a kernel of a disc, a particle with no fluid, wall or disc particle in the region beyond "
+     "it along -grad C (a cone of 90 degrees, then a circle of this radius centred this far out; Marrone et al. "
+     "2010) is on the free surface too: the border of a cavity opening beside discs, whose sums the discs' particles "
+     "fill (0: off; docs/method.md).",
+     OFF(implicit.surface_scan_dp)},
     {"implicit", "contact_reach_dp", SURGE_PARAM_REAL, "dp", 0.45, 0, 0.5, true, NULL,
      "Implicit scheme: the contact distance (the explicit scheme's is walls.face_repulsion_reach_dp): a fluid particle "
      "within it of the nearest wall face loses its velocity toward the face, and no step or shift ends closer. 0.45, "

@@ -136,6 +136,7 @@ typedef struct surge_params {
         double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */
         double surface_kernel_margin; /* kernel sum this far below a flat surface's second row's: surface too */
+        double surface_scan_dp;    /* radius (dp) of the region beyond a particle that, empty, puts it on the surface */
         double contact_reach_dp;   /* no step or shift ends closer than this to a wall face (dp) */
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */

@@ -22,7 +22,8 @@
  * whose discs were stepped after the fluid, continues with the coupled step (version 9). A scene from versions 1-9 is
  * built with the fluid sites it had in gaps too narrow beside a disc, which version 10 leaves out; a run from versions
  * 1-10 continues without the pressure between discs and walls (contacts.solid_pressure 0), as it was run, and one from
- * versions 1-11 without Anderson's acceleration of the implicit scheme's passes (implicit.disc_pressure_history 0). */
+ * versions 1-11 without Anderson's acceleration of the implicit scheme's passes (implicit.disc_pressure_history 0), and
+ * one from versions 1-12 without the implicit scheme's scan for the free surface (implicit.surface_scan_dp 0). */
 #define _POSIX_C_SOURCE 200809L
 #include <errno.h>
 #include <math.h>
@@ -39,7 +40,7 @@
 #include "scene/scene.h"
 
 #define CHECKPOINT_MAGIC "SURGECK1"
-#define CHECKPOINT_VERSION 12u
+#define CHECKPOINT_VERSION 13u
 
 /* The least a checkpoint of this version holds with a parameter block of plen bytes and `fluid` fluid particles: the
  * header, the clock and counts, the particles' fields, (version 3 on) their neighbour-list build positions, the state
@@ -381,6 +382,8 @@ static surge_sim *read_header(FILE *f, const char *path, long long file_bytes, c
     params.contacts.solid_pressure = *version >= 11; /* its key is in the text from version 11 on */
     if (*version < 12) /* and this one's from version 12 on */
         params.implicit.disc_pressure_history = 0;
+    if (*version < 13) /* and this one's from version 13 on */
+        params.implicit.surface_scan_dp = 0;
     char msg[512];
     surge_sim *sim = NULL;
     if (surge_params_load_text(&params, text, path, msg, sizeof msg) != 0)
