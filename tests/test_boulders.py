@@ -299,6 +299,7 @@ def group_inputs():
         (["-s", "contacts.lubrication=maybe"], "contacts.lubrication"),
         (["-s", "implicit.disc_pressure_history=17"], "implicit.disc_pressure_history: 17 is out of range"),
         (["-s", "implicit.disc_pressure_history=2.5"], "implicit.disc_pressure_history: '2.5' is not an integer"),
+        (["-s", "implicit.surface_scan_dp=3"], "implicit.surface_scan_dp: 3 is out of range"),
         (["-s", "contacts.lubrication_cutoff_dp=0"], "contacts.lubrication_cutoff_dp"),
         (["-s", "contacts.lubrication_min_gap_dp=abc"], "contacts.lubrication_min_gap_dp"),
         (["-s", "contacts.lubrication_min_gap_dp=0.5", "-s", "contacts.lubrication_cutoff_dp=0.4"],
