@@ -52,8 +52,8 @@ static void splat_sums(surge_field_sums *sums, const surge_layer_target *t, cons
         float *weight = k < count ? sums->weight : sums->solid;
         const float value = k < count ? splats[k].value : 0;
         const double x = splats[k].x_px - t->x0, y = splats[k].y_px - t->y0;
-        if (!isfinite(x) || !isfinite(y))
-            continue;
+        if (!isfinite(x) || !isfinite(y) || x + support < 0 || x - support > w || y + support < 0 || y - support > h)
+            continue; /* not on the target: nothing to add, and its pixel range may not fit an int */
         const int i0 = (int)fmax(0, ceil(x - support - 0.5)), i1 = (int)fmin(w - 1, floor(x + support - 0.5));
         const int j0 = (int)fmax(0, ceil(y - support - 0.5)), j1 = (int)fmin(h - 1, floor(y + support - 0.5));
         for (int j = j0; j <= j1; j++) {
@@ -136,8 +136,9 @@ static double clamp01(double v) { return v < 0 ? 0 : v > 1 ? 1 : v; }
 
 void surge_draw_disc(const surge_layer_target *t, double cx, double cy, double radius, double angle_rad)
 {
-    if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius))
-        return;
+    if (!isfinite(cx) || !isfinite(cy) || !isfinite(radius) || cx + radius + 1 < t->x0 || cx - radius - 1 > t->x1 ||
+        cy + radius + 1 < t->y0 || cy - radius - 1 > t->y1)
+        return; /* not on the target: its pixel range may not fit an int */
     const double outline = fmax(1.0, 0.08 * radius), spoke = fmax(0.6, 0.05 * radius);
     const double ux = cos(angle_rad), uy = -sin(angle_rad); /* the picture's y runs down */
     const int i0 = (int)fmax(t->x0, floor(cx - radius - 1)), i1 = (int)fmin(t->x1 - 1, ceil(cx + radius + 1));
