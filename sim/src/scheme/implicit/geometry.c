@@ -255,8 +255,9 @@ static void fluid_geometry(surge_sim *sim)
         /* or, next to a disc, where the kernel-sum test is left out, nothing beyond it: a cavity's border, whose
          * sums the disc's particles fill (div r up to 1.7 at the 60-disc surge's; the bulk's is 2, and the scan is
          * spared there) */
-        const double grad_c = sqrt((double)grad_c_x * grad_c_x + (double)grad_c_y * grad_c_y);
-        if (!sim->surface[a] && near_disc && scan_m > 0 && div_r < SCAN_DIV_R_MAX && grad_c > 0) {
+        const double grad_c = !sim->surface[a] && near_disc && scan_m > 0 && div_r < SCAN_DIV_R_MAX
+                                  ? sqrt((double)grad_c_x * grad_c_x + (double)grad_c_y * grad_c_y) : 0;
+        if (grad_c > 0) {
             const double nx = -grad_c_x / grad_c, ny = -grad_c_y / grad_c;
             sim->surface[a] = scan_empty(sim, a, nl->fluid_first[i], nl->fluid_first[i + 1], 0, nx, ny, scan_m) &&
                               scan_empty(sim, a, nl->wall_first[i], nl->wall_first[i + 1], 1, nx, ny, scan_m);
