@@ -1372,6 +1372,51 @@ static int test_implicit_cavity(void)
     return failures;
 }
 
+/* The still tank (dp 1 cm) with one disc of radius 3 dp, in the fluid or 2 dp above the reach of its kernel */
+#define SPIN_DISC_R_M 0.03
+static void spin_tank(surge_params *p, double disc_y_m)
+{
+    p->numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    p->domain.height_m = 0.4;
+    p->boulders.placement = SURGE_BOULDERS_LIST;
+    char list[96], err[160];
+    snprintf(list, sizeof list, "0.2 %g %g", disc_y_m, SPIN_DISC_R_M);
+    surge_param_set(p, surge_param_find("boulders.list_m"), list, err, sizeof err);
+}
+static void spin_tank_wet(surge_params *p) { spin_tank(p, 0.1); }
+static void spin_tank_dry(surge_params *p) { spin_tank(p, 0.2 + SPIN_DISC_R_M + 2 * 0.0255 + 0.02); } /* 2h, h 0.0255 */
+
+/* The first step of the tank at rest with its disc spinning at omega (rad/s), and the smoothing length; 0 where
+ * the step failed */
+static double spin_step_s(void (*edit)(surge_params *), double omega_radps, double *h_m)
+{
+    surge_sim *sim = case_sim("still_tank.ini", 0.01, edit);
+    if (!sim)
+        return 0;
+    *h_m = sim->derived.h_m;
+    sim->boulders.omega[0] = omega_radps;
+    const double dt = surge_sim_step(sim) == 0 ? sim->dt_s : 0;
+    surge_sim_destroy(sim);
+    return dt;
+}
+
+/* A disc's spin limits the implicit step where fluid is within a kernel of it (cfl h / (omega r), its surface
+ * speed of 5 m/s the fastest motion), and not where none is: a dry disc spinning leaves the step of the tank at rest */
+static int test_implicit_dry_spin(void)
+{
+    const double omega = 5.0 / SPIN_DISC_R_M;
+    double h;
+    const double wet = spin_step_s(spin_tank_wet, omega, &h), dry = spin_step_s(spin_tank_dry, omega, &h);
+    const double still = spin_step_s(spin_tank_dry, 0, &h);
+    const double expected_wet = surge_default_params().implicit.cfl * h / 5.0;
+    printf("implicit_dry_spin: step %.6g s with the spinning disc in the fluid (cfl h / surface speed %.6g s), %.6g s "
+           "with it dry, %.6g s with it dry and still\n", wet, expected_wet, dry, still);
+    expect_below("implicit_dry_spin: |wet step / (cfl h / surface speed) - 1|", fabs(wet / expected_wet - 1), 1e-9);
+    expect_below("implicit_dry_spin: |dry spinning step / dry still step - 1|", fabs(dry / still - 1), 0);
+    expect_below("implicit_dry_spin: wet step / dry still step (the spin must bind)", wet / still, 0.2);
+    return failures;
+}
+
 /* A phase of surge_phase_times by name, for the checks below */
 typedef struct named_phase {
     const char *name;
@@ -1520,6 +1565,8 @@ int main(int argc, char **argv)
         return test_implicit_dt() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_cavity"))
         return test_implicit_cavity() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_dry_spin"))
+        return test_implicit_dry_spin() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_disc_momentum"))
         return test_implicit_disc_momentum() ? 1 : 0;
     if (!strcmp(argv[1], "kernel"))

@@ -18,6 +18,7 @@ int boulders_particles_of(const surge_sim *sim, int disc);   /* the particles of
 void boulders_create_particles(surge_sim *sim, int first);
 int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc, or in a
                                                                gap beside one narrower than twice the contact distance */
+int boulders_fluid_within(const surge_sim *sim, int i, double reach_m); /* fluid within reach of its surface */
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);

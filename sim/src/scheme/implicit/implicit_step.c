@@ -40,12 +40,15 @@ static double implicit_dt(const surge_sim *sim)
         const double v2 = (double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a];
         max_v2 = v2 > max_v2 ? v2 : max_v2;
     }
+    /* a disc's surface moves with it, but its spin moves no fluid where none is within a kernel of it (a dry disc
+     * rolling on the belt ahead of the front; its touches are the contact solver's, which is implicit) */
     const boulder_set *b = &sim->boulders;
-    for (int i = 0; i < b->count; i++) { /* a disc's surface moves with it */
-        const double v = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
-        max_v2 = fmax(max_v2, v * v);
-    }
     const double h = sim->derived.h_m, g = sqrt(sim->gx * sim->gx + sim->gy * sim->gy);
+    for (int i = 0; i < b->count; i++) {
+        const double v = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]), surface = v + fabs(b->omega[i]) * b->radius[i];
+        if (surface * surface > max_v2)
+            max_v2 = boulders_fluid_within(sim, i, 2.0 * h) ? surface * surface : fmax(max_v2, v * v);
+    }
     const double dt = surge_implicit_dt_s(p, h, g, sqrt(max_v2));
     if (isfinite(dt))
         return dt;
