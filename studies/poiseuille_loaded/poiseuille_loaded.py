@@ -5,17 +5,19 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 
   studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
-        [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
+        [--scheme explicit|implicit] [--lubrication] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
-        [--dp DP] [--c0 C0] [--diffusion DELTA]
+        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
 body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc area over L B.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
+--scheme sets numerics.scheme and --lubrication contacts.lubrication for the runs; `report` takes the rows of one
+scheme, with or without the lubrication model (default: explicit, without).
 
 Reference (dilute theory for the discs actually placed): the placement depends only on phi and the seed, not on
 dp, so `reference` places them (a run of one step at dp = r/2) and integrates the steady momentum balance across
@@ -42,7 +44,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion"]
+           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion", "scheme", "lubrication"]
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
@@ -150,8 +152,10 @@ def case_diffusion():
 
 
 def run_one(args, phi, deadline):
-    name = "phi%g_dp%g_ch%g_seed%d%s%s" % (phi, args.dp, args.ch, args.seed, "_c0%g" % args.c0 if args.c0 else "",
-                                          "_dd%g" % args.diffusion if args.diffusion >= 0 else "")
+    name = "phi%g_dp%g_ch%g_seed%d%s%s%s%s" % (phi, args.dp, args.ch, args.seed, "_c0%g" % args.c0 if args.c0 else "",
+                                              "_dd%g" % args.diffusion if args.diffusion >= 0 else "",
+                                              "_implicit" if args.scheme == "implicit" else "",
+                                              "_lubrication" if args.lubrication else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
     fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder, "--overwrite",
@@ -159,13 +163,15 @@ def run_one(args, phi, deadline):
     fresh += ["-s", "boulders.solid_fraction=%g" % phi] if phi > 0 else ["-s", "boulders.placement=none"]
     fresh += ["-s", "numerics.c0_mps=%g" % args.c0] if args.c0 else []
     fresh += ["-s", "numerics.density_diffusion=%g" % args.diffusion] if args.diffusion >= 0 else []
+    fresh += ["-s", "numerics.scheme=%s" % args.scheme, "-s", "contacts.lubrication=%s" % str(args.lubrication).lower()]
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
     steps, sim_time = study.particle_steps(TOOL, folder)
     row = {"phi": phi, "dp_m": "%.6g" % args.dp, "ch": args.ch, "seed": args.seed, "threads": args.threads,
            "wall_s": "%.1f" % progress["wall_s"], "u_max_mps": "nan", "mu_eq_over_mu0": "nan",
-           "phi_actual": "nan", "n_discs": 0, "particle_steps": steps, "sim_time_s": "%.3f" % sim_time}
+           "phi_actual": "nan", "n_discs": 0, "particle_steps": steps, "sim_time_s": "%.3f" % sim_time,
+           "scheme": args.scheme, "lubrication": int(args.lubrication)}
     try:
         params = RunParams(folder)
         row.update({"c0_mps": "%.4g" % params.derived("c0_mps"),
@@ -187,13 +193,14 @@ def run_one(args, phi, deadline):
 
 def command_run(args):
     rows = study.existing_rows(TOOL, args.csv, COLUMNS, dict(
-        phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float))
+        phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float, scheme=str, lubrication=int))
     deadline = time.time() + args.budget_s if args.budget_s else None
     diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
     done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
-             float(r["density_diffusion"])) for r in rows}
+             float(r["density_diffusion"]), r["scheme"], int(r["lubrication"])) for r in rows}
     for phi in args.phi:
-        if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion) in done:
+        if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion,
+                args.scheme, int(args.lubrication)) in done:
             continue
         if deadline and time.time() > deadline:
             print("%s: budget spent; run again to continue" % TOOL, flush=True)
@@ -251,7 +258,8 @@ def command_report(args):
     every_run = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
-        density_diffusion=float if args.diffusion is not None or args.png else str)) if r["status"] == "ok"]
+        density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str))
+        if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == str(int(args.lubrication))]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
@@ -402,6 +410,8 @@ def main():
     run.add_argument("--diffusion", type=cli_checks.number, default=-1.0,
                      help="numerics.density_diffusion (delta; default: the case's)")
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
+    run.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="numerics.scheme")
+    run.add_argument("--lubrication", action="store_true", help="contacts.lubrication = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
     run.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
@@ -418,6 +428,8 @@ def main():
     rep.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     rep.add_argument("--png", type=cli_checks.png_file, default=None)
     rep.add_argument("--dp", type=cli_checks.positive, default=None, help="fit only the runs at this dp")
+    rep.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="the runs of this scheme")
+    rep.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
