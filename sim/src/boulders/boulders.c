@@ -391,19 +391,19 @@ static double wall_face_distance_m(const surge_params *p, double x, double y)
     return d;
 }
 
-/* Whether any fluid particle lies within reach_m of disc i's surface (periodic in x where the domain is) */
+/* Whether any fluid particle lies within reach_m of disc i's surface (periodic in x where the domain is); a scan of the
+ * fluid that stops at the first, asked only of discs whose surface outruns every fluid particle */
 int boulders_fluid_within(const surge_sim *sim, int i, double reach_m)
 {
     const boulder_set *b = &sim->boulders;
     const double period = sim->params.domain.periodic_x ? sim->params.domain.length_m : 0;
     const double reach2 = (b->radius[i] + reach_m) * (b->radius[i] + reach_m);
-    int found = 0;
-    #pragma omp parallel for schedule(static) reduction(| : found) if (sim->count - sim->wall_count > 4096)
     for (int a = sim->wall_count; a < sim->count; a++) {
         const double dx = placement_wrap_dx(sim->x[a] - b->x[i], period), dy = sim->y[a] - b->y[i];
-        found |= dx * dx + dy * dy < reach2;
+        if (dx * dx + dy * dy < reach2)
+            return 1;
     }
-    return found;
+    return 0;
 }
 
 /* A fluid site is covered within a quarter spacing of a disc's surface, and where the disc leaves less room between
