@@ -15,7 +15,7 @@ FC = os.path.join(source, "studies", "freydier", "freydier_convergence.py")
 SM = os.path.join(source, "studies", "stability", "stability_map.py")
 PL = os.path.join(source, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
 from checks import check, finish, load_module  # noqa: E402
-from surgepy import study  # noqa: E402
+from surgepy import study, vtp  # noqa: E402
 
 os.makedirs(work, exist_ok=True)
 
@@ -84,6 +84,34 @@ r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--c0", "15",
 check("poiseuille_loaded report fits and charts the committed table (r/dp 4)",
       r.returncode == 0 and "Krieger-Dougherty fit" in r.stdout and os.path.getsize(report_png) > 10000,
       (r.stdout + r.stderr).strip()[-300:])
+# disc_motion on a synthetic run: the fluid on the parabola u = 4 U y (B - y) / B^2, two discs moving at the fluid's
+# speed at their heights less 1 % of U, turning at 0.9 of -u'(y)/2
+synthetic = os.path.join(work, "pl_discs")
+os.makedirs(synthetic, exist_ok=True)
+B, U = 0.6, 0.08
+ys = np.linspace(0.005, B - 0.005, 60)
+fluid_xy = np.stack([np.zeros_like(ys), ys], axis=1)
+discs_y = np.array([0.2, 0.45])
+fluid_entries, disc_entries = [], []
+for k, t in enumerate((0.8, 0.9, 1.0)):
+    u = 4 * U * ys * (B - ys) / B ** 2
+    vtp.write_vtp(os.path.join(synthetic, "snap_%d.vtp" % k), fluid_xy,
+                  {"kind": np.zeros(ys.size, dtype=np.int32), "velocity_mps": np.stack([u, 0 * u], axis=1)}, t, k)
+    ud = 4 * U * discs_y * (B - discs_y) / B ** 2 - 0.01 * U
+    shear = 4 * U * (B - 2 * discs_y) / B ** 2
+    vtp.write_vtp(os.path.join(synthetic, "discs_%d.vtp" % k), np.stack([0 * discs_y, discs_y], axis=1),
+                  {"velocity_mps": np.stack([ud, 0 * ud], axis=1), "omega_radps": 0.9 * -shear / 2}, t, k)
+    fluid_entries.append((t, "snap_%d.vtp" % k))
+    disc_entries.append((t, "discs_%d.vtp" % k))
+vtp.write_pvd(os.path.join(synthetic, "run.pvd"), fluid_entries)
+vtp.write_pvd(os.path.join(synthetic, "boulders.pvd"), disc_entries)
+samples, lag, spread, spin = poiseuille_loaded.disc_motion(synthetic)
+check("poiseuille_loaded disc_motion: 6 samples, lag -0.01 of the centre speed, spin 0.9",
+      samples == 6 and abs(lag + 0.01) < 1e-5 and spread < 1e-5 and abs(spin - 0.9) < 1e-5,  # stored in float32
+      "%d %.6g %.3g %.6g" % (samples, lag, spread, spin))
+r = subprocess.run([sys.executable, PL, "discs", work], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded discs: a folder without discs refused with its name", r.returncode == 2 and work in r.stderr,
+      r.stderr.strip())
 r = subprocess.run([sys.executable, PL, "run", "--phi", "0.9"], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded run --phi 0.9 refused", r.returncode == 2 and "--phi" in r.stderr, r.stderr.strip())
 r = subprocess.run([sys.executable, PL, "run", "--diffusion", "2"], capture_output=True, text=True, timeout=60)

@@ -7,6 +7,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
         [--scheme explicit|implicit] [--lubrication] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
+  studies/poiseuille_loaded/poiseuille_loaded.py discs RUN_DIR        # how the discs move against the flow
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
@@ -14,6 +15,10 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
 body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc area over L B.
+`discs`: over the same snapshots, each disc's x speed less the fluid's at its height (a parabola fitted to every fluid
+particle's x speed against y), over the parabola's centre speed, and its spin over half the parabola's vorticity
+at its height, -u'(y)/2 (a torque-free disc's in Stokes flow); prints the samples, the mean and spread of the lag and
+the median spin ratio.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme and --lubrication contacts.lubrication for the runs; `report` takes the rows of one
@@ -85,6 +90,28 @@ def measure(folder):
         if discs:
             radii = vtp.read_vtp(os.path.join(folder, discs[0][1]), ("radius_m",))["radius_m"]
     return u_max, mu_ratio, float(np.sum(np.pi * radii ** 2) / (length * gap)), int(radii.size)
+
+
+def disc_motion(folder):
+    """(samples, mean lag, its standard deviation, median spin ratio) of the discs over the window (see the module's
+    `discs`); ValueError naming the folder where it has no discs or no snapshot in the window."""
+    fluid_at = {round(t, 9): name for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd"))}
+    lags, spins = [], []
+    for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd")):
+        if not (WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6) or round(t, 9) not in fluid_at:
+            continue
+        discs = vtp.read_vtp(os.path.join(folder, name), ("velocity_mps", "omega_radps"), finite=True)
+        s = vtp.read_vtp(os.path.join(folder, fluid_at[round(t, 9)]), ("kind", "velocity_mps"), finite=True)
+        fluid = s["kind"] == 0
+        profile = np.polyfit(s["points"][fluid, 1], s["velocity_mps"][fluid, 0].astype(float), 2)
+        y = discs["points"][:, 1]
+        centre_speed = np.polyval(profile, -profile[1] / (2 * profile[0]))
+        lags.append((discs["velocity_mps"][:, 0] - np.polyval(profile, y)) / centre_speed)
+        spins.append(discs["omega_radps"] / (-np.polyval(np.polyder(profile), y) / 2))
+    if not lags or not np.concatenate(lags).size:
+        raise ValueError("%s: no discs in a snapshot between %g and %g s" % (folder, *WINDOW_S))
+    lag, spin = np.concatenate(lags), np.concatenate(spins)
+    return lag.size, float(lag.mean()), float(lag.std()), float(np.median(spin))
 
 
 def local_einstein(centres_y, radius, length, gap):
@@ -418,6 +445,7 @@ def main():
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
+    sub.add_parser("discs").add_argument("run_dir")
     ref = sub.add_parser("reference")
     ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5", type=solid_fractions(with_zero=False))
     ref.add_argument("--seed", type=int, default=1)
@@ -446,6 +474,14 @@ def main():
         except (OSError, ValueError) as e:
             fail(str(e))
         print("u_max = %.6g m/s, mu_eq/mu0 = %.5g, phi = %.4f (%d discs)" % (u_max, mu_ratio, phi_actual, n))
+        return 0
+    if args.command == "discs":
+        try:
+            samples, lag, spread, spin = disc_motion(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("%d disc samples: (U - u(y)) / u_centre mean %+.4f, sd %.4f; omega / (-u'(y)/2) median %.3f"
+              % (samples, lag, spread, spin))
         return 0
     return command_report(args)
 
