@@ -109,6 +109,36 @@ samples, lag, spread, spin = poiseuille_loaded.disc_motion(synthetic)
 check("poiseuille_loaded disc_motion: 6 samples, lag -0.01 of the centre speed, spin 0.9",
       samples == 6 and abs(lag + 0.01) < 1e-5 and spread < 1e-5 and abs(spin - 0.9) < 1e-5,  # stored in float32
       "%d %.6g %.3g %.6g" % (samples, lag, spread, spin))
+# shell_density on the synthetic run's folder with one disc clear of the plates (r 0.02 m at (0.5, 0.3) m, dp 1 mm)
+# and a fluid laid on circles about it: a shell of three times the lattice's density 0.45 dp from its face, the
+# lattice's density 0.05-1.95 dp out elsewhere, and one disc 1 dp from the lower plate, whose annuli are left out
+dp_s, r_s = 0.001, 0.02
+with open(os.path.join(synthetic, "params.ini"), "w") as f:
+    f.write("[domain]\nlength_m = 1\nheight_m = 0.6\n[numerics]\ndp_m = %g\n" % dp_s)
+points = []
+for k in range(20):
+    d = (k + 0.5) * 0.1 * dp_s
+    n = round((3 if k == 4 else 1) * np.pi * ((r_s + (k + 1) * 0.1 * dp_s) ** 2 - (r_s + k * 0.1 * dp_s) ** 2) / dp_s ** 2)
+    angles = 2 * np.pi * (np.arange(n) + 0.5) / n
+    points += [(0.5 + (r_s + d) * np.cos(a), 0.3 + (r_s + d) * np.sin(a)) for a in angles]
+points = np.array(points)
+shell_expected = np.array([round((3 if k == 4 else 1) * np.pi * ((r_s + (k + 1) * 0.1 * dp_s) ** 2 -
+                                                                 (r_s + k * 0.1 * dp_s) ** 2) / dp_s ** 2) /
+                           (np.pi * ((r_s + (k + 1) * 0.1 * dp_s) ** 2 - (r_s + k * 0.1 * dp_s) ** 2) / dp_s ** 2)
+                           for k in range(20)])
+for k, t in enumerate((0.8, 0.9, 1.0)):
+    vtp.write_vtp(os.path.join(synthetic, "snap_%d.vtp" % k), points,
+                  {"kind": np.zeros(len(points), dtype=np.int32)}, t, k)
+    vtp.write_vtp(os.path.join(synthetic, "discs_%d.vtp" % k), np.array([[0.5, 0.3], [0.2, r_s + dp_s]]),
+                  {"radius_m": np.array([r_s, r_s])}, t, k)
+edges, density = poiseuille_loaded.shell_density(synthetic)
+check("poiseuille_loaded shell_density: 3 in the shell 0.4-0.5 dp out, 1 elsewhere (to the counts' rounding)",
+      len(density) == 20 and abs(edges[-1] - 2) < 1e-12 and np.allclose(density, shell_expected, atol=1e-6)
+      and abs(density[4] - 3) < 0.1 and np.all(np.abs(np.delete(density, 4) - 1) < 0.2),
+      " ".join("%.3f" % x for x in density))
+r = subprocess.run([sys.executable, PL, "shells", work], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded shells: a folder that is not a run refused with its name",
+      r.returncode == 2 and work in r.stderr, r.stderr.strip())
 r = subprocess.run([sys.executable, PL, "discs", work], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded discs: a folder without discs refused with its name", r.returncode == 2 and work in r.stderr,
       r.stderr.strip())

@@ -8,6 +8,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
         [--scheme explicit|implicit] [--lubrication] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   studies/poiseuille_loaded/poiseuille_loaded.py discs RUN_DIR        # how the discs move against the flow
+  studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
@@ -19,6 +20,9 @@ body force F = |dP/dx| / rho, and mu0 = rho nu0. phi_actual is the placed disc a
 particle's x speed against y), over the parabola's centre speed, and its spin over half the parabola's vorticity
 at its height, -u'(y)/2 (a torque-free disc's in Stokes flow); prints the samples, the mean and spread of the lag and
 the median spin ratio.
+`shells`: over the same snapshots, the fluid's number density at each distance from a disc's face (bins of 0.1 dp
+out to 2 dp; the count in the annulus over its area times 1/dp^2, the lattice's density), over every disc whose
+annulus stays clear of the plates; 1 is the lattice's density, a shell of particles shows as a peak.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme and --lubrication contacts.lubrication for the runs; `report` takes the rows of one
@@ -53,6 +57,7 @@ COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wal
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
+SHELL_BINS, SHELL_BIN_DP = 20, 0.1
 DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
 REFERENCE_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded_reference.csv")
 
@@ -112,6 +117,37 @@ def disc_motion(folder):
         raise ValueError("%s: no discs in a snapshot between %g and %g s" % (folder, *WINDOW_S))
     lag, spin = np.concatenate(lags), np.concatenate(spins)
     return lag.size, float(lag.mean()), float(lag.std()), float(np.median(spin))
+
+
+def shell_density(folder, bins=SHELL_BINS, bin_dp=SHELL_BIN_DP):
+    """(bin edges in dp from the discs' faces, the fluid's number density in each over the lattice's, annuli counted)
+    over the window (see the module's `shells`); ValueError naming the folder where no disc in a snapshot in the window
+    stays clear of the plates."""
+    params = RunParams(folder)
+    dp, gap = params.positive("numerics", "dp_m"), params.positive("domain", "height_m")
+    length = params.positive("domain", "length_m")
+    fluid_at = {round(t, 9): name for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd"))}
+    edges = np.arange(bins + 1) * bin_dp
+    counts, areas, annuli = np.zeros(bins), np.zeros(bins), 0
+    for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd")):
+        if not (WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6) or round(t, 9) not in fluid_at:
+            continue
+        discs = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
+        s = vtp.read_vtp(os.path.join(folder, fluid_at[round(t, 9)]), ("kind",), finite=True)
+        fluid = s["points"][s["kind"] == 0, :2]
+        for (cx, cy), r in zip(discs["points"][:, :2], discs["radius_m"]):
+            outer = r + edges[-1] * dp
+            if cy - outer < 0 or cy + outer > gap:
+                continue
+            dx = fluid[:, 0] - cx
+            dx -= length * np.round(dx / length)
+            counts += np.histogram((np.hypot(dx, fluid[:, 1] - cy) - r) / dp, bins=edges)[0]
+            areas += np.pi * ((r + edges[1:] * dp) ** 2 - (r + edges[:-1] * dp) ** 2) / (dp * dp)
+            annuli += 1
+    if not annuli:
+        raise ValueError("%s: no disc clear of the plates by %g dp in a snapshot between %g and %g s"
+                         % (folder, edges[-1], *WINDOW_S))
+    return edges, counts / areas
 
 
 def local_einstein(centres_y, radius, length, gap):
@@ -446,6 +482,7 @@ def main():
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
     sub.add_parser("discs").add_argument("run_dir")
+    sub.add_parser("shells").add_argument("run_dir")
     ref = sub.add_parser("reference")
     ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5", type=solid_fractions(with_zero=False))
     ref.add_argument("--seed", type=int, default=1)
@@ -482,6 +519,15 @@ def main():
             fail(str(e))
         print("%d disc samples: (U - u(y)) / u_centre mean %+.4f, sd %.4f; omega / (-u'(y)/2) median %.3f"
               % (samples, lag, spread, spin))
+        return 0
+    if args.command == "shells":
+        try:
+            edges, density = shell_density(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("distance from the disc's face (dp), fluid number density / the lattice's")
+        for lo, hi, n in zip(edges[:-1], edges[1:], density):
+            print("%.1f-%.1f %.3f" % (lo, hi, n))
         return 0
     return command_report(args)
 
