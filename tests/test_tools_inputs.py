@@ -28,6 +28,7 @@ TOOLS = os.path.join(SOURCE, "tools")
 FC = os.path.join(SOURCE, "studies", "freydier", "freydier_convergence.py")
 SM = os.path.join(SOURCE, "studies", "stability", "stability_map.py")
 PL = os.path.join(SOURCE, "studies", "poiseuille_loaded", "poiseuille_loaded.py")
+SP = os.path.join(SOURCE, "studies", "spreading", "spreading.py")
 RB = os.path.join(SOURCE, "bench", "render_bench.py")
 AB = os.path.join(SOURCE, "bench", "ab_bench.py")
 SC = os.path.join(SOURCE, "bench", "scaling.py")
@@ -431,6 +432,16 @@ expect("freydier_metrics --png a folder", tool("freydier_metrics.py", path("run"
 
 # ---- 13. make_colormaps ----
 expect("make_colormaps with an argument", tool("make_colormaps.py", "extra"), "unrecognized arguments")
+# ---- 13b. spreading ----
+expect("spreading measure: not a run folder", tool(SP, "measure", WORK), WORK)
+expect("spreading reference --times-s 5,2 (not ascending)", tool(SP, "reference", path("run"), "--times-s", "5,2"),
+       "--times-s")
+expect("spreading reference --times-s x", tool(SP, "reference", path("run"), "--times-s", "x"), "--times-s")
+sloped = folder("sloped", RUN_FILES)
+write(os.path.join(sloped, "params.ini"), params_with(slope_deg="5"))
+expect("spreading reference: a sloped bed", tool(SP, "reference", sloped), "slope_deg")
+expect("spreading measure: a sloped bed", tool(SP, "measure", sloped), "slope_deg")
+
 # ---- 14. every tool that prints a table, into a reader that stopped early (| head): no traceback ----
 for name, *args in (("make_colormaps.py",), ("wall_contact.py", path("run"), "--after-s", "0.1"),
                     ("operator_check.py", path("run"), "--x", "0.06", "0.12", "--y", "0.004", "0.011")):
