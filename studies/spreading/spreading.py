@@ -25,11 +25,8 @@ import sys
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(HERE)), "python"))
-
-from surgepy import cli_checks, vtp  # noqa: E402
-from surgepy.run_params import RunParams  # noqa: E402
+from surgepy import cli_checks, vtp
+from surgepy.run_params import RunParams
 
 TOOL = "spreading"
 CELLS_PER_DEPTH = 100
@@ -106,6 +103,7 @@ def measure(folder):
         rows.append((t, *front_of(fluid, x0, dp)))
     if not rows:
         raise ValueError("%s: no snapshot after t = 0" % folder)
+    rows.sort()  # the model is stepped forward through the snapshots' times
     fronts = lubrication_fronts(g, nu, x0, x1, depth, length, [r[0] for r in rows])
     return [r + (f,) for r, f in zip(rows, fronts)]
 
