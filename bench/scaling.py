@@ -1,10 +1,11 @@
 #!/usr/bin/python3
 """scaling: how the solver's speed grows with the thread count, on the scenes users run.
 
-  bench/scaling.py [--bench build/surge-bench] [--max-threads N] [--scene NAME,...] [--quick]
+  bench/scaling.py [--bench build/surge-bench] [--max-threads N | --threads 1,T2,...] [--scene NAME,...] [--quick]
 
 For each scene and scheme it runs surge-bench once per thread count, 1, 2, 4, ... up to the machine's physical cores,
-or the CPUs this process may use where fewer (or N, the last count also when it is not a power of two), and prints
+or the CPUs this process may use where fewer (or N, the last count also when it is not a power of two; or the counts
+--threads lists), and prints
 one table, a row per run: the fluid particles, steps, the steps' wall time, the rate in million fluid
 particle-steps/s, the speed-up against 1 thread, two estimates of the serial fraction and the phase that took most of
 the time. Then, per scene and scheme, each phase's seconds at every thread count and its own speed-up. The phases
@@ -24,10 +25,11 @@ at dp = 0.5 mm (implicit only). --quick runs a tiny film (dp = 2 cm, a few steps
 check that the benchmark works, not to measure.
 
 Why a script around surge-bench and not an option of it: each thread count runs in a fresh process, so that the
-OpenMP runtime reads OMP_WAIT_POLICY and OMP_PROC_BIND at its start (a running program cannot change them for itself)
-and no run inherits another's thread pool, caches or heap; a run that fails costs its row, not the table. The runs
-get OMP_WAIT_POLICY=PASSIVE, as `surge run` takes it, unless the caller set the variable. The output names the
-machine, its cores and both variables. Time it on an otherwise idle machine.
+OpenMP runtime reads OMP_WAIT_POLICY, GOMP_SPINCOUNT and OMP_PROC_BIND at its start (a running program cannot change
+them for itself) and no run inherits another's thread pool, caches or heap; a run that fails costs its row, not the
+table. The runs get OMP_WAIT_POLICY=PASSIVE, as `surge run` takes it, unless the caller set OMP_WAIT_POLICY or
+GOMP_SPINCOUNT. The output names the machine, its cores and the three variables. Time it on an otherwise idle
+machine.
 
 Exit status: 0, 1 when a run failed (its row says how), 2 on bad input.
 """
@@ -130,9 +132,9 @@ def header_lines(bench, env, caller_policy, quick):
     lines = ["# scaling: %s%s" % (bench, ", --quick (a check that it runs, not a measurement)" if quick else ""),
              "# machine: %s, %s physical cores, %d logical CPUs, %d usable by this process" %
              (model, cores if cores else "unknown", logical, usable),
-             "# OpenMP: OMP_WAIT_POLICY=%s (%s), OMP_PROC_BIND=%s" %
-             (env["OMP_WAIT_POLICY"], "set by the caller" if caller_policy else "set by scaling.py",
-              env.get("OMP_PROC_BIND", "unset"))]
+             "# OpenMP: OMP_WAIT_POLICY=%s, GOMP_SPINCOUNT=%s (%s), OMP_PROC_BIND=%s" %
+             (env.get("OMP_WAIT_POLICY", "unset"), env.get("GOMP_SPINCOUNT", "unset"),
+              "set by the caller" if caller_policy else "set by scaling.py", env.get("OMP_PROC_BIND", "unset"))]
     return lines, (cores or logical, usable)
 
 
@@ -176,6 +178,17 @@ def phase_table(name, scheme, runs):
     print("  ".join(["total".ljust(15)] + ["%11.6f" % r["total_s"] for _, r in ok]))
 
 
+def thread_list(text):
+    """Comma-separated thread counts, rising, the first 1 (the speed-ups are against it)."""
+    try:
+        counts = [int(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected comma-separated whole numbers, got '%s'" % text)
+    if counts[0] != 1 or any(b <= a for a, b in zip(counts, counts[1:])):
+        raise argparse.ArgumentTypeError("expected rising thread counts starting at 1, got '%s'" % text)
+    return counts
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--bench", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge-bench"),
@@ -183,6 +196,8 @@ def main():
     parser.add_argument("--max-threads", type=cli_checks.positive_int, metavar="N",
                         help="the most threads a run takes (default: the machine's physical cores, or the CPUs this "
                              "process may use where fewer)")
+    parser.add_argument("--threads", type=thread_list, metavar="1,T2,...",
+                        help="the thread counts to run, rising from 1 (instead of the powers of 2)")
     parser.add_argument("--scene", type=cli_checks.names(list(SCENES)),
                         help="comma-separated scenes among %s (default all)" % ", ".join(SCENES))
     parser.add_argument("--quick", action="store_true",
@@ -190,15 +205,18 @@ def main():
     args = parser.parse_args()
     if args.quick and args.scene:
         parser.error("--quick runs its own tiny scene: leave out --scene")
+    if args.threads and (args.max_threads or args.quick):
+        parser.error("--threads lists the counts itself: leave out --max-threads and --quick")
     env = dict(os.environ)
-    caller_policy = "OMP_WAIT_POLICY" in env
-    env.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+    caller_policy = "OMP_WAIT_POLICY" in env or "GOMP_SPINCOUNT" in env
+    if not caller_policy:
+        env["OMP_WAIT_POLICY"] = "PASSIVE"
     lines, (cores, usable) = header_lines(args.bench, env, caller_policy, args.quick)
     if args.quick:
         scenes, counts = QUICK, [t for t in (1, 2) if t <= (args.max_threads or 2)]
     else:
         scenes = {name: SCENES[name] for name in args.scene or SCENES}
-        counts = thread_counts(args.max_threads or min(cores, usable))
+        counts = args.threads or thread_counts(args.max_threads or min(cores, usable))
     for line in lines:
         print(line)
     widths = [10, 9, 7, 7, 6, 9, 9, 8, 6, 10, 0]

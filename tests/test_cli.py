@@ -882,13 +882,17 @@ def group_restart():
     report("sigint_says_how_to_continue", "--restart " + checkpoint in r_int.stderr, r_int,
            "needs the --restart command")
 
-    # OpenMP threads wait passively unless the user set a policy: the running process's environment
-    for given, wanted in ((None, "PASSIVE"), ("ACTIVE", "ACTIVE")):
-        env = {k: v for k, v in ENV.items() if k != "OMP_WAIT_POLICY"}
+    # OpenMP threads wait passively unless the user set how they wait (a policy or a spin count): the running
+    # process's environment
+    for given, wanted in ((None, ["OMP_WAIT_POLICY=PASSIVE"]), ("OMP_WAIT_POLICY=ACTIVE", ["OMP_WAIT_POLICY=ACTIVE"]),
+                          ("GOMP_SPINCOUNT=1000", ["GOMP_SPINCOUNT=1000"])):
+        env = {k: v for k, v in ENV.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
         if given:
-            env["OMP_WAIT_POLICY"] = given
+            key, _, value = given.partition("=")
+            env[key] = value
+        name = "default" if given is None else "user_" + given.split("=")[0].lower()
         proc = subprocess.Popen([SURGE, "run", case, "-s", "time.end_s=100", *quiet, "-o",
-                                 os.path.join(WORK, "wait_%s" % wanted), "--threads", "1"], stdin=subprocess.DEVNULL,
+                                 os.path.join(WORK, "wait_%s" % name), "--threads", "1"], stdin=subprocess.DEVNULL,
                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env)
         seen, deadline = None, time.time() + 30
         while time.time() < deadline and proc.poll() is None and seen is None:
@@ -896,8 +900,9 @@ def group_restart():
             try:
                 with open("/proc/%d/environ" % proc.pid, "rb") as f:
                     entries = f.read().split(b"\0")
-                if os.path.isfile(os.path.join(WORK, "wait_%s" % wanted, "params.ini")):
-                    seen = [e.decode() for e in entries if e.startswith(b"OMP_WAIT_POLICY=")]
+                if os.path.isfile(os.path.join(WORK, "wait_%s" % name, "params.ini")):
+                    seen = sorted(e.decode() for e in entries
+                                  if e.startswith(b"OMP_WAIT_POLICY=") or e.startswith(b"GOMP_SPINCOUNT="))
             except OSError:
                 pass
         proc.send_signal(signal.SIGINT)
@@ -906,8 +911,7 @@ def group_restart():
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.communicate()
-        report("omp_wait_policy_%s" % ("default" if given is None else "user_" + given.lower()),
-               seen == ["OMP_WAIT_POLICY=" + wanted], None, "the run's environment had %s" % seen)
+        report("omp_wait_%s" % name, seen == wanted, None, "the run's environment had %s" % seen)
     try:
         checkpoint_step, checkpoint_time_s = checkpoint_position(checkpoint)
     except (OSError, struct.error):

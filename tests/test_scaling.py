@@ -1,9 +1,10 @@
 #!/usr/bin/python3
 """The scaling benchmark (bench/scaling.py) end to end on its tiny scene (--quick): the machine's lines, the table's
 columns and rows (each scheme on 1 and 2 threads, the same steps on both, 1.00 the 1-thread speed-up), the per-phase
-tables, and OMP_WAIT_POLICY=PASSIVE in every run it starts unless the caller set the variable (ACTIVE kept, with
---max-threads 1: one thread only). Then a surge-bench that fails: its rows say so and the exit status is 1. The
-runs go through a stand-in surge-bench that records the variable and runs the real one. No figure is checked
+tables, and OMP_WAIT_POLICY=PASSIVE in every run it starts unless the caller set OMP_WAIT_POLICY or
+GOMP_SPINCOUNT (ACTIVE kept, with --max-threads 1: one thread only). Then a surge-bench that fails:
+its rows say so and the exit status is 1. The runs go through a stand-in surge-bench that records the two variables
+and runs the real one. No figure is checked
 against a bound: the timings only have to be there and be numbers.
 
 usage: test_scaling.py SURGE_BENCH SOURCE_DIR WORK_DIR
@@ -35,8 +36,8 @@ def stand_in(name, body):
 
 
 def scaling(bench, *args, policy=None):
-    """bench/scaling.py --bench bench args, with OMP_WAIT_POLICY=policy (None: unset)."""
-    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
+    """bench/scaling.py --bench bench args, with OMP_WAIT_POLICY=policy (None: unset) and GOMP_SPINCOUNT unset."""
+    env = {k: v for k, v in os.environ.items() if k not in ("OMP_WAIT_POLICY", "GOMP_SPINCOUNT")}
     if policy:
         env["OMP_WAIT_POLICY"] = policy
     return subprocess.run([sys.executable, SCALING, "--bench", bench] + list(args), capture_output=True, text=True,
@@ -65,19 +66,20 @@ def policies(path):
 shutil.rmtree(WORK, ignore_errors=True)
 os.makedirs(WORK)
 record = os.path.join(WORK, "policies.txt")
-recording = stand_in("surge-bench", 'echo "${OMP_WAIT_POLICY:-unset}" >> "%s"\nexec "%s" "$@"\n' % (record, BENCH))
+recording = stand_in("surge-bench", 'echo "${OMP_WAIT_POLICY:-unset}/${GOMP_SPINCOUNT:-unset}" >> "%s"\n'
+                                    'exec "%s" "$@"\n' % (record, BENCH))
 
-# ---- the tiny scene, OMP_WAIT_POLICY unset ----
+# ---- the tiny scene, OMP_WAIT_POLICY and GOMP_SPINCOUNT unset ----
 r = scaling(recording, "--quick")
 check("--quick: exit status 0", r.returncode == 0, "rc %d, stderr: %s" % (r.returncode, r.stderr[-1500:]))
 out = r.stdout
 machine = re.search(r"^# machine: (.+), (\d+|unknown) physical cores, (\d+) logical CPUs, (\d+) usable", out, re.M)
 check("the machine's line names the CPU and its cores", machine is not None and machine.group(1).strip() != "", out)
-check("the OpenMP line: OMP_WAIT_POLICY=PASSIVE set by the benchmark, OMP_PROC_BIND named",
-      re.search(r"^# OpenMP: OMP_WAIT_POLICY=PASSIVE \(set by scaling.py\), OMP_PROC_BIND=\S+", out, re.M) is not None,
-      out)
+check("the OpenMP line: OMP_WAIT_POLICY=PASSIVE set by the benchmark, GOMP_SPINCOUNT unset, OMP_PROC_BIND named",
+      re.search(r"^# OpenMP: OMP_WAIT_POLICY=PASSIVE, GOMP_SPINCOUNT=unset \(set by scaling.py\), OMP_PROC_BIND=\S+",
+                out, re.M) is not None, out)
 seen = policies(record)
-check("every run got OMP_WAIT_POLICY=PASSIVE (4 runs)", seen == ["PASSIVE"] * 4, seen)
+check("every run got OMP_WAIT_POLICY=PASSIVE and no spin count (4 runs)", seen == ["PASSIVE/unset"] * 4, seen)
 header, rows = table(out)
 check("the table's columns", header == COLUMNS, header)
 keys = [(row[0], row[1], row[3]) for row in rows]
@@ -128,9 +130,9 @@ os.remove(record)
 r = scaling(recording, "--quick", "--max-threads", "1", policy="ACTIVE")
 check("--max-threads 1, ACTIVE: exit status 0", r.returncode == 0, "rc %d, stderr: %s" % (r.returncode, r.stderr))
 check("the caller's OMP_WAIT_POLICY is named as the caller's",
-      "OMP_WAIT_POLICY=ACTIVE (set by the caller)" in r.stdout, r.stdout)
+      "OMP_WAIT_POLICY=ACTIVE, GOMP_SPINCOUNT=unset (set by the caller)" in r.stdout, r.stdout)
 seen = policies(record)
-check("every run kept the caller's ACTIVE (2 runs)", seen == ["ACTIVE"] * 2, seen)
+check("every run kept the caller's ACTIVE and no spin count was added (2 runs)", seen == ["ACTIVE/unset"] * 2, seen)
 header, rows = table(r.stdout)
 check("--max-threads 1: rows on 1 thread only", [row[3] for row in rows] == ["1", "1"], rows)
 

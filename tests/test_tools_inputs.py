@@ -395,6 +395,11 @@ expect("ab_bench --set-b without =", tool(AB, "--new", BUILD, "--set-b", "numeri
 expect("scaling --max-threads 0", tool(SC, "--max-threads", "0"), "--max-threads", "0")
 expect("scaling --max-threads x", tool(SC, "--max-threads", "x"), "--max-threads", "'x'")
 expect("scaling --max-threads 1.5", tool(SC, "--max-threads", "1.5"), "--max-threads", "1.5")
+expect("scaling --threads 2,4", tool(SC, "--threads", "2,4"), "--threads", "2,4")
+expect("scaling --threads 1,4,2", tool(SC, "--threads", "1,4,2"), "--threads", "rising")
+expect("scaling --threads 1,x", tool(SC, "--threads", "1,x"), "--threads", "'1,x'")
+expect("scaling --threads with --max-threads", tool(SC, "--threads", "1,2", "--max-threads", "2"), "--threads",
+       "--max-threads")
 expect("scaling --scene unknown", tool(SC, "--scene", "film,nope"), "--scene", "nope")
 expect("scaling --quick with --scene", tool(SC, "--quick", "--scene", "film"), "--quick", "--scene")
 expect("scaling --bench a folder", tool(SC, "--bench", WORK), "--bench")

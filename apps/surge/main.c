@@ -26,13 +26,13 @@ static const char *usage_main =
     "'surge COMMAND --help' describes each command.\n"
     "exit status: 0 done, 1 stopped by the health monitor, 2 bad input, 3 output error, 4 interrupted\n";
 
-/* While they wait at a barrier, libgomp's threads spin (OMP_WAIT_POLICY unset: about 300,000 times before they
- * sleep), which on cores shared with other work starves the thread the others wait for: a run that takes minutes
- * can take hours. libgomp reads the variable before main, so a run without the user's own setting executes itself
- * again, once, with OMP_WAIT_POLICY=PASSIVE (docs/performance.md measures both). */
+/* While they wait at a barrier, libgomp's threads spin (OMP_WAIT_POLICY and GOMP_SPINCOUNT unset: about 300,000
+ * times before they sleep), which on cores shared with other work starves the thread the others wait for: a run that
+ * takes minutes can take hours. libgomp reads the variables before main, so a run with neither set executes itself
+ * again, once, with OMP_WAIT_POLICY=PASSIVE (docs/performance.md, "Waiting threads", measures the choices). */
 static void prefer_passive_wait(char **argv)
 {
-    if (getenv("OMP_WAIT_POLICY") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0)
+    if (getenv("OMP_WAIT_POLICY") || getenv("GOMP_SPINCOUNT") || setenv("OMP_WAIT_POLICY", "PASSIVE", 1) != 0)
         return;
     execv("/proc/self/exe", argv);
     unsetenv("OMP_WAIT_POLICY"); /* no /proc: go on with libgomp's default */
