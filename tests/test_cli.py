@@ -576,6 +576,23 @@ def group_inputs():
                cost.group(3) if cost else "?", "%.3g" % expected if counts and cost else "?", r.stdout + r.stderr))
     r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.005")
     report("check_warns_coarse_discs", exited(r, 0) and "2.5 dp, fewer than 4" in r.stdout, r)
+    # c0's viscous term for discs (Morris et al. 1997): the loaded channel at its derived c0 gets 10 x sqrt(nu u / r) =
+    # 10 x sqrt(0.467 x 0.07709 / 0.02) = 13.42 m/s, where its speed alone gives 0.77 m/s; without discs the term is
+    # absent; the debris surge's discs keep the fall term's 112 m/s
+    loaded = os.path.join(cases_dir, "poiseuille_loaded.ini")
+    r = surge("check", loaded, "-s", "numerics.c0_mps=0", "-s", "numerics.dp_m=0.01")
+    c0 = re.search(r"c0 = ([0-9.]+) m/s \(([^;]*);", r.stdout)
+    report("check_c0_discs_viscous_term", exited(r, 0) and c0 is not None and abs(float(c0.group(1)) / 13.416 - 1) < 1e-3
+           and c0.group(2) == "set by the discs' viscous pressures" and "r = 0.02 m the smallest radius" in r.stdout, r)
+    r = surge("check", loaded, "-s", "numerics.c0_mps=0", "-s", "numerics.dp_m=0.01", "-s", "boulders.placement=none")
+    c0 = re.search(r"c0 = ([0-9.]+) m/s \(([^;]*);", r.stdout)
+    report("check_c0_no_discs_no_viscous_term", exited(r, 0) and c0 is not None and
+           abs(float(c0.group(1)) / 0.7709 - 1) < 1e-3 and "viscous speed" not in r.stdout, r)
+    r = surge("check", os.path.join(cases_dir, "debris_surge.ini"), "-s", "numerics.dp_m=0.04", "-s",
+              "boulders.placement=graded", "-s", "boulders.count=60", "-s", "boulders.density_ratio=0.9")
+    c0 = re.search(r"c0 = ([0-9.]+) m/s \(([^;]*);", r.stdout)
+    report("check_c0_debris_discs_fall_term", exited(r, 0) and c0 is not None and abs(float(c0.group(1)) / 112.214 - 1) <
+           1e-4 and c0.group(2) == "set by the speed", r)
     # the implicit scheme with discs under 2.5 dp in radius (the debris surge stopped at 1.5 dp), and not at 2.5 dp
     r = surge("check", os.path.join(cases_dir, "boulder_settling.ini"), "-s", "numerics.dp_m=0.007", "-s",
               "numerics.scheme=implicit")

@@ -12,9 +12,11 @@ static const char *usage_check =
 /* What set c0: the parameter itself, the hydrostatic head, or the expected speed. */
 static const char *c0_origin(const surge_params *resolved, const surge_derived *d)
 {
-    return resolved->numerics.c0_mps > 0 ? "set by numerics.c0_mps"
-           : d->c0_mps > resolved->numerics.c0_factor * d->expected_speed_mps ? "set by the head"
-                                                                              : "set by the speed";
+    if (resolved->numerics.c0_mps > 0)
+        return "set by numerics.c0_mps";
+    if (d->c0_mps <= resolved->numerics.c0_factor * d->expected_speed_mps)
+        return "set by the speed";
+    return d->viscous_c0_mps > d->head_c0_mps ? "set by the discs' viscous pressures" : "set by the head";
 }
 
 int command_check(int argc, char **argv)
@@ -41,9 +43,13 @@ int command_check(int argc, char **argv)
     }
     const surge_derived *d = surge_sim_derived(sim);
     printf("%s: ok: %d fluid + %d wall particles, h = %.6g m, c0 = %.6g m/s (%s; expected speed %.4g m/s; "
-           "c0_factor x the hydrostatic head's speed sqrt(g H): %.4g m/s, 1 %% density at factor 10)\n", c.case_path,
+           "c0_factor x the hydrostatic head's speed sqrt(g H): %.4g m/s, 1 %% density at factor 10", c.case_path,
            d->fluid_count, d->wall_count, d->h_m, d->c0_mps, c0_origin(surge_sim_params(sim), d),
            d->expected_speed_mps, d->head_c0_mps);
+    if (d->boulder_count > 0)
+        printf("; c0_factor x the discs' viscous speed sqrt(nu u / r), r = %.4g m the smallest radius: %.4g m/s",
+               d->smallest_boulder_radius_m, d->viscous_c0_mps);
+    printf(")\n");
     report_resolution(sim, 1);
     warn_diffusive_compressibility(sim);
     surge_sim_destroy(sim);

@@ -90,7 +90,9 @@ static const surge_param_info registry[] = {
     {"numerics", "cfl", SURGE_PARAM_REAL, "-", 0.2, 1e-4, 2, false, NULL,
      "Courant coefficient C_CFL of the variable time step.", OFF(numerics.cfl)},
     {"numerics", "c0_mps", SURGE_PARAM_REAL, "m s^-1", 0, 0, 1e5, false, NULL,
-     "Numerical speed of sound; 0 derives it as c0_factor times the scene's largest expected speed.",
+     "Numerical speed of sound; 0 derives it as c0_factor times the largest of the scene's expected speed, the "
+     "hydrostatic head's speed and, with discs, the viscous speed sqrt(nu u / r) of the smallest disc's radius r "
+     "(docs/method.md, \"c0\").",
      OFF(numerics.c0_mps)},
     {"numerics", "c0_factor", SURGE_PARAM_REAL, "-", 10, 1, 1e3, false, NULL,
      "c0 / largest expected speed when c0 is derived (10 keeps density errors near 1 %).",

@@ -61,20 +61,34 @@ surge_sim *sim_create_checked(const surge_params *params,
     sim->scheme = scheme_of(p);
     const double dp = p->numerics.dp_m;
     sim->derived.h_m = p->numerics.ch * sqrt(2.0) * dp;
-    sim->derived.expected_speed_mps = scene_expected_speed(p);
-    /* c0: the case's, or c0_factor times the larger of the expected speed and the hydrostatic head's speed (at the
-     * default factor 10 the head's term holds the hydrostatic density variation within 1 %) */
-    sim->derived.head_c0_mps = p->numerics.c0_factor * scene_head_speed(p);
-    sim->derived.c0_mps = p->numerics.c0_mps > 0 ? p->numerics.c0_mps
-                                                : fmax(p->numerics.c0_factor * sim->derived.expected_speed_mps,
-                                                       sim->derived.head_c0_mps);
-    if (!(sim->derived.c0_mps > 0)) {
-        snprintf(err, err_len, "cannot derive c0: the scene has no gravity, body force or moving wall to set a speed "
-                 "scale; set numerics.c0_mps");
+    sim->rho0 = p->fluid.density_kgpm3;
+    /* the discs before c0: the smallest one's radius sets c0's viscous term */
+    if (boulders_define(sim, err, err_len) != 0) {
+        boulders_free(&sim->boulders);
         free(sim);
         return NULL;
     }
-    sim->rho0 = p->fluid.density_kgpm3;
+    sim->derived.smallest_boulder_radius_m = INFINITY;
+    for (int i = 0; i < sim->boulders.count; i++)
+        sim->derived.smallest_boulder_radius_m = fmin(sim->derived.smallest_boulder_radius_m, sim->boulders.radius[i]);
+    sim->derived.expected_speed_mps = scene_expected_speed(p);
+    /* c0: the case's, or c0_factor times the largest of the expected speed, the hydrostatic head's speed (at the
+     * default factor 10 the head's term holds the hydrostatic density variation within 1 %) and, with discs, the
+     * viscous speed (scene_viscous_speed) */
+    sim->derived.head_c0_mps = p->numerics.c0_factor * scene_head_speed(p);
+    sim->derived.viscous_c0_mps = p->numerics.c0_factor * scene_viscous_speed(p, sim->derived.expected_speed_mps,
+                                                                               sim->derived.smallest_boulder_radius_m);
+    sim->derived.c0_mps = p->numerics.c0_mps > 0 ? p->numerics.c0_mps
+                                                : fmax(fmax(p->numerics.c0_factor * sim->derived.expected_speed_mps,
+                                                            sim->derived.head_c0_mps),
+                                                       sim->derived.viscous_c0_mps);
+    if (!(sim->derived.c0_mps > 0)) {
+        snprintf(err, err_len, "cannot derive c0: the scene has no gravity, body force or moving wall to set a speed "
+                 "scale; set numerics.c0_mps");
+        boulders_free(&sim->boulders);
+        free(sim);
+        return NULL;
+    }
     sim->b_pa = sim->derived.c0_mps * sim->derived.c0_mps * sim->rho0 / 7.0;
     sim->mass = sim->rho0 * dp * dp;
     sim->derived.particle_mass_kg = sim->mass;
@@ -99,9 +113,6 @@ surge_sim *sim_create_checked(const surge_params *params,
         return NULL;
     }
     sim->derived.boulder_count = sim->boulders.count;
-    sim->derived.smallest_boulder_radius_m = INFINITY;
-    for (int i = 0; i < sim->boulders.count; i++)
-        sim->derived.smallest_boulder_radius_m = fmin(sim->derived.smallest_boulder_radius_m, sim->boulders.radius[i]);
     grid_sort_walls(sim);
     grid_sort_fluid(sim);
     boundary_wall_speeds(sim, 0.0);

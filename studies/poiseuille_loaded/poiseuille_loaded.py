@@ -469,7 +469,7 @@ def main():
     run.add_argument("--ch", type=cli_checks.positive, default=1.8)
     run.add_argument("--seed", type=int, default=1)
     run.add_argument("--c0", type=cli_checks.non_negative, default=0.0,
-                     help="numerics.c0_mps (0: derived from the scene)")
+                     help="numerics.c0_mps (0: the case file's, 15 m/s)")
     run.add_argument("--diffusion", type=cli_checks.number, default=-1.0,
                      help="numerics.density_diffusion (delta; default: the case's)")
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)

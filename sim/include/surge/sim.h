@@ -16,6 +16,7 @@ typedef struct surge_derived {
     double c0_mps;         /* speed of sound actually used */
     double expected_speed_mps; /* the scene's largest expected speed c0 was derived from */
     double head_c0_mps;        /* c0_factor x the hydrostatic head's speed sqrt(g_n H) (1 % density at factor 10) */
+    double viscous_c0_mps;     /* c0_factor x sqrt(nu u / r), r the smallest disc's radius (0 without discs) */
     double particle_mass_kg;   /* per metre of width (2D) */
     int32_t fluid_count;
     int32_t wall_count;        /* boulders' particles included */

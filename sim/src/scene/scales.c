@@ -52,6 +52,19 @@ double scene_expected_speed(const surge_params *p)
     return u;
 }
 
+/* The speed whose square, times c0_factor^2, holds the viscous pressures of a flow of speed u over a length L within
+ * the density variation the factor allows: rho0 nu u / L / (rho0 c0^2) <= 1 / c0_factor^2 gives c0 >= c0_factor
+ * sqrt(nu u / L) (Morris, Fox and Zhu 1997, J. Comput. Phys. 136, the viscous term of their estimate of c0^2). With
+ * discs, L is the smallest disc's radius, over which the flow around it and through the gaps between discs varies;
+ * 0 without discs, where the flow's own scales above bound the viscous pressures. */
+double scene_viscous_speed(const surge_params *p, double speed_mps, double smallest_disc_radius_m)
+{
+    const double nu = p->fluid.viscosity_m2ps;
+    if (!(nu > 0) || !(speed_mps > 0) || !(smallest_disc_radius_m > 0) || !isfinite(smallest_disc_radius_m))
+        return 0.0;
+    return sqrt(nu * speed_mps / smallest_disc_radius_m);
+}
+
 double scene_upstream_back_m(const surge_params *p)
 {
     const double dp = p->numerics.dp_m, front_back_m = p->walls.upstream_x_m - p->walls.layers * dp;

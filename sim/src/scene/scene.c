@@ -206,8 +206,6 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     const surge_params *p = &s->params;
     const double dp = p->numerics.dp_m;
     particle_list walls = {0};
-    if (boulders_define(s, err, err_len) != 0)
-        return -1;
     walls.cap = wall_capacity(p);
     walls.x = malloc((size_t)walls.cap * sizeof(double) + 1);
     walls.y = malloc((size_t)walls.cap * sizeof(double) + 1);
