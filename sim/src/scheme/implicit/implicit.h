@@ -89,7 +89,7 @@ typedef struct implicit_work {
     double *dvx_by_id, *dvy_by_id;       /* per particle id: the last step's v* - v_n, the next viscous solve's guess */
     double *density_dx, *density_dy;     /* per fluid particle: the rest-density correction's displacement */
     double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (implicit_part_close_pairs) */
-    double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial;
+    double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial; /* partial: two sums' blocks (krylov.c) */
     double *pressure_by_id;              /* per particle id: the fluid's pressure, the next step's p_n (checkpointed) */
     /* the free surface's mirror images (surface_images.c) */
     uint8_t *imaged;                     /* per fluid particle: its kernel reaches the surface and sees images */

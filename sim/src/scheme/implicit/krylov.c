@@ -1,5 +1,8 @@
 /* BiCGSTAB, matrix-free on the implicit scheme's operators, with the diagonal or a multigrid V-cycle as its
- * preconditioner; dot products in fixed blocks, so the result does not depend on the thread count. */
+ * preconditioner; dot products in fixed blocks, so the result does not depend on the thread count. A vector update
+ * and the dot products of its result share one parallel loop over the blocks: each region wakes the waiting threads
+ * (tens of microseconds where they sleep, docs/performance.md, "Waiting threads"), and the block sums are those the
+ * dot products alone would add, in the same order. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -7,10 +10,21 @@
 
 #include "scheme/implicit/implicit.h"
 
+static int dot_blocks(int n) { return (n + DOT_BLOCK - 1) / DOT_BLOCK; }
+
+/* The blocks' partial sums (DOT_BLOCK entries each) added in order */
+static double block_total(const double *partial, int blocks)
+{
+    double sum = 0;
+    for (int k = 0; k < blocks; k++)
+        sum += partial[k];
+    return sum;
+}
+
 /* sum_i a_i b_i (b NULL: sum_i a_i) over n, in fixed blocks added in order: the same for any thread count */
 double implicit_dot(const implicit_work *w, const double *a, const double *b, int n)
 {
-    const int blocks = (n + DOT_BLOCK - 1) / DOT_BLOCK;
+    const int blocks = dot_blocks(n);
     #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
     for (int k = 0; k < blocks; k++) {
         const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
@@ -19,10 +33,90 @@ double implicit_dot(const implicit_work *w, const double *a, const double *b, in
             sum += b ? a[i] * b[i] : a[i];
         w->partial[k] = sum;
     }
-    double sum = 0;
-    for (int k = 0; k < blocks; k++)
-        sum += w->partial[k];
-    return sum;
+    return block_total(w->partial, blocks);
+}
+
+/* out -= offset where F is affine (not linear), then rhat . out */
+static double unoffset_dot(implicit_work *w, int linear, const double *rhat, double *out, int n)
+{
+    const int blocks = dot_blocks(n);
+    const double *offset = w->offset;
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum = 0;
+        for (int i = from; i < to; i++) {
+            if (!linear)
+                out[i] -= offset[i];
+            sum += rhat[i] * out[i];
+        }
+        w->partial[k] = sum;
+    }
+    return block_total(w->partial, blocks);
+}
+
+/* x += alpha y, s = r - alpha v; returns s . s */
+static double step_alpha(implicit_work *w, double alpha, int n)
+{
+    const int blocks = dot_blocks(n);
+    double *x = w->x, *s = w->s;
+    const double *y = w->y, *r = w->r, *v = w->v;
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum = 0;
+        for (int i = from; i < to; i++) {
+            x[i] += alpha * y[i];
+            s[i] = r[i] - alpha * v[i];
+            sum += s[i] * s[i];
+        }
+        w->partial[k] = sum;
+    }
+    return block_total(w->partial, blocks);
+}
+
+/* out -= offset where F is affine, then *tt = t . t and *ts = t . s (out is t) */
+static void unoffset_dots_t(implicit_work *w, int linear, int n, double *tt, double *ts)
+{
+    const int blocks = dot_blocks(n);
+    double *t = w->t, *second = w->partial + blocks;
+    const double *offset = w->offset, *s = w->s;
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum_tt = 0, sum_ts = 0;
+        for (int i = from; i < to; i++) {
+            if (!linear)
+                t[i] -= offset[i];
+            sum_tt += t[i] * t[i];
+            sum_ts += t[i] * s[i];
+        }
+        w->partial[k] = sum_tt, second[k] = sum_ts;
+    }
+    *tt = block_total(w->partial, blocks);
+    *ts = block_total(second, blocks);
+}
+
+/* x += omega z, r = s - omega t; *rr = r . r and *rhat_r = rhat . r */
+static void step_omega(implicit_work *w, double omega, int n, double *rr, double *rhat_r)
+{
+    const int blocks = dot_blocks(n);
+    double *x = w->x, *r = w->r, *second = w->partial + blocks;
+    const double *z = w->z, *s = w->s, *t = w->t, *rhat = w->rhat;
+    #pragma omp parallel for schedule(static) if (n >= WIDE_FLUID_PARTICLES)
+    for (int k = 0; k < blocks; k++) {
+        const int from = k * DOT_BLOCK, to = from + DOT_BLOCK < n ? from + DOT_BLOCK : n;
+        double sum_rr = 0, sum_rhat_r = 0;
+        for (int i = from; i < to; i++) {
+            x[i] += omega * z[i];
+            r[i] = s[i] - omega * t[i];
+            sum_rr += r[i] * r[i];
+            sum_rhat_r += rhat[i] * r[i];
+        }
+        w->partial[k] = sum_rr, second[k] = sum_rhat_r;
+    }
+    *rr = block_total(w->partial, blocks);
+    *rhat_r = block_total(second, blocks);
 }
 
 /* The linear part of the operator: F(x) - F(0) (offset holds F(0)), or F(x) itself where F is linear */
@@ -92,9 +186,8 @@ int implicit_solve(surge_sim *sim, affine_operator op, int n, int homogeneous, d
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < n; i++)
         rhat[i] = r[i];
-    double rho = 1, alpha = 1, omega = 1;
+    double rho = 1, alpha = 1, omega = 1, rho_new = implicit_dot(w, rhat, r, n);
     for (int it = 1; it <= max_iterations; it++) {
-        const double rho_new = implicit_dot(w, rhat, r, n);
         if (rho_new == 0 || omega == 0)
             return -1;
         const double beta = rho_new / rho * alpha / omega;
@@ -104,32 +197,24 @@ int implicit_solve(surge_sim *sim, affine_operator op, int n, int homogeneous, d
             p[i] = r[i] + beta * (p[i] - omega * v[i]);
         if (precondition(sim, p, y, n) != 0)
             return -1;
-        apply_linear(sim, op, homogeneous, y, v, n);
-        const double rv = implicit_dot(w, rhat, v, n);
+        op(sim, y, v);
+        const double rv = unoffset_dot(w, homogeneous, rhat, v, n);
         if (rv == 0)
             return -1;
         alpha = rho / rv;
-        #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < n; i++) {
-            x[i] += alpha * y[i];
-            s[i] = r[i] - alpha * v[i];
-        }
-        const double s_norm = sqrt(implicit_dot(w, s, s, n));
+        const double s_norm = sqrt(step_alpha(w, alpha, n));
         if (s_norm <= tolerance * b_norm) {
             *residual = s_norm / b_norm;
             return it;
         }
         if (precondition(sim, s, z, n) != 0)
             return -1;
-        apply_linear(sim, op, homogeneous, z, t, n);
-        const double tt = implicit_dot(w, t, t, n);
-        omega = tt > 0 ? implicit_dot(w, t, s, n) / tt : 0;
-        #pragma omp parallel for schedule(static) if (wide(sim))
-        for (int i = 0; i < n; i++) {
-            x[i] += omega * z[i];
-            r[i] = s[i] - omega * t[i];
-        }
-        r_norm = sqrt(implicit_dot(w, r, r, n));
+        op(sim, z, t);
+        double tt, ts, rr;
+        unoffset_dots_t(w, homogeneous, n, &tt, &ts);
+        omega = tt > 0 ? ts / tt : 0;
+        step_omega(w, omega, n, &rr, &rho_new);
+        r_norm = sqrt(rr);
         *residual = r_norm / b_norm;
         if (!isfinite(r_norm))
             return -1;

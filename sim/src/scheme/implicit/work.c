@@ -66,7 +66,7 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
-            GROW(y, n2) || GROW(z, n2) || GROW(partial, nblocks) ||
+            GROW(y, n2) || GROW(z, n2) || GROW(partial, 2 * nblocks) ||
             GROW(density_rhs, nf) || GROW(phi_saved, nf) || GROW(divergence, nf) || GROW(density_dx, nf) || GROW(density_dy, nf) ||
             GROW(pair_dvx, nf) || GROW(pair_dvy, nf) || GROW(pair_dx, nf) || GROW(pair_dy, nf) ||
             GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
