@@ -17,6 +17,7 @@ Measure, for each snapshot (x from the left wall's face, the bed's face at y = 0
   body   the largest x of the fluid between 1 and 2 dp above the bed (the second row): the current's own front;
   film   fluid below 1 dp above the bed ahead of the body: how many particles, and how far the farthest lies ahead
          of the body (dp). A front that meets the bed has none or one; a film creeping ahead along the bed has many.
+  row    the mean height above the bed of the fluid below 1 dp (the first row), in dp: 0.5 on the lattice.
 Prints each snapshot's toe and body against the model at that time and their differences from it.
 """
 import argparse
@@ -78,17 +79,21 @@ def similarity_front(g, nu, area, t):
 
 
 def front_of(points, x0, dp):
-    """(toe, body, film count, film reach) of one snapshot's fluid positions (m; reach in dp)"""
+    """(toe, body, film count, film reach, first row's height) of one snapshot's fluid positions (m; reach and
+    height in dp; the height NaN where no fluid lies below 1 dp)"""
     x, y = points[:, 0] - x0, points[:, 1]
     second_row = (y >= dp) & (y < 2 * dp)
     body = x[second_row].max() if second_row.any() else x.min()
     film = (y < dp) & (x > body)
     reach = (x[film].max() - body) / dp if film.any() else 0.0
-    return x.max(), body, int(film.sum()), reach
+    first_row = y < dp
+    height = float(y[first_row].mean() / dp) if first_row.any() else float("nan")
+    return x.max(), body, int(film.sum()), reach, height
 
 
 def measure(folder):
-    """[(t, toe, body, film count, film reach, model front)] over the run's snapshots after t = 0"""
+    """[(t, toe, body, film count, film reach, first row's height, model front)] over the run's snapshots after
+    t = 0"""
     params = RunParams(folder)
     g, nu, x0, x1, depth, length = scene(params)
     dp = params.positive("numerics", "dp_m")
@@ -136,10 +141,11 @@ def main():
         rows = measure(args.run_dir)
     except (OSError, ValueError) as e:
         fail(str(e))
-    print("t (s), toe (m), body (m), model (m), toe/model - 1, body/model - 1, film particles, film ahead (dp)")
-    for t, toe, body, count, reach, model in rows:
-        print("%.2f %.4f %.4f %.4f %+.4f %+.4f %d %.1f" % (t, toe, body, model, toe / model - 1, body / model - 1,
-                                                         count, reach))
+    print("t (s), toe (m), body (m), model (m), toe/model - 1, body/model - 1, film particles, film ahead (dp), "
+          "first row's height (dp)")
+    for t, toe, body, count, reach, height, model in rows:
+        print("%.2f %.4f %.4f %.4f %+.4f %+.4f %d %.1f %.3f" % (t, toe, body, model, toe / model - 1,
+                                                              body / model - 1, count, reach, height))
     return 0
 
 
