@@ -526,7 +526,8 @@ def group_inputs():
     # idle TCP connections cannot take the file descriptors the outputs need: the run starts with
     # a soft limit of 256 open files, 400 plain connections arrive at its control and publisher ports, and it must
     # still write every snapshot and finish. It starts paused and is resumed once the connections are held, so a
-    # fast machine cannot finish the run before they arrive (it did: 202 connected, 2026-11-26)
+    # fast machine cannot finish the run before they arrive; 1 s of flow, so that it does not end (closing its control
+    # socket, which gives a queued reply 200 ms) before the resume's reply has left on a busy machine
     import resource
     import socket
     probe = socket.socket()
@@ -536,8 +537,8 @@ def group_inputs():
     hard = resource.getrlimit(resource.RLIMIT_NOFILE)[1]
     out = os.path.join(WORK, "inputs_fds")
     shutil.rmtree(out, ignore_errors=True)
-    proc = subprocess.Popen([SURGE, "run", TANK, "-o", out, "--threads", "1", "-s", "time.end_s=0.3", "-s",
-                             "output.snapshot_interval_s=0.01", "-s", "output.progress_interval_s=0", "--control",
+    proc = subprocess.Popen([SURGE, "run", TANK, "-o", out, "--threads", "1", "-s", "time.end_s=1", "-s",
+                             "output.snapshot_interval_s=0.03", "-s", "output.progress_interval_s=0", "--control",
                              str(port), "--publish", str(port + 1), "--paused"], stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE, text=True, env=dict(os.environ, OMP_WAIT_POLICY="PASSIVE"),
                             preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (min(256, hard), hard)))
