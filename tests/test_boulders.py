@@ -207,12 +207,14 @@ def group_restart():
           len(series) == len(vtp.read_pvd(os.path.join(whole, "run.pvd"))) and
           all(s[1]["points"].shape[0] == 2 for s in series), str(len(series)))
     # the impact, seen in snapshots every 1 ms, without the pressure between the discs' particles
-    # (contacts.solid_pressure=0): the discs start 1 mm apart and touch at about 12 ms. Before the touch the fluid
+    # (contacts.solid_pressure=0) and the lubrication film (which keeps them apart, as that pressure does): the discs
+    # start 1 mm apart and touch at about 12 ms. Before the touch the fluid
     # between them changes the lower disc's speed by at most 6 mm/s per ms; the contact impulse changes it by 25 mm/s
     # within one interval. With that pressure the film between them holds them apart (below)
     impact, p_i, cmd_i = surge("restart_impact", ["run"] + args + ["-s", "time.end_s=0.02", "-s",
                                                                    "output.snapshot_interval_s=0.001", "-s",
-                                                                   "contacts.solid_pressure=0"])
+                                                                   "contacts.solid_pressure=0", "-s",
+                                                                   "contacts.lubrication=0"])
     fine = boulder_series(impact) if p_i.returncode == 0 else []
     gap = np.array([np.hypot(*(s[1]["points"][0, :2] - s[1]["points"][1, :2])) - 0.025 for s in fine])
     kick = np.diff([s[1]["velocity_mps"][0, 1] for s in fine]) if fine else np.zeros(1)
@@ -220,10 +222,12 @@ def group_restart():
           "1 ms) and they never overlap by more than 1 % of a radius",
           len(fine) >= 20 and gap.min() < 1e-5 and kick.min() < -0.01 and gap.min() > -0.01 * 0.0125,
           "%s\ngaps %s m\nlower disc's speed changes %s m/s" % (cmd_i, gap, kick))
-    # as the run goes by default, the pressure of each disc's particles on the other's stops the thrown disc short:
-    # closest 0.36 mm (0.14 dp) within 20 ms, having come to 0.50 mm and parted again (measured)
+    # with that pressure (the default) and no lubrication film, the pressure of each disc's particles on the other's
+    # stops the thrown disc short: closest 0.36 mm (0.14 dp) within 20 ms, having come to 0.50 mm and parted again
+    # (measured)
     film, p_f, cmd_f = surge("restart_film", ["run"] + args + ["-s", "time.end_s=0.02",
-                                                               "-s", "output.snapshot_interval_s=0.001"])
+                                                               "-s", "output.snapshot_interval_s=0.001",
+                                                               "-s", "contacts.lubrication=0"])
     held = boulder_series(film) if p_f.returncode == 0 else []
     gap_f = np.array([np.hypot(*(s[1]["points"][0, :2] - s[1]["points"][1, :2])) - 0.025 for s in held])
     check("restart: with the pressure between the discs the thrown disc stops short of the other (gap above 0.2 mm "
@@ -337,14 +341,15 @@ def group_scene():
     check("scene: the same case loading boulders.csv repeats the run's state hash",
           q.returncode == 0 and h1 and h2 and h1.group(1) == h2.group(1), cmd_file + "\n" + q.stderr[-1500:])
     # the contact margin: a heavy disc let down onto the bed rests a margin above it, where no sub-dp gap traps fluid;
-    # without a margin it comes to rest on the bed's face when the bed's particles exert no pressure on it
-    # (contacts.solid_pressure=0; with that pressure the film under it still holds it 0.30 dp up at 0.4 s)
+    # without a margin it comes to rest on the bed's face when neither the bed's particles' pressure nor the
+    # lubrication film hold it (contacts.solid_pressure=0, contacts.lubrication=0; with that pressure the film under it
+    # still holds it 0.30 dp up at 0.4 s, with the lubrication film 0.45 dp)
     gaps = {}
     for margin in (0, 1):
         settle, r, cmd_m = surge("scene_margin%d" % margin, [
             "run", "boulder_settling.ini", "-s", "boulders.list_m=0.05 0.0175 0.0125", "-s", "boulders.density_ratio=10",
             "-s", "time.end_s=0.4", "-s", "output.snapshot_interval_s=0.1", "-s", "contacts.margin_dp=%d" % margin]
-            + (["-s", "contacts.solid_pressure=0"] if margin == 0 else []))
+            + (["-s", "contacts.solid_pressure=0", "-s", "contacts.lubrication=0"] if margin == 0 else []))
         last = boulder_series(settle)[-1][1] if r.returncode == 0 else None
         gaps[margin] = (last["points"][0][1] - last["radius_m"][0]) / 0.0025 if last is not None else float("nan")
     check("scene: a disc rests on the bed at its surface without a margin and 1 dp above it with margin_dp = 1 "
@@ -582,9 +587,11 @@ def group_gap_pressure():
     """A disc settling onto the bed (docs/boulders.md, "Pressure across narrow gaps"): a = 12.5 mm, a/dp 5, released
     2.5 dp above it, explicit scheme. Where the bed's particles take the place of fluid in the disc particles'
     kernels, only their pressure (contacts.solid_pressure) keeps the squeeze film: without it the disc closes on the
-    bed at 5.96 and 27 times the film's own speed at h/a 0.2 and 0.1 (measured), with it at 1.84 and 3.43."""
+    bed at 5.96 and 27 times the film's own speed at h/a 0.2 and 0.1 (measured), with it at 1.84 and 3.43. The
+    lubrication model, which adds the film the SPH leaves out, is off here: this is the SPH's own film."""
     run = surge("gap_pressure", ["run", "boulder_settling.ini", "-s", "boulders.list_m=0.05 0.01875 0.0125",
-                                 "-s", "time.end_s=4.2", "-s", "output.snapshot_interval_s=0.02"])
+                                 "-s", "time.end_s=4.2", "-s", "output.snapshot_interval_s=0.02",
+                                 "-s", "contacts.lubrication=0"])
     check("gap pressure: run finishes", run[1].returncode == 0, run[2] + "\n" + run[1].stderr[-2000:])
     for target, bound in ((0.2, 3.0), (0.1, 6.0)):
         ratio = approach_over_film(*run[:2], target=target)
@@ -593,7 +600,8 @@ def group_gap_pressure():
     # the implicit scheme takes the same pressure into its coupled solve: 3.00 at h/a 0.2 (3.68 without it, measured)
     ratio = approach_over_film(*surge("gap_pressure_implicit", [
         "run", "boulder_settling.ini", "-s", "boulders.list_m=0.05 0.01875 0.0125", "-s", "numerics.scheme=implicit",
-        "-s", "time.end_s=1.9", "-s", "output.snapshot_interval_s=0.02"])[:2], target=0.2)
+        "-s", "time.end_s=1.9", "-s", "output.snapshot_interval_s=0.02", "-s", "contacts.lubrication=0"])[:2],
+        target=0.2)
     check("gap pressure: implicit, at h/a 0.2 the disc approaches at under 3.4 times the film's speed",
           ratio is not None and 0 < ratio < 3.4, "ratio %s" % ratio)
 

@@ -5,7 +5,9 @@
  * boundary; discs blown up to non-finite or huge positions neither crash the broad phase nor disturb a resting
  * disc. Lubrication: the film's force (lubrication.h) against Reynolds' equation integrated on the exact circular gap;
  * a disc driven onto a wall, and two discs driven together, approach at the force over the film's damping at every
- * gap below the cut-off, and at free fall above it.
+ * gap below the cut-off, and at free fall above it. The sliding film's shear (lubrication.h) against Reynolds'
+ * equation for a face sliding past a plane, with the net force its pressure leaves; a disc spinning by a wall, and two
+ * discs spinning the same way, slow at the rate its torques give and do not move.
  * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication */
 #include <math.h>
 #include <stdio.h>
@@ -280,18 +282,90 @@ static double reynolds_damping(double mu, double r, double h0)
     return force;
 }
 
+/* The sliding film under a disc of radius r at gap h0 above a plane, its face sliding at U = 1 past the plane: with
+ * p = 0 at |x| = r, the flux q = U int h^-2 / (2 int h^-3) on the exact gap, p' = 6 mu U / h^2 - 12 mu q / h^3. Returns
+ * the shear force on the disc's face, int (mu U / h + h p' / 2) dx, and in *net the x force with the pressure on the
+ * curved face, int (mu U / h + h p' / 2 - p' h) dx (p h' integrated by parts) */
+static double reynolds_sliding(double mu, double r, double h0, double *net)
+{
+    enum { N = 400000 };
+    const double dth = 0.5 * 3.14159265358979323846 / N;
+    double i2 = 0, i3 = 0;
+    for (int k = 0; k < N; k++) {
+        const double th = (k + 0.5) * dth, dx = 2 * r * cos(th) * dth, h = h0 + r - r * cos(th); /* both halves */
+        i2 += dx / (h * h), i3 += dx / (h * h * h);
+    }
+    const double q = 0.5 * i2 / i3;
+    double shear = 0, pressure = 0;
+    for (int k = 0; k < N; k++) {
+        const double th = (k + 0.5) * dth, dx = 2 * r * cos(th) * dth, h = h0 + r - r * cos(th);
+        const double dp_dx = 6 * mu / (h * h) - 12 * mu * q / (h * h * h);
+        shear += (mu / h + 0.5 * h * dp_dx) * dx;
+        pressure -= dp_dx * h * dx;
+    }
+    *net = shear + pressure;
+    return shear;
+}
+
+/* A disc spinning at omega0 beside a wall at a fixed gap h (no translation: the film turns it, moves it not), and two
+ * discs spinning the same way: the spin decays as exp(-c_t(h) r^2 t / I) (each disc's share for the pair) */
+static void sliding_decay(int pair, double mu, double r, double dp, double gap_dp)
+{
+    world w;
+    world_init(&w, 0, 0);
+    w.settings.lubrication_viscosity_pa_s = mu;
+    w.settings.lubrication_cutoff_m = dp;
+    w.settings.lubrication_min_gap_m = 0.01 * dp;
+    const double gap = gap_dp * dp, omega0 = 10;
+    int disc;
+    if (pair) {
+        add_disc(&w, 0.5, 0.5, r, 0);
+        disc = add_disc(&w, 0.5, 0.5 + 2 * r + gap, r, 0);
+        w.omega[0] = omega0;
+    } else {
+        add_plane(&w, 0, 1, 0);
+        disc = add_disc(&w, 0.5, r + gap, r, 0);
+    }
+    w.omega[disc] = omega0;
+    const double inertia = 1 / w.inv_inertia[disc], radius = pair ? 0.5 * r : r;
+    /* the surfaces slide at (omega_a + omega_b) r for the pair, and each disc takes the film's torque */
+    const double rate = (pair ? 2 : 1) * lubrication_sliding_damping(mu, radius, gap, dp, 0.01 * dp) * r * r / inertia;
+    const double t_end = 1 / rate, dt = t_end / 200;
+    run(&w, dt, 200);
+    char what[112];
+    snprintf(what, sizeof what, "sliding film, %s at %.2g dp: spin after 1/rate against exp(-1)",
+             pair ? "two discs" : "disc by a wall", gap_dp);
+    expect_below(what, fabs(w.omega[disc] / omega0 / exp(-1.0) - 1), 0.02);
+    snprintf(what, sizeof what, "sliding film, %s at %.2g dp: centre's speed (m/s)", pair ? "two discs" : "disc",
+             gap_dp);
+    expect_below(what, hypot(w.vx[disc], w.vy[disc]), 1e-12);
+    contact_solver_destroy(w.solver);
+}
+
 static int test_lubrication(void)
 {
     const double mu = 467, r = 0.02, dp = 0.02 / 11.8;
     /* the film's formula against Reynolds' equation: the paraboloid gap's result, exact as h0 / r -> 0 */
     const double ratios[] = {1e-4, 1e-3, 1e-2};
     const double bounds[] = {0.001, 0.006, 0.05}; /* the paraboloid's error, about 3.4 h/r */
+    /* the sliding film's formula is the leading order: the next, about 2.4 (h/r)^(1/2) of it, and a net force
+     * about 1.2 (h/r)^(1/2) of the shear */
+    const double sliding_bounds[] = {0.03, 0.09, 0.3}, sliding_net_bounds[] = {0.015, 0.045, 0.15};
     for (int k = 0; k < 3; k++) {
         const double h0 = ratios[k] * r, numeric = reynolds_damping(mu, r, h0);
         char what[96];
         snprintf(what, sizeof what, "lubrication: film formula against Reynolds' equation, h/r = %g", ratios[k]);
         expect_below(what, fabs(lubrication_film_damping(mu, r, h0) / numeric - 1), bounds[k]);
+        double net;
+        const double shear = reynolds_sliding(mu, r, h0, &net);
+        snprintf(what, sizeof what, "sliding film: shear formula against Reynolds' equation, h/r = %g", ratios[k]);
+        expect_below(what, fabs(lubrication_sliding_film_damping(mu, r, h0) / shear - 1), sliding_bounds[k]);
+        snprintf(what, sizeof what, "sliding film: net x force over the shear force, h/r = %g", ratios[k]);
+        expect_below(what, fabs(net / shear), sliding_net_bounds[k]);
     }
+    for (int pair = 0; pair <= 1; pair++)
+        for (int g = 0; g < 3; g++)
+            sliding_decay(pair, mu, r, dp, (const double[]){0.8, 0.3, 0.05}[g]);
     /* a disc driven onto a plane (and, by symmetry, two discs driven together) by a = 10 m/s2 */
     for (int pair = 0; pair <= 1; pair++) {
         world w;

@@ -315,10 +315,10 @@ static const surge_param_info registry[] = {
      "A disc's particles feel the pressure of the particles of walls and of other discs within the kernel's reach as "
      "they feel the fluid's: the pressure across gaps narrower than the kernel, which the fluid alone leaves out "
      "(docs/boulders.md).", OFF(contacts.solid_pressure)},
-    {"contacts", "lubrication", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+    {"contacts", "lubrication", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Add the lubrication force of gaps between discs, and between a disc and a wall, narrower than "
-     "lubrication_cutoff_dp: the 2D (cylinder) squeeze-film force less its value at the cut-off, which the SPH "
-     "resolves (docs/boulders.md).", OFF(contacts.lubrication)},
+     "lubrication_cutoff_dp: the 2D (cylinder) squeeze film's force and sliding film's torques less their values at "
+     "the cut-off, which the SPH resolves (docs/boulders.md).", OFF(contacts.lubrication)},
     {"contacts", "lubrication_cutoff_dp", SURGE_PARAM_REAL, "dp", 1, 0.1, 10, true, NULL,
      "Gap (surface to surface, in dp) below which the lubrication force acts.", OFF(contacts.lubrication_cutoff_dp)},
     {"contacts", "lubrication_min_gap_dp", SURGE_PARAM_REAL, "dp", 0.01, 1e-4, 1, true, NULL,

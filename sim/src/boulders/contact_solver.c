@@ -16,10 +16,12 @@ typedef struct contact {
     double gap_m;     /* distance between the surfaces; < 0: overlap */
     double ra, rb;    /* lever arms (radii; 0 for a wall) */
     double k_n, k_t;  /* effective masses' inverses along n and t */
+    double k_turn;    /* and along t for equal and opposite torques alone (the sliding film's) */
     double target_vn; /* smallest normal relative velocity allowed */
     double lambda_n, lambda_t; /* accumulated impulses */
     double lubrication;   /* the film's force per unit approach speed (lubrication.h); 0: none */
-    double lambda_l;      /* its impulse in this sub-step */
+    double lubrication_t; /* and per unit sliding speed of the surfaces */
+    double lambda_l, lambda_lt; /* their impulses in this sub-step */
     double wall_vx, wall_vy;
 } contact;
 
@@ -282,13 +284,23 @@ static void apply_impulse(const contact *c, contact_discs *d, double pn, double 
     }
 }
 
+/* The torques of a tangential impulse pt at the contact point that the pressure's equal and opposite one at the
+ * centres cancels the force of: each disc turned as by pt t on b and -pt t on a, neither moved */
+static void apply_torques(const contact *c, contact_discs *d, double pt)
+{
+    d->omega[c->b] -= d->inv_inertia[c->b] * c->rb * pt;
+    if (c->a >= 0)
+        d->omega[c->a] -= d->inv_inertia[c->a] * c->ra * pt;
+}
+
 static void prepare(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
 {
     for (int k = 0; k < s->now_count; k++) {
         contact *c = &s->now[k];
         const double inv_ma = c->a >= 0 ? d->inv_mass[c->a] : 0, inv_ia = c->a >= 0 ? d->inv_inertia[c->a] : 0;
         c->k_n = inv_ma + d->inv_mass[c->b];
-        c->k_t = c->k_n + c->ra * c->ra * inv_ia + c->rb * c->rb * d->inv_inertia[c->b];
+        c->k_turn = c->ra * c->ra * inv_ia + c->rb * c->rb * d->inv_inertia[c->b];
+        c->k_t = c->k_n + c->k_turn;
         double vn0, vt0;
         relative_velocity(c, d, &vn0, &vt0);
         /* Signorini at velocity level: close at most the gap in this sub-step, or open an overlap gradually */
@@ -300,7 +312,10 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         c->lubrication = lubrication_damping(set->lubrication_viscosity_pa_s, c->a >= 0 ? ra * rb / (ra + rb) : rb,
                                              c->gap_m + set->gap_offset_m, set->lubrication_cutoff_m,
                                              set->lubrication_min_gap_m);
-        c->lambda_l = 0;
+        c->lubrication_t = lubrication_sliding_damping(set->lubrication_viscosity_pa_s,
+                                                       c->a >= 0 ? ra * rb / (ra + rb) : rb, c->gap_m + set->gap_offset_m,
+                                                       set->lubrication_cutoff_m, set->lubrication_min_gap_m);
+        c->lambda_l = 0, c->lambda_lt = 0;
         const contact *old = find_before(s, c->key);
         c->lambda_n = old ? old->lambda_n : 0;
         c->lambda_t = old ? old->lambda_t : 0;
@@ -323,6 +338,13 @@ static void solve(contact_solver *s, contact_discs *d, const contact_settings *s
                 const double delta = -(vn + c->lambda_l * compliance) / (c->k_n + compliance);
                 apply_impulse(c, d, delta, 0);
                 c->lambda_l += delta;
+                relative_velocity(c, d, &vn, &vt);
+            }
+            if (c->lubrication_t > 0 && c->k_turn > 0) { /* the sliding film's torques, the same way */
+                const double compliance = 1.0 / (c->lubrication_t * h);
+                const double delta = -(vt + c->lambda_lt * compliance) / (c->k_turn + compliance);
+                apply_torques(c, d, delta);
+                c->lambda_lt += delta;
                 relative_velocity(c, d, &vn, &vt);
             }
             const double lambda_n = fmax(0, c->lambda_n - (vn - c->target_vn) / c->k_n);

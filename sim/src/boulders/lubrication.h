@@ -3,7 +3,11 @@
  * h(x) = h0 + x^2 / (2 R), R = r_a r_b / (r_a + r_b) (a wall: R = r), gives the pressure p = 6 mu U R / h(x)^2 and
  * the normal force F = 3 sqrt(2) pi mu U (R / h0)^(3/2) for the approach speed U (docs/boulders.md, "Lubrication").
  * The SPH resolves the film down to about a particle spacing, so only the part above the force at the cut-off gap is
- * added: c(h) = 3 sqrt(2) pi mu [(R / max(h, h_min))^(3/2) - (R / h_c)^(3/2)] for h < h_c, F = -c U. */
+ * added: c(h) = 3 sqrt(2) pi mu [(R / max(h, h_min))^(3/2) - (R / h_c)^(3/2)] for h < h_c, F = -c U.
+ * Sliding: with the surfaces moving past each other at U_t, Couette flow in the gap and the pressure that keeps its
+ * flux the same along it give each surface the shear force 2 sqrt(2) pi mu U_t (R / h0)^(1/2), which on a disc the
+ * pressure on its curved face cancels: a torque 2 sqrt(2) pi mu U_t r (R / h0)^(1/2) about its centre and no force
+ * at this order (docs/boulders.md, "Lubrication"); its unresolved part is taken the same way. */
 #ifndef SURGE_LUBRICATION_H
 #define SURGE_LUBRICATION_H
 
@@ -26,6 +30,22 @@ static inline double lubrication_damping(double viscosity_pa_s, double radius_m,
         return 0.0;
     return lubrication_film_damping(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) -
            lubrication_film_damping(viscosity_pa_s, radius_m, cutoff_m);
+}
+
+/* The sliding film's shear force per unit relative surface speed at gap h0: 2 sqrt(2) pi mu (R / h0)^(1/2) */
+static inline double lubrication_sliding_film_damping(double viscosity_pa_s, double radius_m, double gap_m)
+{
+    return 2.0 * sqrt(2.0) * 3.14159265358979323846 * viscosity_pa_s * sqrt(radius_m / gap_m);
+}
+
+/* Its unresolved part, as lubrication_damping's */
+static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
+                                                 double min_gap_m)
+{
+    if (!(gap_m < cutoff_m) || !(viscosity_pa_s > 0) || !(radius_m > 0))
+        return 0.0;
+    return lubrication_sliding_film_damping(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) -
+           lubrication_sliding_film_damping(viscosity_pa_s, radius_m, cutoff_m);
 }
 
 #endif

@@ -312,6 +312,35 @@ wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int 
     return face;
 }
 
+wall_face interaction_other_face(const surge_sim *sim, int a, real search_m, const wall_face *nearest)
+{
+    const neighbour_lists *nl = &sim->neighbours;
+    const real half_dp = (real)(0.5 * sim->params.numerics.dp_m), support2 = sim->kernel.support2;
+    const int i = a - sim->wall_count;
+    wall_face face = {search_m, 0, 0, 0, -1, -1};
+    for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++) {
+        const int b = nl->wall_index[e];
+        const real dx = nl->wall_dx0[e] + (nl->moved_x[a] - nl->moved_x[b]);
+        const real dy = nl->wall_dy0[e] + (nl->moved_y[a] - nl->moved_y[b]);
+        if (dx * dx + dy * dy >= support2)
+            continue;
+        if (sim->wall_of[b] == WALL_BOULDER) {
+            const int disc = sim->boulders.of_wall[sim->id[b]];
+            if (disc != nearest->disc)
+                disc_face(sim, a, disc, &face);
+            continue;
+        }
+        if (nearest->disc < 0) /* a fixed wall's face is the nearest: the other is a disc's */
+            continue;
+        const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
+        const real gap = along - sim->wall_depth_m[b];
+        if (along > -half_dp && dx * dx + dy * dy - along * along < half_dp * half_dp && gap < face.gap_m)
+            face = (wall_face){gap, sim->wall_nx[b], sim->wall_ny[b],
+                               sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
+    }
+    return face;
+}
+
 void interaction_compute(surge_sim *sim, int corrector)
 {
     const int antuono = sim->params.numerics.density_diffusion_form == SURGE_DIFFUSION_ANTUONO;

@@ -20,5 +20,8 @@ typedef struct wall_face {
     int wall, disc;
 } wall_face;
 wall_face interaction_wall_face(const surge_sim *sim, int a, real search_m, int *near_boulder);
+/* The nearest face within search_m of another solid than nearest's: of another disc, or, where nearest is a disc's,
+ * of a fixed wall too (a fluid particle in the wedge between a disc and the bed, or between two discs) */
+wall_face interaction_other_face(const surge_sim *sim, int a, real search_m, const wall_face *nearest);
 
 #endif

@@ -279,4 +279,10 @@ void implicit_discs_pressure_answer(surge_sim *sim, double dt)
             sim->face_vn_mps[a] = (real)(w->disc_velocity[3 * d] * sim->face_nx[a] +
                                          w->disc_velocity[3 * d + 1] * sim->face_ny[a]);
         }
+    for (int i = 0; i < sim->count - sim->wall_count; i++)
+        if (w->other_face[i].disc >= 0) {
+            wall_face *other = &w->other_face[i];
+            other->vn_mps = (real)(w->disc_velocity[3 * other->disc] * other->nx +
+                                   w->disc_velocity[3 * other->disc + 1] * other->ny);
+        }
 }

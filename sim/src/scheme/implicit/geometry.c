@@ -243,6 +243,10 @@ static void fluid_geometry(surge_sim *sim)
         int near_disc = 0;
         const wall_face face = interaction_wall_face(sim, a, (real)sim->params.numerics.dp_m, &near_disc);
         sim->face_nx[a] = face.nx, sim->face_ny[a] = face.ny, sim->face_gap_m[a] = face.gap_m;
+        /* and, next to a disc, the nearest face of another solid: a particle in a wedge is kept off both */
+        const real dp = (real)sim->params.numerics.dp_m;
+        w->other_face[i] = near_disc && face.gap_m < dp ? interaction_other_face(sim, a, dp, &face)
+                                                         : (wall_face){dp, 0, 0, 0, -1, -1};
         sim->face_vn_mps[a] = face.vn_mps, sim->face_disc[a] = face.disc;
         w->near_disc[i] = (uint8_t)near_disc;
         /* a free-surface particle: div r low, or a kernel sum short of the second row's under a flat surface (a

@@ -7,6 +7,7 @@
 #include <stdio.h>
 
 #include "scheme/implicit/amg.h"
+#include "physics/interaction.h"
 #include "physics/lanes.h"
 #include "physics/pair_terms.h"
 #include "sim_internal.h"
@@ -78,6 +79,10 @@ typedef struct implicit_work {
     double *pressure_n;                  /* per fluid particle: the last step's pressure p_n, then p_n+1 */
     uint8_t *fixed;                      /* free-surface particle: p = 0 */
     uint8_t *near_disc;                  /* per fluid particle: a disc particle within the kernel's support */
+    wall_face *other_face;               /* per fluid particle: the nearest face within dp of another solid than its
+                                          * nearest face's (interaction_other_face; gap dp: none) */
+    real *other_push_x, *other_push_y;   /* per fluid particle: the contact rule's push off the other face, which a
+                                          * disc there takes the reaction of (as face_push_x, face_push_y) */
     double *expected_ratio;              /* per fluid particle: the kernel sum at rest spacing at its depth under the
                                           * free surface, where that can be read (else 0) */
     double *wall_x, *wall_y;             /* per wall: a mirrored field (velocity, pressure) */

@@ -18,6 +18,12 @@ int implicit_discs_advance(surge_sim *sim, double dt_s)
             velocity[3 * d] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_x[a];
             velocity[3 * d + 1] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_y[a];
         }
+    for (int i = 0; i < sim->count - sim->wall_count; i++) /* and of pushes off a second face, in a wedge */
+        if (w->other_face[i].disc >= 0) {
+            const int d = w->other_face[i].disc;
+            velocity[3 * d] -= dt_s * sim->mass * b->inv_mass[d] * w->other_push_x[i];
+            velocity[3 * d + 1] -= dt_s * sim->mass * b->inv_mass[d] * w->other_push_y[i];
+        }
     for (int d = 0; d < b->count; d++) {
         boulders_save_step_start(b, d);
         b->ax[d] = (velocity[3 * d] - b->vx[d]) / dt_s;

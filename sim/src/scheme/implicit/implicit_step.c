@@ -525,11 +525,38 @@ static void correct_velocities(surge_sim *sim, double dt)
                                    rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
 }
 
+/* The least change (lambda_1 n_1 + lambda_2 n_2, lambdas >= 0) that brings (dx, dy) into n_1.d >= c_1 and
+ * n_2.d >= c_2, the unit normals of two faces (a projection onto two half-planes); no more than cap_m long. Returns
+ * the multipliers; faces nearly back to back (no room between them) take the first face's projection alone. */
+static void keep_off_two_faces(double *dx, double *dy, double n1x, double n1y, double c1, double n2x, double n2y,
+                               double c2, double cap, double *lambda1, double *lambda2)
+{
+    const double r1 = c1 - (n1x * *dx + n1y * *dy), r2 = c2 - (n2x * *dx + n2y * *dy), g = n1x * n2x + n1y * n2y;
+    double l1 = 0, l2 = 0;
+    if (r1 > 0 && r2 - r1 * g <= 0)
+        l1 = r1;
+    else if (r2 > 0 && r1 - r2 * g <= 0)
+        l2 = r2;
+    else if (r1 > 0 || r2 > 0) {
+        const double det = 1 - g * g;
+        if (det > 1e-3)
+            l1 = fmax(0.0, (r1 - g * r2) / det), l2 = fmax(0.0, (r2 - g * r1) / det);
+        else
+            l1 = fmax(0.0, r1);
+    }
+    double cx = l1 * n1x + l2 * n2x, cy = l1 * n1y + l2 * n2y;
+    const double length = sqrt(cx * cx + cy * cy);
+    if (length > cap)
+        cx *= cap / length, cy *= cap / length, l1 *= cap / length, l2 *= cap / length;
+    *dx += cx, *dy += cy;
+    *lambda1 = l1, *lambda2 = l2;
+}
+
 /* The contact rule on velocities: within reach of a wall face, no approach to it (the explicit scheme's contact rule;
  * docs/method.md); a disc takes the reaction. The fluid's velocities become v_n+1 */
 static void contact_velocities(surge_sim *sim, double dt)
 {
-    const implicit_work *w = implicit_of(sim);
+    implicit_work *w = implicit_of(sim);
     const int first = sim->wall_count, nf = sim->count - first;
     /* a particle the contact rule on positions left at the reach is in contact: its gap, read back in single
      * precision, may come out a rounding either side of the reach */
@@ -540,10 +567,25 @@ static void contact_velocities(surge_sim *sim, double dt)
         double vx1 = w->x[i], vy1 = w->x[nf + i];
         const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
         const int contact = sim->face_gap_m[a] < contact_m && approach_mps < 0;
-        if (contact)
-            vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
-        sim->face_push_x[a] = (real)(contact ? -approach_mps * sim->face_nx[a] / dt : 0.0);
-        sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
+        const wall_face *other = &w->other_face[i];
+        const double other_approach_mps = vx1 * other->nx + vy1 * other->ny - other->vn_mps;
+        if (other->gap_m < contact_m && other_approach_mps - (contact ? approach_mps * (other->nx * sim->face_nx[a] +
+                                                              other->ny * sim->face_ny[a]) : 0.0) < 0) {
+            /* in a wedge, within reach of two faces: no approach to either */
+            double l_nearest, l_other;
+            keep_off_two_faces(&vx1, &vy1, sim->face_nx[a], sim->face_ny[a],
+                               sim->face_gap_m[a] < contact_m ? sim->face_vn_mps[a] : -INFINITY, other->nx, other->ny,
+                               other->vn_mps, INFINITY, &l_nearest, &l_other);
+            sim->face_push_x[a] = (real)(l_nearest * sim->face_nx[a] / dt);
+            sim->face_push_y[a] = (real)(l_nearest * sim->face_ny[a] / dt);
+            w->other_push_x[i] = (real)(l_other * other->nx / dt), w->other_push_y[i] = (real)(l_other * other->ny / dt);
+        } else {
+            w->other_push_x[i] = 0, w->other_push_y[i] = 0;
+            if (contact)
+                vx1 -= approach_mps * sim->face_nx[a], vy1 -= approach_mps * sim->face_ny[a];
+            sim->face_push_x[a] = (real)(contact ? -approach_mps * sim->face_nx[a] / dt : 0.0);
+            sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
+        }
         sim->vx[a] = (real)vx1, sim->vy[a] = (real)vy1;
     }
 }
@@ -578,7 +620,26 @@ static void move_particles(surge_sim *sim, double dt)
         double dy = dt * sim->vy[a] + sim->shift_y[a] + w->density_dy[a - first] + w->pair_dy[a - first];
         const double gap_after = sim->face_gap_m[a] + dx * sim->face_nx[a] + dy * sim->face_ny[a] -
                                  dt * sim->face_vn_mps[a];
-        if (sim->face_gap_m[a] < dp && gap_after < face_reach_m)
+        const wall_face *other = &w->other_face[a - first];
+        const double other_after = other->gap_m + dx * other->nx + dy * other->ny - dt * other->vn_mps;
+        if (other->gap_m < dp && sim->face_gap_m[a] < dp && gap_after < face_reach_m && other_after < face_reach_m) {
+            /* in the gap between two solids, within reach of both: kept off each by the reach, or, where the gap is
+             * narrower than two reaches, half the gap (alternate projections onto the two faces) */
+            const double keep = fmin(face_reach_m, 0.5 * (gap_after + other_after));
+            double near_after = gap_after, far_after = other_after;
+            for (int round = 0; round < 4 && keep > 0; round++) {
+                if (near_after < keep) {
+                    const double push = keep - near_after;
+                    dx += push * sim->face_nx[a], dy += push * sim->face_ny[a];
+                    near_after = keep, far_after += push * (sim->face_nx[a] * other->nx + sim->face_ny[a] * other->ny);
+                }
+                if (far_after < keep) {
+                    const double push = keep - far_after;
+                    dx += push * other->nx, dy += push * other->ny;
+                    far_after = keep, near_after += push * (sim->face_nx[a] * other->nx + sim->face_ny[a] * other->ny);
+                }
+            }
+        } else if (sim->face_gap_m[a] < dp && gap_after < face_reach_m)
             dx += (face_reach_m - gap_after) * sim->face_nx[a], dy += (face_reach_m - gap_after) * sim->face_ny[a];
         sim->x[a] = sim->x_n[a] + dx;
         sim->y[a] = sim->y_n[a] + dy;

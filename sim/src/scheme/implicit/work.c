@@ -63,7 +63,7 @@ int implicit_reserve_work(surge_sim *sim)
         const size_t n2 = 2 * nf + 3 * discs, nblocks = n2 / DOT_BLOCK + 2; /* the fluid's velocities, the discs' */
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(other_face, nf) || GROW(other_push_x, nf) || GROW(other_push_y, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, 2 * nblocks) ||
@@ -106,7 +106,7 @@ void implicit_destroy(surge_sim *sim)
                       w->disc_velocity, w->disc_force, w->spin_drag,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
-                      w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->expected_ratio, w->wall_x, w->wall_y,
+                      w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->other_face, w->other_push_x, w->other_push_y, w->expected_ratio, w->wall_x, w->wall_y,
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->divergence, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial, w->imaged, w->fluid_iw, w->fluid_igx, w->fluid_igy, w->wall_iw, w->wall_igx,
                       w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y, w->mixing_x, w->mixing_g, w->mixing_f,
