@@ -84,6 +84,27 @@ r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--c0", "15",
 check("poiseuille_loaded report fits and charts the committed table (r/dp 4)",
       r.returncode == 0 and "Krieger-Dougherty fit" in r.stdout and os.path.getsize(report_png) > 10000,
       (r.stdout + r.stderr).strip()[-300:])
+# convergence on a synthetic table: two resolutions without the model, one with it, and a row of another scheme
+conv = os.path.join(work, "convergence.csv")
+if os.path.exists(conv):
+    os.remove(conv)
+for phi, dp, mu, lub, scheme in ((0.3, 0.005, 1.5, 0, "implicit"), (0.3, 0.0025, 1.53, 0, "implicit"),
+                                 (0.3, 0.005, 1.6, 1, "implicit"), (0.3, 0.0025, 9.0, 0, "explicit")):
+    study.append_row(conv, poiseuille_loaded.COLUMNS, {"phi": phi, "phi_actual": phi, "mu_eq_over_mu0": mu, "status": "ok",
+                                                       "dp_m": dp, "ch": 1.8, "seed": 1, "c0_mps": 15, "wall_s": 1,
+                                                       "density_diffusion": 0, "scheme": scheme, "lubrication": lub})
+conv_png = os.path.join(work, "convergence.png")
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", conv, "--png", conv_png], capture_output=True,
+                   text=True, timeout=120)
+lines = r.stdout.splitlines()
+check("poiseuille_loaded convergence: r/dp 4 and 8 without the model (+2.0 %), r/dp 4 with it, no explicit row, "
+      "a chart", r.returncode == 0 and any("1.5300 (+2.0 %)" in line for line in lines) and
+      any("with the lubrication model" in line for line in lines) and "9.0000" not in r.stdout and
+      os.path.getsize(conv_png) > 10000, (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", conv, "--c0", "40"], capture_output=True, text=True,
+                   timeout=60)
+check("poiseuille_loaded convergence: no run with the settings asked is refused",
+      r.returncode == 2 and "no finished implicit run" in r.stderr, r.stderr.strip())
 # disc_motion on a synthetic run: the fluid on the parabola u = 4 U y (B - y) / B^2, two discs moving at the fluid's
 # speed at their heights less 1 % of U, turning at 0.9 of -u'(y)/2
 synthetic = os.path.join(work, "pl_discs")

@@ -12,6 +12,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
+  studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
+        [--c0 C0] [--diffusion DELTA]     # mu_eq/mu0 per phi and r/dp, without and with the lubrication model
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -59,6 +61,7 @@ PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the
 HALF_BAND_M = 0.01
 SHELL_BINS, SHELL_BIN_DP = 20, 0.1
 DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
+RADIUS_M = 0.02  # the case's disc radius (boulders.radius_m): r/dp names a resolution
 REFERENCE_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded_reference.csv")
 
 
@@ -402,7 +405,7 @@ def plot(png, rows, reference, rel_fit, selected):
     for k, dp in enumerate(dps):
         colour = "C%d" % k
         sel = sorted((r for r in mine if float(r["dp_m"]) == dp), key=phi_of)
-        name = "r/dp %.0f" % (0.02 / dp)
+        name = "r/dp %.0f" % (RADIUS_M / dp)
         setting = "c0 %.3g, $\delta$ %g" % (float(sel[0]["c0_mps"]), float(sel[0]["density_diffusion"]))
         ax.plot([phi_of(r) for r in sel], [relative_mu(r) for r in sel], "o-", lw=0.8, color=colour,
                 label="surge, %s, %s" % (name, setting))
@@ -421,7 +424,7 @@ def plot(png, rows, reference, rel_fit, selected):
             cost.loglog([float(r["wall_s"]) for r in coarser],
                         [abs(relative_mu(r) / relative_mu(finest[float(r["phi"])]) - 1) for r in coarser], "^",
                         color=colour, mfc="none", label=name + ", |1 - $\mu$ / $\mu$ of r/dp %.0f| (same $\phi$)"
-                        % (0.02 / dps[-1]))
+                        % (RADIUS_M / dps[-1]))
     top = max(phi_of(r) for r in rows)
     grid = np.linspace(0, top * 1.02, 200)
     ax.plot(grid, krieger_dougherty(grid, rel_fit[0], rel_fit[1]), "-", color="black",
@@ -444,6 +447,63 @@ def plot(png, rows, reference, rel_fit, selected):
     fig.tight_layout()
     fig.savefig(png, dpi=120)
     print("%s: wrote %s" % (TOOL, png))
+
+
+def command_convergence(args):
+    """mu_eq/mu0 per phi and r/dp for one scheme (and c0, delta where given), without and with the lubrication model:
+    a table with each value's change from the next coarser resolution, and a chart against r/dp per phi."""
+    rows = [r for r in study.read_rows(TOOL, args.csv, dict(
+        status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
+        lubrication=str, wall_s=float))
+        if r["status"] == "ok" and r["scheme"] == args.scheme and
+        (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
+        (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
+    if not rows:
+        fail("%s: no finished %s run with the settings asked" % (args.csv, args.scheme))
+    series = {}
+    for r in rows:  # the last row of a (lubrication, phi, dp) counts: a rerun replaces its run
+        series.setdefault(r["lubrication"], {}).setdefault(float(r["phi"]), {})[
+            round(RADIUS_M / float(r["dp_m"]), 2)] = (float(r["mu_eq_over_mu0"]), float(r["wall_s"]))
+    for lub in sorted(series):
+        by_phi = series[lub]
+        resolutions = sorted({rd for values in by_phi.values() for rd in values})
+        print("%s scheme, %s the lubrication model: mu_eq/mu0 (change from the next coarser r/dp)"
+              % (args.scheme, "with" if lub == "1" else "without"))
+        print("  phi   " + "".join("%20s" % ("r/dp %g" % rd) for rd in resolutions))
+        for phi in sorted(by_phi):
+            cells, before = [], None
+            for rd in resolutions:
+                value = by_phi[phi].get(rd)
+                if value is None:
+                    cells.append("%20s" % "-")
+                    continue
+                change = "" if before is None else " (%+.1f %%)" % (100 * (value[0] / before - 1))
+                cells.append("%20s" % ("%.4f%s" % (value[0], change)))
+                before = value[0]
+            print("  %-5g " % phi + "".join(cells))
+    if args.png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(8, 6))
+        phis = sorted({phi for by_phi in series.values() for phi in by_phi})
+        for k, phi in enumerate(phis):
+            for lub, style in (("0", "o-"), ("1", "s--")):
+                values = series.get(lub, {}).get(phi)
+                if not values:
+                    continue
+                rds = sorted(values)
+                ax.plot(rds, [values[rd][0] for rd in rds], style, color="C%d" % k, mfc="none" if lub == "1" else None,
+                        label="$\phi$ %g%s" % (phi, ", lubrication model" if lub == "1" else ""))
+        ax.set_xlabel("disc radius over particle spacing, r/dp")
+        ax.set_ylabel("$\mu_{eq}/\mu_0$")
+        ax.set_title("Loaded Poiseuille, %s scheme: convergence in dp" % args.scheme)
+        ax.legend(fontsize=7, ncol=2)
+        ax.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(args.png, dpi=120)
+        print("%s: wrote %s" % (TOOL, args.png))
+    return 0
 
 
 def solid_fractions(with_zero):
@@ -498,7 +558,15 @@ def main():
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
+    conv = sub.add_parser("convergence")
+    conv.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    conv.add_argument("--png", type=cli_checks.png_file, default=None)
+    conv.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
+    conv.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
+    conv.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
     args = parser.parse_args()
+    if args.command == "convergence":
+        return command_convergence(args)
     if args.command == "run":
         if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
             fail("--diffusion must be in [0, 1]")
