@@ -21,31 +21,35 @@ static inline double lubrication_film_damping(double viscosity_pa_s, double radi
     return 3.0 * sqrt(2.0) * 3.14159265358979323846 * viscosity_pa_s * ratio * sqrt(ratio);
 }
 
-/* The part the SPH does not resolve: 0 at and beyond the cut-off gap, the film's force less its value at the
- * cut-off below it, the gap taken at least min_gap_m */
-static inline double lubrication_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
-                                         double min_gap_m)
-{
-    if (!(gap_m < cutoff_m) || !(viscosity_pa_s > 0) || !(radius_m > 0))
-        return 0.0;
-    return lubrication_film_damping(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) -
-           lubrication_film_damping(viscosity_pa_s, radius_m, cutoff_m);
-}
-
 /* The sliding film's shear force per unit relative surface speed at gap h0: 2 sqrt(2) pi mu (R / h0)^(1/2) */
 static inline double lubrication_sliding_film_damping(double viscosity_pa_s, double radius_m, double gap_m)
 {
     return 2.0 * sqrt(2.0) * 3.14159265358979323846 * viscosity_pa_s * sqrt(radius_m / gap_m);
 }
 
-/* Its unresolved part, as lubrication_damping's */
-static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
-                                                 double min_gap_m)
+/* The part of a film's damping the SPH does not resolve: 0 at and beyond the cut-off gap, the film's value less its
+ * value at the cut-off below it, the gap taken at least min_gap_m */
+static inline double lubrication_unresolved(double (*film)(double, double, double), double viscosity_pa_s,
+                                            double radius_m, double gap_m, double cutoff_m, double min_gap_m)
 {
     if (!(gap_m < cutoff_m) || !(viscosity_pa_s > 0) || !(radius_m > 0))
         return 0.0;
-    return lubrication_sliding_film_damping(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) -
-           lubrication_sliding_film_damping(viscosity_pa_s, radius_m, cutoff_m);
+    return film(viscosity_pa_s, radius_m, fmax(gap_m, min_gap_m)) - film(viscosity_pa_s, radius_m, cutoff_m);
+}
+
+/* The squeeze film's unresolved part */
+static inline double lubrication_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
+                                         double min_gap_m)
+{
+    return lubrication_unresolved(lubrication_film_damping, viscosity_pa_s, radius_m, gap_m, cutoff_m, min_gap_m);
+}
+
+/* The sliding film's unresolved part */
+static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
+                                                 double min_gap_m)
+{
+    return lubrication_unresolved(lubrication_sliding_film_damping, viscosity_pa_s, radius_m, gap_m, cutoff_m,
+                                  min_gap_m);
 }
 
 #endif
