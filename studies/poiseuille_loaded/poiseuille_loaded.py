@@ -321,11 +321,13 @@ def read_reference(path):
 
 
 def command_report(args):
+    # the clear fluid (phi = 0) has no gaps for the lubrication model: its runs count with the model or without
     every_run = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
         density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str))
-        if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == str(int(args.lubrication))]
+        if r["status"] == "ok" and r["scheme"] == args.scheme and
+        (r["lubrication"] == str(int(args.lubrication)) or float(r["phi"]) == 0)]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
