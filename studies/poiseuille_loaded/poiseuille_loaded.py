@@ -536,7 +536,8 @@ def main():
                      help="numerics.density_diffusion (delta; default: the case's)")
     run.add_argument("--threads", type=cli_checks.positive_int, default=2)
     run.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="numerics.scheme")
-    run.add_argument("--lubrication", action="store_true", help="contacts.lubrication = true")
+    run.add_argument("--lubrication", action="store_true",
+                     help="contacts.lubrication = true (without it false, though the model is on by default)")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
     run.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
