@@ -619,6 +619,72 @@ static int test_disc_contact_rules(void)
     return failures;
 }
 
+/* The implicit scheme's rule in a wedge: a disc resting 0.6 dp above the bed leaves no room for a particle at the
+ * contact reach (0.45 dp) from both faces. A fluid particle put 0.1 dp above the bed under the disc's flank and thrown
+ * at the bed at 0.5 m/s leaves the step off both faces by half the gap (0.3 dp) less a rounding, not approaching
+ * the bed; a second step, which starts in reach of both faces, leaves it approaching neither. Kept off the nearest face
+ * (the bed) alone it ends at the reach, 0.45 dp up, and 0.18 dp from the disc. */
+static void wedge_edit(surge_params *p)
+{
+    p->numerics.scheme = SURGE_SCHEME_IMPLICIT;
+    snprintf(p->boulders.list_m, sizeof p->boulders.list_m, "0.05 %.10g 0.0125", 0.0125 + 0.6 * p->numerics.dp_m);
+}
+
+static int test_implicit_wedge(void)
+{
+    surge_sim *sim = case_sim("boulder_settling.ini", 0, wedge_edit);
+    if (!sim)
+        return 1;
+    const boulder_set *b = &sim->boulders;
+    const double dp = sim->params.numerics.dp_m, px = b->x[0] + 0.5 * dp, py = 0.1 * dp;
+    int a = -1; /* the fluid particle nearest the point */
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (a < 0 || hypot(sim->x[f] - px, sim->y[f] - py) < hypot(sim->x[a] - px, sim->y[a] - py))
+            a = f;
+    sim->x[a] = px;
+    sim->y[a] = py;
+    sim->vy[a] = -0.5f;
+    const int32_t id = sim->id[a];
+    if (surge_sim_step(sim) != 0) {
+        fprintf(stderr, "implicit_wedge: the step failed: %s\n", sim->health.message);
+        surge_sim_destroy(sim);
+        return 1;
+    }
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (sim->id[f] == id)
+            a = f;
+    const double dx = sim->x[a] - b->x[0], dy = sim->y[a] - b->y[0], distance = hypot(dx, dy);
+    const double disc_gap = distance - b->radius[0], bed_gap = sim->y[a];
+    const double disc_approach = -((sim->vx[a] - b->vx[0]) * dx + (sim->vy[a] - b->vy[0]) * dy) / distance;
+    printf("implicit_wedge: the disc %.3f dp above the bed; after the step the particle %.3f dp above the bed and "
+           "%.3f dp off the disc, approaching the bed at %.3g m/s and the disc at %.3g m/s (its face was out of reach "
+           "at the step's start)\n",
+           (b->y[0] - b->radius[0]) / dp, bed_gap / dp, disc_gap / dp, (double)-sim->vy[a], disc_approach);
+    expect_below("implicit_wedge: off the bed by half the gap, less 0.05 dp (dp short)", 0.25 - bed_gap / dp, 0);
+    expect_below("implicit_wedge: off the disc by half the gap, less 0.05 dp (dp short)", 0.25 - disc_gap / dp, 0);
+    expect_below("implicit_wedge: velocity toward the bed after the step (m/s)", (double)-sim->vy[a], 1e-6);
+    /* in reach of the disc's face from the step's start on, the velocity rule holds there too */
+    if (surge_sim_step(sim) != 0) {
+        fprintf(stderr, "implicit_wedge: the second step failed: %s\n", sim->health.message);
+        surge_sim_destroy(sim);
+        return 1;
+    }
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (sim->id[f] == id)
+            a = f;
+    const double ex = sim->x[a] - b->x[0], ey = sim->y[a] - b->y[0], d2 = hypot(ex, ey);
+    const double approach2 = -((sim->vx[a] - b->vx[0]) * ex + (sim->vy[a] - b->vy[0]) * ey) / d2;
+    printf("implicit_wedge: after a second step %.3f dp above the bed and %.3f dp off the disc, approaching the bed at "
+           "%.3g m/s and the disc at %.3g m/s\n", sim->y[a] / dp, (d2 - b->radius[0]) / dp, (double)-sim->vy[a],
+           approach2);
+    expect_below("implicit_wedge: second step, off both faces by half the gap less 0.05 dp (dp short)",
+                 fmax(0.25 - sim->y[a] / dp, 0.25 - (d2 - b->radius[0]) / dp), 0);
+    expect_below("implicit_wedge: second step, velocity toward the bed (m/s)", (double)-sim->vy[a], 1e-6);
+    expect_below("implicit_wedge: second step, velocity toward the disc's face (m/s)", approach2, 1e-6);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 /* A fluid particle behind the upstream wall (come round the periodic channel: the 60-disc debris surge carried four
  * there; fluid clinging to a caught disc went round and, knocked toward the wall at 0.95 m/s, ended a 28-disc run at
  * 42.08 s when it reached 0.03 mm into the wall's back), thrown at the wall's back at 5 m/s. The wall-face repulsion
@@ -1583,6 +1649,8 @@ int main(int argc, char **argv)
         return test_corner_continuity() ? 1 : 0;
     if (!strcmp(argv[1], "disc_contact_rules"))
         return test_disc_contact_rules() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_wedge"))
+        return test_implicit_wedge() ? 1 : 0;
     if (!strcmp(argv[1], "lanes"))
         return test_lanes() ? 1 : 0;
     if (!strcmp(argv[1], "behind_wall"))

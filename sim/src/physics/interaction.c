@@ -333,10 +333,9 @@ wall_face interaction_other_face(const surge_sim *sim, int a, real search_m, con
         if (nearest->disc < 0) /* a fixed wall's face is the nearest: the other is a disc's */
             continue;
         const real along = dx * sim->wall_nx[b] + dy * sim->wall_ny[b];
-        const real gap = along - sim->wall_depth_m[b];
-        if (along > -half_dp && dx * dx + dy * dy - along * along < half_dp * half_dp && gap < face.gap_m)
-            face = (wall_face){gap, sim->wall_nx[b], sim->wall_ny[b],
-                               sim->vx[b] * sim->wall_nx[b] + sim->vy[b] * sim->wall_ny[b], b, -1};
+        if (along > -half_dp && dx * dx + dy * dy - along * along < half_dp * half_dp &&
+            along - sim->wall_depth_m[b] < face.gap_m)
+            entry_face(sim, a, e, &face);
     }
     return face;
 }

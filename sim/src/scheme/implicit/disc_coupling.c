@@ -273,16 +273,15 @@ void implicit_discs_pressure_answer(surge_sim *sim, double dt)
     for (int q = 0; q < 3 * b->count; q++)
         w->disc_velocity[q] += w->disc_force[q];
     implicit_discs_mirror(sim, w->disc_velocity);
-    for (int a = sim->wall_count; a < sim->count; a++)
+    for (int a = sim->wall_count; a < sim->count; a++) {
         if (sim->face_disc[a] >= 0) {
             const int d = sim->face_disc[a];
             sim->face_vn_mps[a] = (real)(w->disc_velocity[3 * d] * sim->face_nx[a] +
                                          w->disc_velocity[3 * d + 1] * sim->face_ny[a]);
         }
-    for (int i = 0; i < sim->count - sim->wall_count; i++)
-        if (w->other_face[i].disc >= 0) {
-            wall_face *other = &w->other_face[i];
+        wall_face *other = &w->other_face[a - sim->wall_count];
+        if (other->disc >= 0)
             other->vn_mps = (real)(w->disc_velocity[3 * other->disc] * other->nx +
                                    w->disc_velocity[3 * other->disc + 1] * other->ny);
-        }
+    }
 }

@@ -12,18 +12,18 @@ int implicit_discs_advance(surge_sim *sim, double dt_s)
     implicit_work *w = implicit_of(sim);
     boulder_set *b = &sim->boulders;
     double *velocity = w->disc_velocity;
-    for (int a = sim->wall_count; a < sim->count; a++) /* in index order: the same sums whatever the thread count */
+    for (int a = sim->wall_count; a < sim->count; a++) { /* in index order: the same sums whatever the thread count */
         if (sim->face_disc[a] >= 0) {
             const int d = sim->face_disc[a];
             velocity[3 * d] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_x[a];
             velocity[3 * d + 1] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_y[a];
         }
-    for (int i = 0; i < sim->count - sim->wall_count; i++) /* and of pushes off a second face, in a wedge */
-        if (w->other_face[i].disc >= 0) {
-            const int d = w->other_face[i].disc;
+        if (w->other_face[a - sim->wall_count].disc >= 0) { /* and of a push off a second face, in a wedge */
+            const int i = a - sim->wall_count, d = w->other_face[i].disc;
             velocity[3 * d] -= dt_s * sim->mass * b->inv_mass[d] * w->other_push_x[i];
             velocity[3 * d + 1] -= dt_s * sim->mass * b->inv_mass[d] * w->other_push_y[i];
         }
+    }
     for (int d = 0; d < b->count; d++) {
         boulders_save_step_start(b, d);
         b->ax[d] = (velocity[3 * d] - b->vx[d]) / dt_s;

@@ -525,13 +525,13 @@ static void correct_velocities(surge_sim *sim, double dt)
                                    rho0 * (sim->gx * sim->ghost_dx[kw] + sim->gy * sim->ghost_dy[kw]));
 }
 
-/* The least change (lambda_1 n_1 + lambda_2 n_2, lambdas >= 0) that brings (dx, dy) into n_1.d >= c_1 and
- * n_2.d >= c_2, the unit normals of two faces (a projection onto two half-planes); no more than cap_m long. Returns
- * the multipliers; faces nearly back to back (no room between them) take the first face's projection alone. */
-static void keep_off_two_faces(double *dx, double *dy, double n1x, double n1y, double c1, double n2x, double n2y,
-                               double c2, double cap, double *lambda1, double *lambda2)
+/* The least change (lambda_1 n_1 + lambda_2 n_2, lambdas >= 0) that brings the velocity (vx, vy) into n_1.v >= c_1
+ * and n_2.v >= c_2, the unit normals of two faces (a projection onto two half-planes). Returns the multipliers; faces
+ * nearly back to back take the first face's projection alone. */
+static void keep_off_two_faces(double *vx, double *vy, double n1x, double n1y, double c1, double n2x, double n2y,
+                               double c2, double *lambda1, double *lambda2)
 {
-    const double r1 = c1 - (n1x * *dx + n1y * *dy), r2 = c2 - (n2x * *dx + n2y * *dy), g = n1x * n2x + n1y * n2y;
+    const double r1 = c1 - (n1x * *vx + n1y * *vy), r2 = c2 - (n2x * *vx + n2y * *vy), g = n1x * n2x + n1y * n2y;
     double l1 = 0, l2 = 0;
     if (r1 > 0 && r2 - r1 * g <= 0)
         l1 = r1;
@@ -544,11 +544,7 @@ static void keep_off_two_faces(double *dx, double *dy, double n1x, double n1y, d
         else
             l1 = fmax(0.0, r1);
     }
-    double cx = l1 * n1x + l2 * n2x, cy = l1 * n1y + l2 * n2y;
-    const double length = sqrt(cx * cx + cy * cy);
-    if (length > cap)
-        cx *= cap / length, cy *= cap / length, l1 *= cap / length, l2 *= cap / length;
-    *dx += cx, *dy += cy;
+    *vx += l1 * n1x + l2 * n2x, *vy += l1 * n1y + l2 * n2y;
     *lambda1 = l1, *lambda2 = l2;
 }
 
@@ -575,7 +571,7 @@ static void contact_velocities(surge_sim *sim, double dt)
             double l_nearest, l_other;
             keep_off_two_faces(&vx1, &vy1, sim->face_nx[a], sim->face_ny[a],
                                sim->face_gap_m[a] < contact_m ? sim->face_vn_mps[a] : -INFINITY, other->nx, other->ny,
-                               other->vn_mps, INFINITY, &l_nearest, &l_other);
+                               other->vn_mps, &l_nearest, &l_other);
             sim->face_push_x[a] = (real)(l_nearest * sim->face_nx[a] / dt);
             sim->face_push_y[a] = (real)(l_nearest * sim->face_ny[a] / dt);
             w->other_push_x[i] = (real)(l_other * other->nx / dt), w->other_push_y[i] = (real)(l_other * other->ny / dt);
@@ -622,21 +618,24 @@ static void move_particles(surge_sim *sim, double dt)
                                  dt * sim->face_vn_mps[a];
         const wall_face *other = &w->other_face[a - first];
         const double other_after = other->gap_m + dx * other->nx + dy * other->ny - dt * other->vn_mps;
-        if (other->gap_m < dp && sim->face_gap_m[a] < dp && gap_after < face_reach_m && other_after < face_reach_m) {
-            /* in the gap between two solids, within reach of both: kept off each by the reach, or, where the gap is
-             * narrower than two reaches, half the gap (alternate projections onto the two faces) */
+        const double cosine = sim->face_nx[a] * other->nx + sim->face_ny[a] * other->ny;
+        const double nearest_push = fmax(0.0, face_reach_m - gap_after);
+        if (other->gap_m < dp && sim->face_gap_m[a] < dp && other_after + nearest_push * cosine < face_reach_m) {
+            /* in the gap between two solids, within reach of the other one, or brought there by the push off the
+             * nearest: kept off each by the reach, or, where the gap is narrower than two reaches, half the gap
+             * (alternate projections onto the two faces) */
             const double keep = fmin(face_reach_m, 0.5 * (gap_after + other_after));
             double near_after = gap_after, far_after = other_after;
             for (int round = 0; round < 4 && keep > 0; round++) {
                 if (near_after < keep) {
                     const double push = keep - near_after;
                     dx += push * sim->face_nx[a], dy += push * sim->face_ny[a];
-                    near_after = keep, far_after += push * (sim->face_nx[a] * other->nx + sim->face_ny[a] * other->ny);
+                    near_after = keep, far_after += push * cosine;
                 }
                 if (far_after < keep) {
                     const double push = keep - far_after;
                     dx += push * other->nx, dy += push * other->ny;
-                    far_after = keep, near_after += push * (sim->face_nx[a] * other->nx + sim->face_ny[a] * other->ny);
+                    far_after = keep, near_after += push * cosine;
                 }
             }
         } else if (sim->face_gap_m[a] < dp && gap_after < face_reach_m)
