@@ -105,6 +105,11 @@ r = subprocess.run([sys.executable, PL, "convergence", "--csv", conv, "--c0", "4
                    timeout=60)
 check("poiseuille_loaded convergence: no run with the settings asked is refused",
       r.returncode == 2 and "no finished implicit run" in r.stderr, r.stderr.strip())
+missing_csv = os.path.join(work, "no_such_table.csv")
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", missing_csv], capture_output=True, text=True,
+                   timeout=60)
+check("poiseuille_loaded convergence: a missing table is refused, named",
+      r.returncode == 2 and missing_csv in r.stderr, r.stderr.strip())
 # disc_motion on a synthetic run: the fluid on the parabola u = 4 U y (B - y) / B^2, two discs moving at the fluid's
 # speed at their heights less 1 % of U, turning at 0.9 of -u'(y)/2
 synthetic = os.path.join(work, "pl_discs")
