@@ -2,6 +2,7 @@
 """scaling: how the solver's speed grows with the thread count, on the scenes users run.
 
   bench/scaling.py [--bench build/surge-bench] [--max-threads N | --threads 1,T2,...] [--scene NAME,...] [--quick]
+                   [--multigrid-parts N|threads]
 
 For each scene and scheme it runs surge-bench once per thread count, 1, 2, 4, ... up to the machine's physical cores,
 or the CPUs this process may use where fewer (or N, the last count also when it is not a power of two; or the counts
@@ -22,7 +23,10 @@ are surge-bench's (surge_phase_times in sim/include/surge/sim.h; docs/performanc
 The scenes: film, the benchmark film (cases/incline_film.ini, dp = 5 mm, C_h 1.0, 20,000 fluid particles); film_fine,
 the same at dp = 2.5 mm (80,000); debris, the 60-disc debris surge at dp = 0.04 m; freydier, the Freydier ID1 front
 at dp = 0.5 mm (implicit only). --quick runs a tiny film (dp = 2 cm, a few steps) on 1 and 2 threads instead, to
-check that the benchmark works, not to measure.
+check that the benchmark works, not to measure. --multigrid-parts sets the implicit scheme's
+implicit.multigrid_parts (the parts its multigrid hierarchies are cut into, V-cycled side by side), to N or, with
+"threads", to each run's thread count (the results then differ between thread counts, within the solves'
+tolerances).
 
 Why a script around surge-bench and not an option of it: each thread count runs in a fresh process, so that the
 OpenMP runtime reads OMP_WAIT_POLICY, GOMP_SPINCOUNT and OMP_PROC_BIND at its start (a running program cannot change
@@ -100,11 +104,14 @@ def thread_counts(most):
     return counts + [most]
 
 
-def run_bench(bench, scene, scheme, threads, env):
-    """One surge-bench run: a dict of its figures and phases, or one with 'failed' saying why."""
+def run_bench(bench, scene, scheme, threads, env, parts=None):
+    """One surge-bench run: a dict of its figures and phases, or one with 'failed' saying why. parts: the implicit
+    scheme's implicit.multigrid_parts, a number or 'threads' (None: the case's own)."""
     case, ch, layers, settings, end_times = scene
     cmd = [bench, os.path.join(ROOT, "cases", case), "--ch", ch, "--layers", layers, "--threads", str(threads),
            "--end-s", repr(end_times[scheme]), "-s", "numerics.scheme=" + scheme] + settings
+    if parts is not None and scheme == "implicit":
+        cmd += ["-s", "implicit.multigrid_parts=%d" % (threads if parts == "threads" else parts)]
     try:
         proc = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env,
                               stdin=subprocess.DEVNULL)
@@ -189,6 +196,16 @@ def thread_list(text):
     return counts
 
 
+def multigrid_parts(text):
+    """A positive number of parts, or 'threads'."""
+    if text == "threads":
+        return text
+    try:
+        return cli_checks.positive_int(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError("expected a whole number >= 1 or 'threads', got '%s'" % text)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--bench", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge-bench"),
@@ -202,6 +219,9 @@ def main():
                         help="comma-separated scenes among %s (default all)" % ", ".join(SCENES))
     parser.add_argument("--quick", action="store_true",
                         help="a tiny scene on 1 and 2 threads, a few steps: that it runs, in seconds")
+    parser.add_argument("--multigrid-parts", type=multigrid_parts, metavar="N|threads",
+                        help="the implicit scheme's implicit.multigrid_parts: N, or each run's thread count "
+                             "(default: the case's own, 1)")
     args = parser.parse_args()
     if args.quick and args.scene:
         parser.error("--quick runs its own tiny scene: leave out --scene")
@@ -217,6 +237,9 @@ def main():
     else:
         scenes = {name: SCENES[name] for name in args.scene or SCENES}
         counts = args.threads or thread_counts(args.max_threads or min(cores, usable))
+    if args.multigrid_parts is not None:
+        lines.append("# implicit.multigrid_parts = %s" % (
+            "the run's thread count" if args.multigrid_parts == "threads" else args.multigrid_parts))
     for line in lines:
         print(line)
     widths = [10, 9, 7, 7, 6, 9, 9, 8, 6, 10, 0]
@@ -227,7 +250,7 @@ def main():
         for scheme in scene[4]:
             runs = []
             for threads in counts:
-                result = run_bench(args.bench, scene, scheme, threads, env)
+                result = run_bench(args.bench, scene, scheme, threads, env, args.multigrid_parts)
                 if not program_lines:
                     program_lines = [line for line in result.get("output", "").splitlines()
                                      if line.startswith(("# program:", "# machine:"))]

@@ -136,6 +136,24 @@ check("every run kept the caller's ACTIVE and no spin count was added (2 runs)",
 header, rows = table(r.stdout)
 check("--max-threads 1: rows on 1 thread only", [row[3] for row in rows] == ["1", "1"], rows)
 
+# ---- the implicit scheme's multigrid parts: each run's thread count, the implicit runs only ----
+arguments = os.path.join(WORK, "arguments.txt")
+logging = stand_in("logging-bench", 'echo "$*" >> "%s"\nexec "%s" "$@"\n' % (arguments, BENCH))
+r = scaling(logging, "--quick", "--multigrid-parts", "threads")
+check("--multigrid-parts threads: exit status 0", r.returncode == 0, "rc %d, stderr: %s" % (r.returncode, r.stderr))
+check("--multigrid-parts threads: named in the header", "# implicit.multigrid_parts = the run's thread count" in r.stdout,
+      r.stdout)
+with open(arguments) as f:
+    calls = f.read().splitlines()
+parts_given = [(re.search(r"numerics\.scheme=(\w+)", c).group(1), re.search(r"--threads (\d+)", c).group(1),
+                (re.search(r"implicit\.multigrid_parts=(\d+)", c) or re.match("()", "")).group(1)) for c in calls]
+check("--multigrid-parts threads: the implicit runs get their thread count as parts, the explicit ones none",
+      parts_given == [("explicit", "1", ""), ("explicit", "2", ""), ("implicit", "1", "1"), ("implicit", "2", "2")],
+      parts_given)
+r = scaling(BENCH, "--quick", "--multigrid-parts", "many")
+check("--multigrid-parts many: refused (exit status 2), the value named",
+      r.returncode == 2 and "expected a whole number >= 1 or 'threads', got 'many'" in r.stderr, r.stderr)
+
 # ---- a surge-bench that fails ----
 failing = stand_in("failing-bench", 'echo "surge-bench: stand-in failure"\nexit 1\n')
 r = scaling(failing, "--quick")

@@ -132,6 +132,7 @@ typedef struct surge_params {
         int max_iterations;        /* per solve; more is a health failure */
         int preconditioner;        /* surge_preconditioner, for the solves */
         int multigrid_rebuild_steps; /* amg: a hierarchy serves at most this many steps */
+        int multigrid_parts;         /* amg: diagonal blocks, a hierarchy each, V-cycled side by side */
         double density_correction; /* alpha: weight of the rest-density source (psi's solve) */
         double anti_clumping;      /* w in the compressed particles' shift -2 w (rho_k/rho0 - 1) h^2 grad C */
         double surface_threshold;  /* div r below this: a free-surface particle, p = 0 */

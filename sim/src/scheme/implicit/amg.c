@@ -27,8 +27,9 @@
 _Static_assert(sizeof(HYPRE_BigInt) == sizeof(int32_t), "hypre built with 64-bit indices");
 
 #define AMG_MAX_COPIES 2
+#define AMG_MAX_PARTS 256
 
-/* One multigrid hierarchy on the kept matrix, with its vectors */
+/* One multigrid hierarchy on one part's diagonal block of the kept matrix, with its vectors */
 typedef struct amg_copy {
     HYPRE_IJMatrix matrix;
     HYPRE_IJVector rhs, x;
@@ -39,11 +40,21 @@ typedef struct amg_copy {
 
 struct amg_system {
     int n;
-    int copies;                /* hierarchies held: one per block V-cycled at once (amg_create) */
-    amg_copy copy[AMG_MAX_COPIES];
-    HYPRE_BigInt *rows;        /* 0 .. n-1 */
-    HYPRE_Int *row_sizes;      /* per row: its entries */
-    HYPRE_BigInt *order;       /* per vector entry: its particle's row (amg_follow) */
+    int concurrent;            /* V-cycles may run on several threads at once (MPI allows it, threads exist) */
+    int copies;                /* hierarchies held per part: one per block V-cycled at once (amg_create) */
+    int parts_wanted;          /* the diagonal blocks asked for (amg_create) */
+    int parts;                 /* those of the kept matrix: at most one per row */
+    amg_copy *hierarchy;       /* copies x parts: copy c of part p at c * parts + p */
+    int *part_first;           /* parts + 1: part p's rows are the slots part_first[p] .. part_first[p+1] */
+    int32_t *part_of_row;      /* per row: its part */
+    int32_t *slot_of_row;      /* per row: its slot (part_first of its part + its row in the part's block) */
+    int32_t *entry_of_slot;    /* per slot: the vector entry holding that row (amg_follow) */
+    double *buffer;            /* copies x n: a part's vector in its own row order */
+    HYPRE_BigInt *rows;        /* 0 .. n-1: a block's own row numbers */
+    HYPRE_Int *row_sizes;      /* per slot: the entries of its row inside its block */
+    int32_t *block_col;        /* the blocks' entries, slot after slot, columns numbered inside the block */
+    double *block_val;
+    int32_t *queue;            /* the partition's breadth-first order */
     int32_t *row_id;           /* per row: its particle's id */
     int32_t *row_of_id;        /* per id: its row, or -1 */
     int id_count;
@@ -63,8 +74,9 @@ static void finalize_mpi(void)
 
 static void release(amg_system *amg)
 {
-    for (int c = 0; c < AMG_MAX_COPIES; c++) {
-        amg_copy *h = &amg->copy[c];
+    const int held = amg->hierarchy ? amg->copies * amg->parts : 0;
+    for (int c = 0; c < held; c++) {
+        amg_copy *h = &amg->hierarchy[c];
         if (h->multigrid)
             HYPRE_BoomerAMGDestroy(h->multigrid);
         if (h->matrix)
@@ -73,16 +85,18 @@ static void release(amg_system *amg)
             HYPRE_IJVectorDestroy(h->rhs);
         if (h->x)
             HYPRE_IJVectorDestroy(h->x);
-        *h = (amg_copy){0};
     }
+    free(amg->hierarchy);
+    amg->hierarchy = NULL;
+    amg->parts = 0;
 }
 
-amg_system *amg_create(char *err, size_t err_len, int blocks)
+amg_system *amg_create(char *err, size_t err_len, int blocks, int parts)
 {
     int initialized = 0, provided = MPI_THREAD_SINGLE;
     MPI_Initialized(&initialized);
     if (!initialized) {
-        /* MPI_THREAD_MULTIPLE: the copies' V-cycles call MPI (on one rank, no messages) from their threads */
+        /* MPI_THREAD_MULTIPLE: the hierarchies' V-cycles call MPI (on one rank, no messages) from their threads */
         if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
             snprintf(err, err_len, "implicit.preconditioner = amg: MPI (which hypre needs) did not start");
             return NULL;
@@ -98,6 +112,8 @@ amg_system *amg_create(char *err, size_t err_len, int blocks)
     }
     const int concurrent = provided >= MPI_THREAD_MULTIPLE && omp_get_max_threads() > 1;
     amg->copies = concurrent && blocks > 1 ? (blocks < AMG_MAX_COPIES ? blocks : AMG_MAX_COPIES) : 1;
+    amg->concurrent = concurrent;
+    amg->parts_wanted = parts < 1 ? 1 : parts > AMG_MAX_PARTS ? AMG_MAX_PARTS : parts;
     return amg;
 }
 
@@ -106,9 +122,16 @@ void amg_destroy(amg_system *amg)
     if (!amg)
         return;
     release(amg);
+    free(amg->part_first);
+    free(amg->part_of_row);
+    free(amg->slot_of_row);
+    free(amg->entry_of_slot);
+    free(amg->buffer);
     free(amg->rows);
     free(amg->row_sizes);
-    free(amg->order);
+    free(amg->block_col);
+    free(amg->block_val);
+    free(amg->queue);
     free(amg->row_id);
     free(amg->row_of_id);
     free(amg->kept_first);
@@ -131,13 +154,21 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
 {
     const size_t rows = (size_t)n + 1;
     if (grow((void **)&amg->rows, rows, sizeof *amg->rows) || grow((void **)&amg->row_sizes, rows, sizeof *amg->row_sizes) ||
-        grow((void **)&amg->order, rows, sizeof *amg->order) || grow((void **)&amg->row_id, rows, sizeof *amg->row_id) ||
+        grow((void **)&amg->part_of_row, rows, sizeof *amg->part_of_row) ||
+        grow((void **)&amg->slot_of_row, rows, sizeof *amg->slot_of_row) ||
+        grow((void **)&amg->entry_of_slot, rows, sizeof *amg->entry_of_slot) ||
+        grow((void **)&amg->queue, rows, sizeof *amg->queue) ||
+        grow((void **)&amg->buffer, rows * (size_t)amg->copies, sizeof *amg->buffer) ||
+        grow((void **)&amg->part_first, (size_t)amg->parts_wanted + 1, sizeof *amg->part_first) ||
+        grow((void **)&amg->row_id, rows, sizeof *amg->row_id) ||
         grow((void **)&amg->kept_first, rows, sizeof *amg->kept_first) ||
         grow((void **)&amg->row_of_id, (size_t)id_count, sizeof *amg->row_of_id))
         return -1;
     if (nnz > amg->kept_cap || !amg->kept_col) {
         if (grow((void **)&amg->kept_col, nnz, sizeof *amg->kept_col) ||
-            grow((void **)&amg->kept_val, nnz, sizeof *amg->kept_val))
+            grow((void **)&amg->kept_val, nnz, sizeof *amg->kept_val) ||
+            grow((void **)&amg->block_col, nnz, sizeof *amg->block_col) ||
+            grow((void **)&amg->block_val, nnz, sizeof *amg->block_val))
             return -1;
         amg->kept_cap = nnz;
     }
@@ -145,7 +176,53 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
     return 0;
 }
 
-/* The hierarchy on the kept matrix of n rows and row ids; the entries in the rows' order */
+/* Breadth-first order of the kept matrix's graph from start, each further connected piece from its lowest row;
+ * returns the row reached last */
+static int breadth_first(amg_system *amg, int n, int start)
+{
+    int32_t *seen = amg->slot_of_row, *queue = amg->queue;
+    for (int i = 0; i < n; i++)
+        seen[i] = 0;
+    int head = 0, tail = 0, next_unseen = 0;
+    while (tail < n) {
+        if (head == tail) { /* a new connected piece */
+            while (seen[next_unseen])
+                next_unseen++;
+            const int root = head == 0 && !seen[start] ? start : next_unseen;
+            seen[root] = 1, queue[tail++] = root;
+        }
+        const int row = queue[head++];
+        for (int64_t e = amg->kept_first[row]; e < amg->kept_first[row + 1]; e++)
+            if (!seen[amg->kept_col[e]])
+                seen[amg->kept_col[e]] = 1, queue[tail++] = amg->kept_col[e];
+    }
+    return queue[n - 1];
+}
+
+/* The rows shared out into parts of consecutive breadth-first order from a far row (the end of a first sweep, as
+ * in reverse Cuthill-McKee): slices across the flow's longest extent, each part's rows kept in their own order */
+static void partition(amg_system *amg, int n)
+{
+    const int parts = amg->parts = amg->parts_wanted < n ? amg->parts_wanted : n;
+    if (parts > 1)
+        breadth_first(amg, n, breadth_first(amg, n, 0));
+    for (int k = 0; k < n; k++)
+        amg->part_of_row[parts > 1 ? amg->queue[k] : k] = (int32_t)((int64_t)k * parts / n);
+    for (int p = 0; p <= parts; p++)
+        amg->part_first[p] = 0;
+    for (int i = 0; i < n; i++)
+        amg->part_first[amg->part_of_row[i] + 1]++;
+    for (int p = 0; p < parts; p++)
+        amg->part_first[p + 1] += amg->part_first[p];
+    int *fill = amg->slot_of_row; /* reused: the slots are counted first, then numbered in row order */
+    for (int p = 0; p < parts; p++)
+        amg->queue[p] = amg->part_first[p];
+    for (int i = 0; i < n; i++)
+        fill[i] = amg->queue[amg->part_of_row[i]]++;
+}
+
+/* The hierarchies on the kept matrix of n rows and row ids: one per part, on its diagonal block (the entries
+ * between parts left out: block Jacobi between the parts) */
 static int build(amg_system *amg, int n)
 {
     release(amg);
@@ -153,48 +230,76 @@ static int build(amg_system *amg, int n)
     for (int i = 0; i < amg->id_count; i++)
         amg->row_of_id[i] = -1;
     for (int i = 0; i < n; i++) {
-        amg->rows[i] = amg->order[i] = i;
-        amg->row_sizes[i] = (HYPRE_Int)(amg->kept_first[i + 1] - amg->kept_first[i]);
+        amg->rows[i] = i;
+        amg->entry_of_slot[i] = -1;
         amg->row_of_id[amg->row_id[i]] = i;
     }
+    partition(amg, n);
+    const int parts = amg->parts;
+    amg->hierarchy = calloc((size_t)amg->copies * (size_t)parts, sizeof *amg->hierarchy);
+    if (!amg->hierarchy) {
+        amg->n = 0, amg->parts = 0;
+        return -1;
+    }
+    int32_t *row_of_slot = amg->queue; /* free again after the partition */
+    for (int i = 0; i < n; i++)
+        row_of_slot[amg->slot_of_row[i]] = i, amg->row_sizes[amg->slot_of_row[i]] = 0;
+    int64_t filled = 0;
     HYPRE_ClearAllErrors();
-    for (int c = 0; c < amg->copies; c++) { /* one after another: the coarsening's random numbers are global */
-        amg_copy *h = &amg->copy[c];
-        HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, n - 1, 0, n - 1, &h->matrix);
-        HYPRE_IJMatrixSetObjectType(h->matrix, HYPRE_PARCSR);
-        HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes);
-        HYPRE_IJMatrixInitialize(h->matrix);
-        HYPRE_IJMatrixSetValues(h->matrix, n, amg->row_sizes, amg->rows, (const HYPRE_BigInt *)amg->kept_col,
-                                amg->kept_val);
-        HYPRE_IJMatrixAssemble(h->matrix);
-        for (int k = 0; k < 2; k++) {
-            HYPRE_IJVector *v = k ? &h->x : &h->rhs;
-            HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, n - 1, v);
-            HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
-            HYPRE_IJVectorInitialize(*v);
-            HYPRE_IJVectorAssemble(*v);
+    for (int p = 0; p < parts; p++) {
+        const int first_slot = amg->part_first[p], rows = amg->part_first[p + 1] - first_slot;
+        const int64_t block_start = filled;
+        for (int slot = first_slot; slot < first_slot + rows; slot++) { /* the block's entries in slot order */
+            const int i = row_of_slot[slot];
+            for (int64_t e = amg->kept_first[i]; e < amg->kept_first[i + 1]; e++) {
+                const int col = amg->kept_col[e];
+                if (amg->part_of_row[col] == p) {
+                    amg->block_col[filled] = amg->slot_of_row[col] - first_slot;
+                    amg->block_val[filled++] = amg->kept_val[e];
+                    amg->row_sizes[slot]++;
+                }
+            }
         }
-        HYPRE_BoomerAMGCreate(&h->multigrid);
-        HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
-        HYPRE_BoomerAMGSetCoarsenType(h->multigrid, 10);   /* HMIS */
-        HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);     /* extended+i */
-        HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
-        HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
-        HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
-        HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
-        HYPRE_BoomerAMGSetKeepTranspose(h->multigrid, 1);
-        HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
-        HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
-        HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);
-        HYPRE_IJVectorGetObject(h->rhs, (void **)&h->b);
-        HYPRE_IJVectorGetObject(h->x, (void **)&h->xv);
-        HYPRE_BoomerAMGSetup(h->multigrid, h->a, h->b, h->xv);
+        for (int c = 0; c < amg->copies; c++) { /* one after another: the coarsening's random numbers are global */
+            amg_copy *h = &amg->hierarchy[c * parts + p];
+            HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, rows - 1, 0, rows - 1, &h->matrix);
+            HYPRE_IJMatrixSetObjectType(h->matrix, HYPRE_PARCSR);
+            HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes + first_slot);
+            HYPRE_IJMatrixInitialize(h->matrix);
+            HYPRE_IJMatrixSetValues(h->matrix, rows, amg->row_sizes + first_slot, amg->rows,
+                                    (const HYPRE_BigInt *)amg->block_col + block_start, amg->block_val + block_start);
+            HYPRE_IJMatrixAssemble(h->matrix);
+            for (int k = 0; k < 2; k++) {
+                HYPRE_IJVector *v = k ? &h->x : &h->rhs;
+                HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, rows - 1, v);
+                HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
+                HYPRE_IJVectorInitialize(*v);
+                HYPRE_IJVectorAssemble(*v);
+            }
+            HYPRE_BoomerAMGCreate(&h->multigrid);
+            HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
+            HYPRE_BoomerAMGSetCoarsenType(h->multigrid, 10);   /* HMIS */
+            HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);     /* extended+i */
+            HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
+            HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
+            HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
+            HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
+            HYPRE_BoomerAMGSetKeepTranspose(h->multigrid, 1);
+            HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
+            HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
+            HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);
+            HYPRE_IJVectorGetObject(h->rhs, (void **)&h->b);
+            HYPRE_IJVectorGetObject(h->x, (void **)&h->xv);
+            HYPRE_BoomerAMGSetup(h->multigrid, h->a, h->b, h->xv);
+        }
     }
     if (HYPRE_GetError()) {
         release(amg);
         amg->n = 0;
         return -1;
     }
+    for (int i = 0; i < n; i++) /* the vectors in row order until amg_follow says otherwise */
+        amg->entry_of_slot[amg->slot_of_row[i]] = i;
     return 0;
 }
 
@@ -214,36 +319,52 @@ int amg_setup(amg_system *amg, int n, const int64_t *row_first, const int32_t *c
     return build(amg, n);
 }
 
-int amg_rows(const amg_system *amg) { return amg && amg->copy[0].multigrid ? amg->n : 0; }
+int amg_rows(const amg_system *amg) { return amg && amg->hierarchy ? amg->n : 0; }
 
 int amg_follow(amg_system *amg, const int32_t *id, int n)
 {
-    if (!amg->copy[0].multigrid || n != amg->n)
+    if (!amg->hierarchy || n != amg->n)
         return -1;
     for (int i = 0; i < n; i++) {
         const int row = id[i] >= 0 && id[i] < amg->id_count ? amg->row_of_id[id[i]] : -1;
         if (row < 0)
             return -1;
-        amg->order[i] = row;
+        amg->entry_of_slot[amg->slot_of_row[row]] = i;
     }
     return 0;
 }
 
+/* One V-cycle of hierarchy h on part p's slots of rhs into x, through buffer */
+static void part_vcycle(const amg_system *amg, const amg_copy *h, int p, double *buffer, const double *rhs, double *x)
+{
+    const int first = amg->part_first[p], rows = amg->part_first[p + 1] - first;
+    const int32_t *entry = amg->entry_of_slot + first;
+    for (int j = 0; j < rows; j++)
+        buffer[j] = rhs[entry[j]];
+    HYPRE_IJVectorSetValues(h->rhs, rows, amg->rows, buffer);
+    HYPRE_ParVectorSetConstantValues(h->xv, 0.0);
+    HYPRE_BoomerAMGSolve(h->multigrid, h->a, h->b, h->xv);
+    HYPRE_IJVectorGetValues(h->x, rows, amg->rows, buffer);
+    for (int j = 0; j < rows; j++)
+        x[entry[j]] = buffer[j];
+}
+
 int amg_vcycle(amg_system *amg, int blocks, const double *rhs, double *x)
 {
-    if (!amg->copy[0].multigrid)
+    if (!amg->hierarchy)
         return -1;
-    const int n = amg->n;
-    /* hypre's error flag is one global: cleared before the copies run and read after, so that no two threads touch
-     * it but a failing V-cycle (whose flag either thread's failure sets) */
+    const int n = amg->n, parts = amg->parts, copies = amg->copies;
+    /* hypre's error flag is one global: cleared before the hierarchies run and read after, so that no two threads
+     * touch it but a failing V-cycle (whose flag either thread's failure sets) */
     HYPRE_ClearAllErrors();
-    #pragma omp parallel for num_threads(amg->copies) schedule(static, 1) if (amg->copies > 1 && blocks > 1)
-    for (int k = 0; k < blocks; k++) {
-        amg_copy *h = &amg->copy[k % amg->copies];
-        HYPRE_IJVectorSetValues(h->rhs, n, amg->order, rhs + (size_t)k * n);
-        HYPRE_ParVectorSetConstantValues(h->xv, 0.0);
-        HYPRE_BoomerAMGSolve(h->multigrid, h->a, h->b, h->xv);
-        HYPRE_IJVectorGetValues(h->x, n, amg->order, x + (size_t)k * n);
+    for (int k0 = 0; k0 < blocks; k0 += copies) { /* as many blocks at once as there are copies */
+        const int at_once = blocks - k0 < copies ? blocks - k0 : copies, tasks = at_once * parts;
+        #pragma omp parallel for schedule(dynamic, 1) if (amg->concurrent && tasks > 1)
+        for (int t = 0; t < tasks; t++) {
+            const int c = t / parts, p = t % parts, k = k0 + c;
+            part_vcycle(amg, &amg->hierarchy[c * parts + p], p, amg->buffer + (size_t)c * n + amg->part_first[p],
+                        rhs + (size_t)k * n, x + (size_t)k * n);
+        }
     }
     const int failed = HYPRE_GetError() != 0;
     HYPRE_ClearAllErrors();

@@ -10,8 +10,10 @@
 typedef struct amg_system amg_system;
 
 /* NULL when MPI or hypre cannot start (the message in err). blocks: the vectors each amg_vcycle takes (1, or 2 for
- * two components); where threads allow, a hierarchy is held for each, so that their V-cycles run at once. */
-amg_system *amg_create(char *err, size_t err_len, int blocks);
+ * two components); where threads allow, a hierarchy is held for each, so that their V-cycles run at once. parts: the
+ * diagonal blocks the matrix is cut into, a hierarchy each, V-cycled side by side (block Jacobi between them; 1: the
+ * whole matrix). */
+amg_system *amg_create(char *err, size_t err_len, int blocks, int parts);
 void amg_destroy(amg_system *amg);
 
 /* The matrix of n rows, row i's entries cols[row_first[i] .. row_first[i+1]) (no repeated column in a row), and

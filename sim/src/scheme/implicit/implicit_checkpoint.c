@@ -70,7 +70,7 @@ static int read_solver_state(FILE *f, surge_sim *sim, uint32_t version)
             fread(&m->last_iterations, 4, 1, f) != 1 || m->base_iterations < -1 || m->last_iterations < 0 ||
             m->built_step < 0)
             return -1;
-        if (!m->amg && !(m->amg = amg_create(reason, sizeof reason, multigrid_blocks(k))))
+        if (!m->amg && !(m->amg = amg_create(reason, sizeof reason, multigrid_blocks(k), sim->params.implicit.multigrid_parts)))
             return -1;
         if (amg_read(m->amg, f, sim->count) != 0)
             return -1;

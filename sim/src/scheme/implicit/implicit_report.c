@@ -47,11 +47,12 @@ static void report_implicit_cost(FILE *out, int verbose, const surge_params *p, 
     if (verbose || bytes > 4e9)
         fprintf(out, "%sestimated memory %.3g MB (%.0f list entries per fluid particle); implicit scheme: dt = %.3g "
                 "s at the scene's expected speed %.3g m/s (it follows the flow's own speed: longer where the flow "
-                "is slower); pressure solves by %s, viscous solves by %s (implicit.preconditioner = %s); the cost "
+                "is slower); pressure solves by %s, viscous solves by %s%s (implicit.preconditioner = %s); the cost "
                 "per step follows the linear solves' iterations (diagnostics.csv), not estimated here\n",
                 verbose ? "  " : "surge: ", bytes / 1e6, entries, dt_implicit, u,
                 amg ? "BiCGSTAB with hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
                 viscous_amg ? "BiCGSTAB with hypre's BoomerAMG" : "matrix-free Jacobi-preconditioned BiCGSTAB",
+                (amg || viscous_amg) && p->implicit.multigrid_parts > 1 ? ", each hierarchy in parts" : "",
                 p->implicit.preconditioner == SURGE_PRECONDITIONER_AUTO
                     ? "auto: amg for the pressure from 2,500 fluid particles, for the viscous solve from 10,000"
                     : (amg ? "amg" : "jacobi"));

@@ -23,7 +23,7 @@ int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const 
     held_multigrid *m = &w->multigrid[which];
     char reason[160] = "";
     if (!m->amg)
-        m->amg = amg_create(reason, sizeof reason, multigrid_blocks(which));
+        m->amg = amg_create(reason, sizeof reason, multigrid_blocks(which), sim->params.implicit.multigrid_parts);
     const int first = sim->wall_count, nf = sim->count - first;
     w->amg = m->amg;
     const int slowed = m->base_iterations >= 0 &&
