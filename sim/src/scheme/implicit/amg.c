@@ -49,6 +49,7 @@ struct amg_system {
     int32_t *part_of_row;      /* per row: its part */
     int32_t *slot_of_row;      /* per row: its slot (part_first of its part + its row in the part's block) */
     int32_t *entry_of_slot;    /* per slot: the vector entry holding that row (amg_follow) */
+    HYPRE_BigInt *slot_of_entry; /* its inverse: per vector entry, its slot */
     double *buffer;            /* copies x n: a part's vector in its own row order */
     HYPRE_BigInt *rows;        /* 0 .. n-1: a block's own row numbers */
     HYPRE_Int *row_sizes;      /* per slot: the entries of its row inside its block */
@@ -126,6 +127,7 @@ void amg_destroy(amg_system *amg)
     free(amg->part_of_row);
     free(amg->slot_of_row);
     free(amg->entry_of_slot);
+    free(amg->slot_of_entry);
     free(amg->buffer);
     free(amg->rows);
     free(amg->row_sizes);
@@ -157,6 +159,7 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
         grow((void **)&amg->part_of_row, rows, sizeof *amg->part_of_row) ||
         grow((void **)&amg->slot_of_row, rows, sizeof *amg->slot_of_row) ||
         grow((void **)&amg->entry_of_slot, rows, sizeof *amg->entry_of_slot) ||
+        grow((void **)&amg->slot_of_entry, rows, sizeof *amg->slot_of_entry) ||
         grow((void **)&amg->queue, rows, sizeof *amg->queue) ||
         grow((void **)&amg->buffer, rows * (size_t)amg->copies, sizeof *amg->buffer) ||
         grow((void **)&amg->part_first, (size_t)amg->parts_wanted + 1, sizeof *amg->part_first) ||
@@ -249,7 +252,14 @@ static int build(amg_system *amg, int n)
     for (int p = 0; p < parts; p++) {
         const int first_slot = amg->part_first[p], rows = amg->part_first[p + 1] - first_slot;
         const int64_t block_start = filled;
-        for (int slot = first_slot; slot < first_slot + rows; slot++) { /* the block's entries in slot order */
+        const int32_t *block_col = amg->block_col + block_start; /* one part: the kept matrix itself */
+        const double *block_val = amg->block_val + block_start;
+        if (parts == 1) {
+            for (int i = 0; i < n; i++)
+                amg->row_sizes[i] = (HYPRE_Int)(amg->kept_first[i + 1] - amg->kept_first[i]);
+            block_col = amg->kept_col, block_val = amg->kept_val;
+        }
+        for (int slot = first_slot; parts > 1 && slot < first_slot + rows; slot++) { /* the block's entries */
             const int i = row_of_slot[slot];
             for (int64_t e = amg->kept_first[i]; e < amg->kept_first[i + 1]; e++) {
                 const int col = amg->kept_col[e];
@@ -267,7 +277,7 @@ static int build(amg_system *amg, int n)
             HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes + first_slot);
             HYPRE_IJMatrixInitialize(h->matrix);
             HYPRE_IJMatrixSetValues(h->matrix, rows, amg->row_sizes + first_slot, amg->rows,
-                                    (const HYPRE_BigInt *)amg->block_col + block_start, amg->block_val + block_start);
+                                    (const HYPRE_BigInt *)block_col, block_val);
             HYPRE_IJMatrixAssemble(h->matrix);
             for (int k = 0; k < 2; k++) {
                 HYPRE_IJVector *v = k ? &h->x : &h->rhs;
@@ -299,7 +309,7 @@ static int build(amg_system *amg, int n)
         return -1;
     }
     for (int i = 0; i < n; i++) /* the vectors in row order until amg_follow says otherwise */
-        amg->entry_of_slot[amg->slot_of_row[i]] = i;
+        amg->entry_of_slot[amg->slot_of_row[i]] = i, amg->slot_of_entry[i] = amg->slot_of_row[i];
     return 0;
 }
 
@@ -329,21 +339,30 @@ int amg_follow(amg_system *amg, const int32_t *id, int n)
         const int row = id[i] >= 0 && id[i] < amg->id_count ? amg->row_of_id[id[i]] : -1;
         if (row < 0)
             return -1;
-        amg->entry_of_slot[amg->slot_of_row[row]] = i;
+        amg->entry_of_slot[amg->slot_of_row[row]] = i, amg->slot_of_entry[i] = amg->slot_of_row[row];
     }
     return 0;
 }
 
-/* One V-cycle of hierarchy h on part p's slots of rhs into x, through buffer */
+/* One V-cycle of hierarchy h on part p's slots of rhs into x, through buffer (one part: hypre places the entries
+ * itself) */
 static void part_vcycle(const amg_system *amg, const amg_copy *h, int p, double *buffer, const double *rhs, double *x)
 {
     const int first = amg->part_first[p], rows = amg->part_first[p + 1] - first;
     const int32_t *entry = amg->entry_of_slot + first;
-    for (int j = 0; j < rows; j++)
-        buffer[j] = rhs[entry[j]];
-    HYPRE_IJVectorSetValues(h->rhs, rows, amg->rows, buffer);
+    if (amg->parts == 1)
+        HYPRE_IJVectorSetValues(h->rhs, rows, amg->slot_of_entry, rhs);
+    else {
+        for (int j = 0; j < rows; j++)
+            buffer[j] = rhs[entry[j]];
+        HYPRE_IJVectorSetValues(h->rhs, rows, amg->rows, buffer);
+    }
     HYPRE_ParVectorSetConstantValues(h->xv, 0.0);
     HYPRE_BoomerAMGSolve(h->multigrid, h->a, h->b, h->xv);
+    if (amg->parts == 1) {
+        HYPRE_IJVectorGetValues(h->x, rows, amg->slot_of_entry, x);
+        return;
+    }
     HYPRE_IJVectorGetValues(h->x, rows, amg->rows, buffer);
     for (int j = 0; j < rows; j++)
         x[entry[j]] = buffer[j];
