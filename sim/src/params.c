@@ -170,11 +170,11 @@ static const surge_param_info registry[] = {
      "solvers\").",
      OFF(implicit.multigrid_rebuild_steps)},
     {"implicit", "multigrid_parts", SURGE_PARAM_INT, "-", 1, 1, 256, false, NULL,
-     "Implicit scheme, amg: the parts each multigrid hierarchy is cut into (slices of the fluid across its longest "
-     "extent, in the matrix's breadth-first order), each with a hierarchy of its own, V-cycled side by side on the "
-     "threads (block Jacobi between the parts); 1: one hierarchy on the whole fluid. More parts than threads let the "
-     "threads share the V-cycles' work; the results depend on the parts, not on the threads (docs/method.md, "
-     "\"Linear solvers\").",
+     "Implicit scheme, amg: the parts the pressure's multigrid hierarchy is cut into (slices of the fluid across its "
+     "longest extent, in the matrix's breadth-first order; the viscous one, whose two components already run side by "
+     "side, in half as many, rounded up), each with a hierarchy of its own, V-cycled side by side on the threads "
+     "(block Jacobi between the parts); 1: one hierarchy on the whole fluid. For machines with many cores: each part "
+     "costs iterations; the results depend on the parts, not on the threads (docs/method.md, \"Linear solvers\").",
      OFF(implicit.multigrid_parts)},
     {"implicit", "density_correction", SURGE_PARAM_REAL, "-", 1, 0, 1, true, NULL,
      "Implicit scheme: alpha, the weight of the rest-density source alpha rho0 (rho_kernel/rho0 - 1)/dt^2 of the "

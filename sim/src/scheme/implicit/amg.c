@@ -114,7 +114,10 @@ amg_system *amg_create(char *err, size_t err_len, int blocks, int parts)
     const int concurrent = provided >= MPI_THREAD_MULTIPLE && omp_get_max_threads() > 1;
     amg->copies = concurrent && blocks > 1 ? (blocks < AMG_MAX_COPIES ? blocks : AMG_MAX_COPIES) : 1;
     amg->concurrent = concurrent;
-    amg->parts_wanted = parts < 1 ? 1 : parts > AMG_MAX_PARTS ? AMG_MAX_PARTS : parts;
+    /* a system of several blocks (the viscous solve's two components) already runs that many V-cycles side by side:
+     * it takes as many tasks in fewer parts */
+    const int per_block = blocks > 1 ? (parts + blocks - 1) / blocks : parts;
+    amg->parts_wanted = per_block < 1 ? 1 : per_block > AMG_MAX_PARTS ? AMG_MAX_PARTS : per_block;
     return amg;
 }
 

@@ -11,8 +11,8 @@ typedef struct amg_system amg_system;
 
 /* NULL when MPI or hypre cannot start (the message in err). blocks: the vectors each amg_vcycle takes (1, or 2 for
  * two components); where threads allow, a hierarchy is held for each, so that their V-cycles run at once. parts: the
- * diagonal blocks the matrix is cut into, a hierarchy each, V-cycled side by side (block Jacobi between them; 1: the
- * whole matrix). */
+ * V-cycles each application runs side by side: the matrix is cut into parts / blocks diagonal blocks (rounded up), a
+ * hierarchy each (block Jacobi between them; 1: the whole matrix). */
 amg_system *amg_create(char *err, size_t err_len, int blocks, int parts);
 void amg_destroy(amg_system *amg);
 
