@@ -110,6 +110,29 @@ r = subprocess.run([sys.executable, PL, "convergence", "--csv", missing_csv], ca
                    timeout=60)
 check("poiseuille_loaded convergence: a missing table is refused, named",
       r.returncode == 2 and missing_csv in r.stderr, r.stderr.strip())
+# seeds on a synthetic table: r/dp 4 with seeds 1-3 (1.4, 1.5, 1.6), r/dp 8 with seeds 1-2 (1.65, 1.75), and
+# convergence keeping to seed 1 (another seed's later row does not replace it)
+seeds_csv = os.path.join(work, "seeds.csv")
+if os.path.exists(seeds_csv):
+    os.remove(seeds_csv)
+for dp, seed, mu in ((0.005, 1, 1.4), (0.005, 2, 1.5), (0.005, 3, 1.6), (0.0025, 1, 1.65), (0.0025, 2, 1.75)):
+    study.append_row(seeds_csv, poiseuille_loaded.COLUMNS, {
+        "phi": 0.5, "phi_actual": 0.5, "mu_eq_over_mu0": mu, "status": "ok", "dp_m": dp, "ch": 1.8, "seed": seed,
+        "c0_mps": 15, "wall_s": 1, "density_diffusion": 0, "scheme": "implicit", "lubrication": 0})
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv], capture_output=True, text=True, timeout=60)
+# r/dp 4: mean 1.5, sd 0.1 (6.7 %); r/dp 8: mean 1.7, sd 0.0707; change +13.3 % +- hypot(0.1/sqrt 3, 0.0707/sqrt 2)/1.5
+rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
+check("poiseuille_loaded seeds: per r/dp the seeds, mean and sd, and the change of the mean with its error",
+      r.returncode == 0 and rows.get(("0.5", "4"), [])[2:5] == ["3", "1.5000", "6.7"] and
+      rows.get(("0.5", "8"), [])[2:9] == ["2", "1.7000", "4.2", "+13.3", "%", "+-", "5.1"],
+      (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubrication"], capture_output=True, text=True,
+                   timeout=60)
+check("poiseuille_loaded seeds: no run with the model is refused", r.returncode == 2 and "no finished" in r.stderr,
+      r.stderr.strip())
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded convergence takes seed 1 at every r/dp: 1.4000 then 1.6500 (+17.9 %)",
+      r.returncode == 0 and "1.4000" in r.stdout and "1.6500 (+17.9 %)" in r.stdout, (r.stdout + r.stderr)[-600:])
 # disc_motion on a synthetic run: the fluid on the parabola u = 4 U y (B - y) / B^2, two discs moving at the fluid's
 # speed at their heights less 1 % of U, turning at 0.9 of -u'(y)/2
 synthetic = os.path.join(work, "pl_discs")

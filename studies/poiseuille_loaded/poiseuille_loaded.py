@@ -13,7 +13,9 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
-        [--c0 C0] [--diffusion DELTA]     # mu_eq/mu0 per phi and r/dp, without and with the lubrication model
+        [--c0 C0] [--diffusion DELTA] [--seed 1]   # mu_eq/mu0 per phi and r/dp, without and with the lubrication model
+  studies/poiseuille_loaded/poiseuille_loaded.py seeds [--csv ...] [--scheme implicit|explicit] [--c0 C0]
+        [--diffusion DELTA] [--lubrication]  # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -28,7 +30,10 @@ annulus stays clear of the plates; 1 is the lattice's density, a shell of partic
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme and --lubrication contacts.lubrication for the runs; `report` takes the rows of one
-scheme, with or without the lubrication model (default: explicit, without).
+scheme, with or without the lubrication model (default: explicit, without). `convergence` takes one placement (--seed,
+default 1) at every resolution; `seeds` gives, per phi and r/dp, each seed's mu_eq/mu0, their mean and standard
+deviation, and the change of the mean from the next coarser r/dp run with at least two seeds, with its standard
+error (the two means' standard errors combined, over the coarser mean).
 
 Reference (dilute theory for the discs actually placed): the placement depends only on phi and the seed, not on
 dp, so `reference` places them (a run of one step at dp = r/2) and integrates the steady momentum balance across
@@ -456,8 +461,8 @@ def command_convergence(args):
     a table with each value's change from the next coarser resolution, and a chart against r/dp per phi."""
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, wall_s=float))
-        if r["status"] == "ok" and r["scheme"] == args.scheme and
+        lubrication=str, wall_s=float, seed=int))
+        if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
         (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
     if not rows:
@@ -505,6 +510,45 @@ def command_convergence(args):
         fig.tight_layout()
         fig.savefig(args.png, dpi=120)
         print("%s: wrote %s" % (TOOL, args.png))
+    return 0
+
+
+def command_seeds(args):
+    """mu_eq/mu0 of one scheme per phi and r/dp over the seeds (placements) run: each seed's value, the mean, the
+    standard deviation over the seeds, and the change of the mean from the next coarser r/dp with two seeds or more."""
+    lubrication = "1" if args.lubrication else "0"
+    rows = [r for r in study.read_rows(TOOL, args.csv, dict(
+        status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
+        lubrication=str, seed=int))
+        if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == lubrication and
+        (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
+        (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
+    if not rows:
+        fail("%s: no finished %s run with the settings asked" % (args.csv, args.scheme))
+    cells = {}
+    for r in rows:  # the last row of a (phi, r/dp, seed) counts: a rerun replaces its run
+        cells.setdefault((float(r["phi"]), round(RADIUS_M / float(r["dp_m"]), 2)), {})[int(r["seed"])] = \
+            float(r["mu_eq_over_mu0"])
+    print("%s scheme, %s the lubrication model: mu_eq/mu0 over the seeds (placements) run"
+          % (args.scheme, "with" if args.lubrication else "without"))
+    print("  %-6s %-6s %-6s %-8s %-8s %-28s %s" % ("phi", "r/dp", "seeds", "mean", "sd (%)", "change of the mean",
+                                                  "by seed"))
+    for phi in sorted({phi for phi, _ in cells}):
+        before = None
+        for rd in sorted(rd for p, rd in cells if p == phi):
+            values = cells[(phi, rd)]
+            v = np.array([values[k] for k in sorted(values)])
+            mean = v.mean()
+            sd = v.std(ddof=1) if v.size > 1 else float("nan")
+            change = "-"
+            if v.size > 1 and before is not None:
+                error = np.hypot(sd / np.sqrt(v.size), before[1] / np.sqrt(before[2])) / before[0]
+                change = "%+.1f %% +- %.1f %%" % (100 * (mean / before[0] - 1), 100 * error)
+            print("  %-6g %-6g %-6d %-8.4f %-8s %-28s %s" % (
+                phi, rd, v.size, mean, "-" if v.size < 2 else "%.1f" % (100 * sd / mean), change,
+                " ".join("%d:%.4f" % (k, values[k]) for k in sorted(values))))
+            if v.size > 1:
+                before = (mean, sd, v.size)
     return 0
 
 
@@ -567,9 +611,18 @@ def main():
     conv.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
     conv.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
     conv.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
+    conv.add_argument("--seed", type=int, default=1, help="the placement (boulders.seed) taken at every resolution")
+    seeds = sub.add_parser("seeds")
+    seeds.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    seeds.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
+    seeds.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
+    seeds.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
+    seeds.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
     args = parser.parse_args()
     if args.command == "convergence":
         return command_convergence(args)
+    if args.command == "seeds":
+        return command_seeds(args)
     if args.command == "run":
         if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
             fail("--diffusion must be in [0, 1]")
