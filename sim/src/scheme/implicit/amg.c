@@ -7,7 +7,9 @@
  * results do not depend on the thread count. A system that takes blocks of vectors (the viscous solve's two velocity
  * components) holds one copy of the hierarchy per block, built one after another on the same matrix (hypre's
  * coarsening reseeds its random numbers at each build, so the copies are the same), and V-cycles the blocks on
- * their own threads, one copy each: the same arithmetic as one copy block after block. */
+ * their own threads, one copy each: the same arithmetic as one copy block after block. With parts (amg_create), the
+ * matrix is cut into diagonal blocks, a hierarchy each (and its copies), whose V-cycles run side by side: block
+ * Jacobi between the parts, the same arithmetic whatever the thread count. */
 #include "scheme/implicit/amg.h"
 
 #include <math.h>
@@ -182,11 +184,11 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
     return 0;
 }
 
-/* Breadth-first order of the kept matrix's graph from start, each further connected piece from its lowest row;
- * returns the row reached last */
+/* Breadth-first order of the kept matrix's graph from start into amg->queue, each further connected piece from its
+ * lowest row; returns the row reached last */
 static int breadth_first(amg_system *amg, int n, int start)
 {
-    int32_t *seen = amg->slot_of_row, *queue = amg->queue;
+    int32_t *seen = amg->slot_of_row, *queue = amg->queue; /* slot_of_row: scratch until partition() sets it */
     for (int i = 0; i < n; i++)
         seen[i] = 0;
     int head = 0, tail = 0, next_unseen = 0;
@@ -220,11 +222,11 @@ static void partition(amg_system *amg, int n)
         amg->part_first[amg->part_of_row[i] + 1]++;
     for (int p = 0; p < parts; p++)
         amg->part_first[p + 1] += amg->part_first[p];
-    int *fill = amg->slot_of_row; /* reused: the slots are counted first, then numbered in row order */
+    int32_t *next_slot = amg->queue; /* per part, free again: its rows take their slots in row order */
     for (int p = 0; p < parts; p++)
-        amg->queue[p] = amg->part_first[p];
+        next_slot[p] = amg->part_first[p];
     for (int i = 0; i < n; i++)
-        fill[i] = amg->queue[amg->part_of_row[i]]++;
+        amg->slot_of_row[i] = next_slot[amg->part_of_row[i]]++;
 }
 
 /* The hierarchies on the kept matrix of n rows and row ids: one per part, on its diagonal block (the entries
