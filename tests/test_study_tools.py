@@ -84,6 +84,10 @@ r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--c0", "15",
 check("poiseuille_loaded report fits and charts the committed table (r/dp 4)",
       r.returncode == 0 and "Krieger-Dougherty fit" in r.stdout and os.path.getsize(report_png) > 10000,
       (r.stdout + r.stderr).strip()[-300:])
+r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--scheme", "implicit", "--c0", "15", "--diffusion",
+                    "0"], capture_output=True, text=True, timeout=120)
+check("poiseuille_loaded report fits one placement: the implicit r/dp 4 runs of seed 1 (6), not the other seeds' rows",
+      r.returncode == 0 and "fit of mu_eq/mu0 over 6 runs" in r.stdout, (r.stdout + r.stderr).strip()[-300:])
 # convergence on a synthetic table: two resolutions without the model, one with it, and a row of another scheme
 conv = os.path.join(work, "convergence.csv")
 if os.path.exists(conv):

@@ -11,7 +11,7 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
-        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication]
+        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication] [--seed 1]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
         [--c0 C0] [--diffusion DELTA] [--seed 1]   # mu_eq/mu0 per phi and r/dp, without and with the lubrication model
   studies/poiseuille_loaded/poiseuille_loaded.py seeds [--csv ...] [--scheme implicit|explicit] [--c0 C0]
@@ -330,8 +330,9 @@ def command_report(args):
     every_run = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
-        density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str))
-        if r["status"] == "ok" and r["scheme"] == args.scheme and
+        density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str,
+        seed=int))
+        if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         (r["lubrication"] == str(int(args.lubrication)) or float(r["phi"]) == 0)]
     rows = every_run
     if args.diffusion is not None:
@@ -605,6 +606,8 @@ def main():
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
+    rep.add_argument("--seed", type=int, default=1,
+                     help="the placement (boulders.seed) of the runs fitted; the reference is seed 1's")
     conv = sub.add_parser("convergence")
     conv.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     conv.add_argument("--png", type=cli_checks.png_file, default=None)
