@@ -630,6 +630,22 @@ static void wedge_edit(surge_params *p)
     snprintf(p->boulders.list_m, sizeof p->boulders.list_m, "0.05 %.10g 0.0125", 0.0125 + 0.6 * p->numerics.dp_m);
 }
 
+/* One step of the wedge scene; the index of particle id after it, or -1 (the scene destroyed) when the step fails */
+static int wedge_step(surge_sim *sim, int32_t id, const char *which)
+{
+    if (surge_sim_step(sim) != 0) {
+        fprintf(stderr, "implicit_wedge: %s failed: %s\n", which, sim->health.message);
+        surge_sim_destroy(sim);
+        return -1;
+    }
+    for (int f = sim->wall_count; f < sim->count; f++)
+        if (sim->id[f] == id)
+            return f;
+    fprintf(stderr, "implicit_wedge: after %s the particle is gone\n", which);
+    surge_sim_destroy(sim);
+    return -1;
+}
+
 static int test_implicit_wedge(void)
 {
     surge_sim *sim = case_sim("boulder_settling.ini", 0, wedge_edit);
@@ -645,14 +661,8 @@ static int test_implicit_wedge(void)
     sim->y[a] = py;
     sim->vy[a] = -0.5f;
     const int32_t id = sim->id[a];
-    if (surge_sim_step(sim) != 0) {
-        fprintf(stderr, "implicit_wedge: the step failed: %s\n", sim->health.message);
-        surge_sim_destroy(sim);
+    if ((a = wedge_step(sim, id, "the step")) < 0)
         return 1;
-    }
-    for (int f = sim->wall_count; f < sim->count; f++)
-        if (sim->id[f] == id)
-            a = f;
     const double dx = sim->x[a] - b->x[0], dy = sim->y[a] - b->y[0], distance = hypot(dx, dy);
     const double disc_gap = distance - b->radius[0], bed_gap = sim->y[a];
     const double disc_approach = -((sim->vx[a] - b->vx[0]) * dx + (sim->vy[a] - b->vy[0]) * dy) / distance;
@@ -664,14 +674,8 @@ static int test_implicit_wedge(void)
     expect_below("implicit_wedge: off the disc by half the gap, less 0.05 dp (dp short)", 0.25 - disc_gap / dp, 0);
     expect_below("implicit_wedge: velocity toward the bed after the step (m/s)", (double)-sim->vy[a], 1e-6);
     /* in reach of the disc's face from the step's start on, the velocity rule holds there too */
-    if (surge_sim_step(sim) != 0) {
-        fprintf(stderr, "implicit_wedge: the second step failed: %s\n", sim->health.message);
-        surge_sim_destroy(sim);
+    if ((a = wedge_step(sim, id, "the second step")) < 0)
         return 1;
-    }
-    for (int f = sim->wall_count; f < sim->count; f++)
-        if (sim->id[f] == id)
-            a = f;
     const double ex = sim->x[a] - b->x[0], ey = sim->y[a] - b->y[0], d2 = hypot(ex, ey);
     const double approach2 = -((sim->vx[a] - b->vx[0]) * ex + (sim->vy[a] - b->vy[0]) * ey) / d2;
     printf("implicit_wedge: after a second step %.3f dp above the bed and %.3f dp off the disc, approaching the bed at "
