@@ -285,9 +285,32 @@ static double velocity_divergence(const surge_sim *sim, int i, double *sum_w)
     return g[0] * w->minv_xx[i] + (g[1] + g[2]) * w->minv_xy[i] + g[3] * w->minv_yy[i];
 }
 
-/* Step 2's sources: -(rho0/dt) div v* for phi and the rest-density source for psi, the diagonal and phi's first
- * guess (the last step's: a steady flow's is much the same from step to step) */
-static void projection_sources(surge_sim *sim, double dt)
+/* The kernel sum the rest-density correction holds the fluid to, over the lattice's: 1 where a free surface takes up
+ * a change of volume; in a closed domain (a channel between plates) the mean over the particles whose kernel sees no
+ * disc. There the fluid's volume is fixed, and once the shift has let it into the room a placement leaves around the
+ * discs the bulk reads some tenths of a per cent short of the lattice everywhere, which no displacement can mend:
+ * held to 1, that shortfall, counted in the bulk but not next to a disc (projection_sources), raised psi over every
+ * disc and drove the fluid off it, 0.5-2 dp a step along a plate out of the wedge under a disc placed 0.8 dp from it
+ * in the loaded channel (r/dp 6), until the emptied wedge read as a free surface and the run stopped on a particle
+ * at 0.897 rho0 (docs/method.md, "Closed domains"). A serial sum: the same at any thread count */
+static double rest_kernel_ratio(const surge_sim *sim, int free_surface)
+{
+    const implicit_work *w = implicit_of(sim);
+    const int nf = sim->count - sim->wall_count;
+    if (free_surface)
+        return 1.0;
+    double sum = 0;
+    int counted = 0;
+    for (int i = 0; i < nf; i++)
+        if (!w->near_disc[i])
+            sum += w->kernel_ratio[i], counted++;
+    return counted > 0 ? sum / counted : 1.0;
+}
+
+/* Step 2's sources: -(rho0/dt) div v* for phi and the rest-density source for psi (the spacing read against
+ * rest_ratio), the diagonal and phi's first guess (the last step's: a steady flow's is much the same from step to
+ * step) */
+static void projection_sources(surge_sim *sim, double dt, double rest_ratio)
 {
     implicit_work *w = implicit_of(sim);
     const int first = sim->wall_count, nf = sim->count - first;
@@ -300,8 +323,8 @@ static void projection_sources(surge_sim *sim, double dt)
         /* near the surface the kernel sum is truncated: it is read against a flat surface's at the particle's depth;
          * where that cannot be read (a partly dry wall in reach), a deficit is not an expansion and only an excess
          * counts (clumped particles, which nothing else pushes apart where the pressure is near 0) */
-        const double compression = w->near_disc[i] ? fmax(0.0, w->kernel_ratio[i] - 1.0)
-                                   : !sim->near_surface[a] ? w->kernel_ratio[i] - 1.0
+        const double compression = w->near_disc[i] ? fmax(0.0, w->kernel_ratio[i] / rest_ratio - 1.0)
+                                   : !sim->near_surface[a] ? w->kernel_ratio[i] / rest_ratio - 1.0
                                    : w->expected_ratio[i] > 0 ? w->kernel_ratio[i] / w->expected_ratio[i] - 1.0
                                    : fmax(0.0, w->kernel_ratio[i] - 1.0);
         w->density_rhs[i] = w->fixed[i] ? 0.0 : alpha * rho0 * compression / (dt * dt);
@@ -322,13 +345,13 @@ static int project(surge_sim *sim, double dt, int first_pass)
     surge_phase_times *t = &sim->phase_times;
     wall_neumann_offsets(sim, dt);
     phase_end(sim, &t->boundary_s);
-    projection_sources(sim, dt);
     /* without a free surface (a closed channel) the pressure is fixed only up to a constant: the singular matrix
      * defeats the multigrid's coarsest level, and the matrix-free solve takes it (docs/method.md) */
     int free_surface = w->any_imaged;
     for (int i = 0; i < nf && !free_surface; i++)
         free_surface = w->fixed[i];
     w->free_surface = free_surface;
+    projection_sources(sim, dt, rest_kernel_ratio(sim, free_surface));
     /* ... and, with a disc, need not be consistent either: the ghosts' normal velocities over a disc need not sum to
      * zero. There the fluid takes the explicit scheme's compressibility, -lap phi + phi/(c0 dt)^2 (the Tait equation
      * of state linearised, p = c0^2 (rho - rho0)): a source the incompressible equation cannot meet becomes a

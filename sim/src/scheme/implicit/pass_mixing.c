@@ -38,14 +38,16 @@ int implicit_mixing_reserve(implicit_work *w, int depth, int nf)
 }
 
 /* Solves the normal equations G gamma = b of the least-squares problem (G symmetric, n x n) by Cholesky's
- * factorisation; 0 when G is numerically singular (a pivot below 1e-12 of its diagonal entry) */
-static int solve_normal(double g[MAX_HISTORY][MAX_HISTORY], double *b, int n)
+ * factorisation; 0 when G is numerically singular: a pivot below 1e-12 of its diagonal entry, or below 1e-12 of
+ * f_squared, the squared norm of the residual f_k that the differences are to reduce (a difference a millionth of
+ * the residual is round-off, and its gamma of order 1e10 threw a disc in shear at 13 rad/s in one pass) */
+static int solve_normal(double g[MAX_HISTORY][MAX_HISTORY], double *b, int n, double f_squared)
 {
     for (int j = 0; j < n; j++) {
         const double diagonal = g[j][j];
         for (int k = 0; k < j; k++)
             g[j][j] -= g[j][k] * g[j][k];
-        if (!(g[j][j] > 1e-12 * diagonal))
+        if (!(g[j][j] > 1e-12 * diagonal && g[j][j] > 1e-12 * f_squared))
             return 0;
         g[j][j] = sqrt(g[j][j]);
         for (int i = j + 1; i < n; i++) {
@@ -97,6 +99,7 @@ void implicit_mix_pressure(surge_sim *sim, int pass)
     /* gamma over the newest differences; the oldest dropped while their normal equations are singular */
     double gamma[MAX_HISTORY] = {0};
     int used = w->mixing_count;
+    const double f_squared = used > 0 ? implicit_dot(w, w->mixing_f, w->mixing_f, nf) : 0.0;
     while (used > 0) {
         double gram[MAX_HISTORY][MAX_HISTORY], b[MAX_HISTORY];
         for (int j = 0; j < used; j++) {
@@ -108,7 +111,7 @@ void implicit_mix_pressure(surge_sim *sim, int pass)
                 gram[j][l] = gram[l][j] = implicit_dot(w, dfj, w->mixing_df + (size_t)cl * nf, nf);
             }
         }
-        if (solve_normal(gram, b, used)) {
+        if (solve_normal(gram, b, used, f_squared)) {
             memcpy(gamma, b, (size_t)used * sizeof *gamma);
             break;
         }
