@@ -20,7 +20,7 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   (implicit.force_cfl 0.1; +13.1 % measured, the explicit scheme's bound 15 %) and at the default
                   step (+15.2 %, bound 20 %), steady and straight down; a disc lighter than the fluid rises; a
                   thrown disc's impact restarts bit for bit. In the tank closed by its lid (no free surface) at the
-                  default step (+18.6 %, bound 20 %; the explicit scheme's closed tank +11 %, bound 15 %), and the
+                  default step (+15.2 %, bound 20 %; the explicit scheme's closed tank +11 %, bound 15 %), and the
                   Couette disc at a tenth of the default step (-1.9 %) and at the default step (+1.7 %; +5.5 % with
                   one pass of the solves a step), within 3 %, the explicit scheme's bound.
   GROUP implicit_steps  the implicit scheme's discs solved with the fluid: one neutrally buoyant disc released at rest
