@@ -590,14 +590,23 @@ static void contact_velocities(surge_sim *sim, double dt)
         const double other_approach_mps = vx1 * other->nx + vy1 * other->ny - other->vn_mps;
         if (other->gap_m < contact_m && other_approach_mps - (contact ? approach_mps * (other->nx * sim->face_nx[a] +
                                                               other->ny * sim->face_ny[a]) : 0.0) < 0) {
-            /* in a wedge, within reach of two faces: no approach to either */
+            /* in a wedge, within reach of two faces: no approach to either. The solids take the particle's change of
+             * momentum, l_nearest n_nearest + l_other n_other, each its own push less the part the two have in common,
+             * and that part, common (n_nearest + n_other), half each. That part squeezes the particle between the
+             * faces: between faces nearly back to back its multipliers grow as 1/(1 - cos^2) while their sum stays
+             * small, and given to each solid whole it kicked two discs 0.9 dp apart apart at 0.06-0.19 m/s in one step
+             * (loaded channel, r/dp 3, phi 0.5), a force no fluid carries: the pressure solve carries the gap's */
             double l_nearest, l_other;
             keep_off_two_faces(&vx1, &vy1, sim->face_nx[a], sim->face_ny[a],
                                sim->face_gap_m[a] < contact_m ? sim->face_vn_mps[a] : -INFINITY, other->nx, other->ny,
                                other->vn_mps, &l_nearest, &l_other);
-            sim->face_push_x[a] = (real)(l_nearest * sim->face_nx[a] / dt);
-            sim->face_push_y[a] = (real)(l_nearest * sim->face_ny[a] / dt);
-            w->other_push_x[i] = (real)(l_other * other->nx / dt), w->other_push_y[i] = (real)(l_other * other->ny / dt);
+            const double common = fmin(l_nearest, l_other);
+            const double shared_x = 0.5 * common * (sim->face_nx[a] + other->nx);
+            const double shared_y = 0.5 * common * (sim->face_ny[a] + other->ny);
+            sim->face_push_x[a] = (real)(((l_nearest - common) * sim->face_nx[a] + shared_x) / dt);
+            sim->face_push_y[a] = (real)(((l_nearest - common) * sim->face_ny[a] + shared_y) / dt);
+            w->other_push_x[i] = (real)(((l_other - common) * other->nx + shared_x) / dt);
+            w->other_push_y[i] = (real)(((l_other - common) * other->ny + shared_y) / dt);
         } else {
             w->other_push_x[i] = 0, w->other_push_y[i] = 0;
             if (contact)
