@@ -300,6 +300,12 @@ static const surge_param_info registry[] = {
     {"boulders", "file", SURGE_PARAM_TEXT, "-", 0, 0, 0, false, NULL,
      "File placement: CSV with the header x_m,y_m,r_m (and optionally vx_mps,vy_mps,omega_radps), one disc per "
      "row, as a run writes to boulders.csv (a relative path is from the working folder).", OFF(boulders.file)},
+    {"boulders", "pack_fluid", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL,
+     "Keep every fluid lattice site outside a disc and pack the fluid around the discs before the first step, so "
+     "that it fills the room the discs leave at its rest spacing. Off: the sites within a quarter spacing of a "
+     "disc's surface are left out, and the fluid is 0.5 phi / ((r/dp) (1 - phi)) of its room short. Off by default: "
+     "with the fluid at its rest spacing next to the discs the implicit scheme squeezes it between discs and walls "
+     "more often (docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
 
     {"contacts", "friction", SURGE_PARAM_REAL, "-", 0.5, 0, 10, true, NULL,
      "Coulomb friction coefficient mu between discs and between discs and walls.", OFF(contacts.friction)},

@@ -102,7 +102,8 @@ surge_sim *sim_create_checked(const surge_params *params,
     update_body_force(sim);
     const int built = scene_build(sim, err, err_len);
     sim->scene_check = NULL;
-    if (built != 0 || grid_init(sim, err, err_len) != 0 || neighbours_init(sim, err, err_len) != 0) {
+    if (built != 0 || grid_init(sim, err, err_len) != 0 || neighbours_init(sim, err, err_len) != 0 ||
+        scene_pack_fluid(sim, err, err_len) != 0) {
         surge_sim_destroy(sim);
         return NULL;
     }
@@ -124,6 +125,7 @@ void surge_sim_destroy(surge_sim *sim)
     if (!sim)
         return;
     fields_free(sim);
+    free(sim->pack_interior);
     free(sim->sort_key);
     free(sim->sort_scratch_i);
     free(sim->sort_scratch_d);

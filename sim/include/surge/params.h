@@ -163,6 +163,7 @@ typedef struct surge_params {
         double front_median_m;          /* graded: median distance of a centre behind the front (log-normal) */
         double front_sigma;             /* graded: the log-normal's sigma (of ln distance) */
         char file[SURGE_TEXT_PARAM_BYTES]; /* file: CSV x_m,y_m,r_m[,vx_mps,vy_mps,omega_radps] */
+        bool pack_fluid;                /* keep every fluid site outside a disc and pack the fluid around the discs */
     } boulders;
     struct {
         double friction;         /* Coulomb coefficient mu */

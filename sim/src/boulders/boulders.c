@@ -375,7 +375,7 @@ void boulders_create_particles(surge_sim *sim, int first)
 
 /* Distance (m) from (x, y) to the nearest wall face of the domain on the fluid's side (the bed, the lid, the side
  * walls, the upstream wall's face below its top); INFINITY without walls */
-static double wall_face_distance_m(const surge_params *p, double x, double y)
+double boulders_wall_face_distance_m(const surge_params *p, double x, double y)
 {
     double d = INFINITY;
     if (p->walls.bottom)
@@ -406,16 +406,19 @@ int boulders_fluid_within(const surge_sim *sim, int i, double reach_m)
     return 0;
 }
 
-/* A fluid site is covered within a quarter spacing of a disc's surface, and where the disc leaves less room between
- * its surface and the next face (another disc, a wall) than twice the scheme's contact distance: a particle there
- * would sit closer to both faces than that distance, and each face's contact rule would push it into the other (a
- * disc a third of a spacing under the lid of the loaded channel squeezed such a particle to 1.14 rho0 in two
- * implicit steps) */
+/* A fluid site is covered within a quarter spacing of a disc's surface (inside it where the fluid is packed,
+ * boulders.pack_fluid: scene/packing.c moves the sites near the surface out), and where the disc leaves less room
+ * between its surface and the next face (another disc, a wall) than twice the scheme's contact distance: a particle
+ * there would sit closer to both faces than that distance, and each face's contact rule would push it into the other
+ * (a disc a third of a spacing under the lid of the loaded channel squeezed such a particle to 1.14 rho0 in two
+ * implicit steps). The quarter spacing leaves the fluid 0.25 dp times the discs' perimeter short, 0.5 phi / ((r/dp)
+ * (1 - phi)) of its room: 12.5 % in the loaded channel at phi 0.5 and r/dp 4 */
 int boulders_cover(const surge_sim *sim, double x, double y)
 {
     const boulder_set *b = &sim->boulders;
     const double period = sim->params.domain.periodic_x ? sim->params.domain.length_m : 0;
-    const double dp = sim->params.numerics.dp_m, clearance = 0.25 * dp, room_m = 2.0 * sim_contact_reach_m(sim);
+    const double dp = sim->params.numerics.dp_m, room_m = 2.0 * sim_contact_reach_m(sim);
+    const double clearance = sim->params.boulders.pack_fluid ? 0.0 : 0.25 * dp;
     double nearest_m = INFINITY, second_m = INFINITY; /* distances to the two nearest disc surfaces */
     for (int i = 0; i < b->count; i++) {
         const double dx = placement_wrap_dx(x - b->x[i], period), dy = y - b->y[i];
@@ -429,5 +432,5 @@ int boulders_cover(const surge_sim *sim, double x, double y)
         else if (surface_m < second_m)
             second_m = surface_m;
     }
-    return nearest_m < room_m && nearest_m + fmin(second_m, wall_face_distance_m(&sim->params, x, y)) < room_m;
+    return nearest_m < room_m && nearest_m + fmin(second_m, boulders_wall_face_distance_m(&sim->params, x, y)) < room_m;
 }

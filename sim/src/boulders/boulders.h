@@ -8,6 +8,7 @@
 
 #include "boulders/boulder_set.h"
 #include "precision.h"
+#include "surge/params.h"
 
 typedef struct surge_sim surge_sim;
 
@@ -19,6 +20,8 @@ void boulders_create_particles(surge_sim *sim, int first);
 int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particle here would sit in a disc, or in a
                                                                gap beside one narrower than twice the contact distance */
 int boulders_fluid_within(const surge_sim *sim, int i, double reach_m); /* fluid within reach of its surface */
+/* Distance (m) from (x, y) to the nearest wall face of the domain on the fluid's side; INFINITY without walls */
+double boulders_wall_face_distance_m(const surge_params *p, double x, double y);
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);

@@ -201,6 +201,41 @@ static double fluid_row(const surge_sim *s, long rows, long r, double g_normal, 
     return rho;
 }
 
+/* Whether lattice site (c, r) of the fluid block (columns of rows[c] rows from fluid.x0_m, row 0 on the bed), or the
+ * point it would take, is filled at the start: a site of the block (a disc's too: the disc fills it) or a point inside
+ * a wall. Not filled: beyond the block's free surface */
+static int lattice_point_filled(const surge_params *p, const int *rows, long cols, long c, long r)
+{
+    const double dp = p->numerics.dp_m, length = p->domain.length_m;
+    if (r < 0)
+        return p->walls.bottom;
+    double x = p->fluid.x0_m + (c + 0.5) * dp;
+    const double y = (r + 0.5) * dp;
+    if (p->domain.periodic_x)
+        x -= floor(x / length) * length;
+    const long k = (long)floor((x - p->fluid.x0_m) / dp);
+    if (k >= 0 && k < cols && r < rows[k])
+        return 1;
+    if (p->walls.upstream && y < p->walls.upstream_height_m && x < p->walls.upstream_x_m &&
+        x > p->walls.upstream_x_m - p->walls.layers * dp)
+        return 1;
+    return boulders_wall_face_distance_m(p, x, y) < 0;
+}
+
+/* Whether every lattice point within the kernel's support of site (c, r) is filled (lattice_point_filled): a site
+ * whose kernel no free surface cuts, which the packing may move */
+static int lattice_site_interior(const surge_sim *s, const int *rows, long cols, long c, long r)
+{
+    const double support_sites = 2.0 * s->derived.h_m / s->params.numerics.dp_m;
+    const long reach = (long)ceil(support_sites);
+    for (long dr = -reach; dr <= reach; dr++)
+        for (long dc = -reach; dc <= reach; dc++)
+            if ((double)(dc * dc + dr * dr) < support_sites * support_sites &&
+                !lattice_point_filled(&s->params, rows, cols, c + dc, r + dr))
+                return 0;
+    return 1;
+}
+
 int scene_build(surge_sim *s, char *err, size_t err_len)
 {
     const surge_params *p = &s->params;
@@ -251,6 +286,13 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
         free(rows);
         goto fail;
     }
+    /* a new scene with discs is packed around them where asked (packing.c); a checkpoint's reader sets the positions */
+    const int pack = s->boulders.count > 0 && p->boulders.pack_fluid && !s->scene_check;
+    if (pack && !(s->pack_interior = calloc((size_t)fluid_count + 1, 1))) {
+        snprintf(err, err_len, "out of memory for %ld particles", (long)s->wall_count + fluid_count);
+        free(rows);
+        goto fail;
+    }
     for (int i = 0; i < s->wall_count; i++)
         s->boulders.of_wall[i] = -1;
     boulders_create_particles(s, walls.n);
@@ -281,6 +323,8 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
             s->pressure[i] = (real)(s->rho0 * g_normal * dp * ((double)rows[c] - 0.5 - (double)r));
             s->id[i] = i;
             s->kind[i] = SURGE_KIND_FLUID;
+            if (pack)
+                s->pack_interior[i - s->wall_count] = (uint8_t)lattice_site_interior(s, rows, cols, c, r);
             i++;
         }
     }

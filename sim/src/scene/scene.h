@@ -9,6 +9,9 @@
 typedef struct surge_sim surge_sim;
 
 int scene_build(surge_sim *sim, char *err, size_t err_len);
+/* Packs the fluid around the discs where boulders.pack_fluid asks and scene_build marked it (packing.c; nothing
+ * otherwise), with the grid and the neighbour lists set up; 0, or -1 with err */
+int scene_pack_fluid(surge_sim *sim, char *err, size_t err_len);
 
 /* The particles the scene of p holds, counted without building it (nothing is allocated): the box's wall particles
  * (the boulders' come on top) and the sites of the initial fluid lattice (the fluid particles, less those the
