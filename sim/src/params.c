@@ -303,9 +303,9 @@ static const surge_param_info registry[] = {
     {"boulders", "pack_fluid", SURGE_PARAM_BOOL, "-", 0, 0, 1, false, NULL,
      "Keep every fluid lattice site outside a disc and pack the fluid around the discs before the first step, so "
      "that it fills the room the discs leave at its rest spacing. Off: the sites within a quarter spacing of a "
-     "disc's surface are left out, and the fluid is 0.5 phi / ((r/dp) (1 - phi)) of its room short. Off by default: "
-     "with the fluid at its rest spacing next to the discs the implicit scheme squeezes it between discs and walls "
-     "more often (docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
+     "disc's surface are left out, and the fluid is 0.5 phi / ((r/dp) (1 - phi)) of its room short. Packed, the "
+     "implicit scheme's rest-density correction counts a deficit next to a disc too. Off by default until the "
+     "validation studies are run with it (docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
 
     {"contacts", "friction", SURGE_PARAM_REAL, "-", 0.5, 0, 10, true, NULL,
      "Coulomb friction coefficient mu between discs and between discs and walls.", OFF(contacts.friction)},
