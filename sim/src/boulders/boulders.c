@@ -417,7 +417,7 @@ int boulders_cover(const surge_sim *sim, double x, double y)
 {
     const boulder_set *b = &sim->boulders;
     const double period = sim->params.domain.periodic_x ? sim->params.domain.length_m : 0;
-    const double dp = sim->params.numerics.dp_m, room_m = 2.0 * sim_contact_reach_m(sim);
+    const double dp = sim->params.numerics.dp_m;
     const double clearance = sim->params.boulders.pack_fluid ? 0.0 : 0.25 * dp;
     double nearest_m = INFINITY, second_m = INFINITY; /* distances to the two nearest disc surfaces */
     for (int i = 0; i < b->count; i++) {
@@ -432,5 +432,11 @@ int boulders_cover(const surge_sim *sim, double x, double y)
         else if (surface_m < second_m)
             second_m = surface_m;
     }
+    return boulders_room_too_narrow(sim, x, y, nearest_m, second_m);
+}
+
+int boulders_room_too_narrow(const surge_sim *sim, double x, double y, double nearest_m, double second_m)
+{
+    const double room_m = 2.0 * sim_contact_reach_m(sim);
     return nearest_m < room_m && nearest_m + fmin(second_m, boulders_wall_face_distance_m(&sim->params, x, y)) < room_m;
 }

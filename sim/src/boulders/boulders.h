@@ -22,6 +22,9 @@ int boulders_cover(const surge_sim *sim, double x, double y); /* a fluid particl
 int boulders_fluid_within(const surge_sim *sim, int i, double reach_m); /* fluid within reach of its surface */
 /* Distance (m) from (x, y) to the nearest wall face of the domain on the fluid's side; INFINITY without walls */
 double boulders_wall_face_distance_m(const surge_params *p, double x, double y);
+/* Whether (x, y), nearest_m and second_m from the surfaces of its two nearest discs, lies where the nearest disc leaves
+ * less room to the next face (the second disc or a wall) than twice the contact distance (boulders_cover) */
+int boulders_room_too_narrow(const surge_sim *sim, double x, double y, double nearest_m, double second_m);
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);

@@ -104,9 +104,7 @@ static int keep_off_discs(const surge_sim *sim, int i, double reach_m, double *x
         else if (surface_m < second_m && surface_m > nearest_m)
             second_m = surface_m;
     }
-    const double room_m = 2.0 * reach_m;
-    return nearest_m < room_m &&
-           nearest_m + fmin(second_m, boulders_wall_face_distance_m(&sim->params, *x, *y)) < room_m;
+    return boulders_room_too_narrow(sim, *x, *y, nearest_m, second_m);
 }
 
 int scene_pack_fluid(surge_sim *sim, char *err, size_t err_len)
