@@ -6,7 +6,8 @@ cases/poiseuille_loaded.ini at phi 0.1 (seed 1, 48 discs), r/dp 3, the implicit 
 shipped settings (the lubrication model on), 1 s.
 
 At phi 0.1 the implicit sweep converges (mu_eq/mu0 1.1131, 1.1378, 1.1496 and 1.1610 at r/dp 4, 6, 8 and 12,
-changes of 2.2, 1.0 and 1.0 %); the coarse run reads 1.0941, 5.8 % below the r/dp 12 value. With the rest-density
+changes of 2.2, 1.0 and 1.0 %; without the lubrication model); the coarse run reads 1.1097, 4.4 % below the r/dp 12
+value (1.0941, 5.8 % below, with the lubrication films in the contact solver after the solve). With the rest-density
 correction reading the spacing against the lattice's kernel sum in this closed channel it read 1.0541, 9.2 % below
 (docs/method.md, "Closed domains").
 

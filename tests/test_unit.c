@@ -1342,6 +1342,80 @@ static int test_implicit_disc_momentum(void)
     return failures;
 }
 
+/* The momentum scene's discs with the second one moved to 0.3 dp from the first, along 30 degrees: a lubrication
+ * film between them (the cut-off is 1 dp) */
+static void film_discs_implicit(surge_params *p)
+{
+    thrown_discs_implicit(p);
+    const double r = 0.0125, centre = 2 * r + 0.3 * p->numerics.dp_m;
+    char list[160], err[160];
+    snprintf(list, sizeof list, "0.195 0.05 0.0125 0.04 0.005 0, 0.08 0.05 0.0125 -0.01 0 0.5, %.9f %.9f 0.0125 0 -0.01 0",
+             0.08 + centre * cos(SURGE_PI / 6), 0.05 + centre * sin(SURGE_PI / 6));
+    surge_param_set(p, surge_param_find("boulders.list_m"), list, err, sizeof err);
+}
+
+/* The lubrication films in the implicit scheme's solves (sim/src/scheme/implicit/films.c): two discs 0.3 dp apart in
+ * a weightless slab. The coupled viscous operator still balances momentum to round-off with the film's forces in the
+ * discs' rows; and the pressure correction's block solve inverts I + dt M^-1 K for the K that the rows' forces use:
+ * for any disc velocities x, solving and then applying I + dt M^-1 K (through implicit_film_forces) gives x back. */
+static int test_implicit_films(void)
+{
+    surge_sim *sim = case_sim("boulder_couette.ini", 0, film_discs_implicit);
+    if (!sim || surge_sim_step(sim) != 0)
+        return 1;
+    const implicit_work *w = implicit_of(sim);
+    const boulder_set *b = &sim->boulders;
+    printf("implicit_films: %d films, %d blocks\n", w->film_count, w->film_blocks.count);
+    expect_below("implicit_films: a film between the close discs (1 = none)", w->film_count >= 1 ? 0 : 1, 0);
+    const int nf = sim->count - sim->wall_count, n = 2 * nf + w->disc_rows;
+    double *x = malloc((size_t)n * sizeof *x), *out = malloc((size_t)n * sizeof *out);
+    uint32_t state = 2024u;
+    for (int q = 0; q < n; q++) {
+        state ^= state << 13, state ^= state >> 17, state ^= state << 5;
+        x[q] = 0.01 * ((double)state / 4294967296.0 - 0.5);
+    }
+    implicit_coupled_viscous_operator(sim, x, out);
+    double change[2] = {0, 0}, moved[2] = {0, 0};
+    for (int c = 0; c < 2; c++) {
+        for (int i = 0; i < nf; i++)
+            change[c] += sim->mass * (out[c * nf + i] - x[c * nf + i]),
+                moved[c] += fabs(sim->mass * (out[c * nf + i] - x[c * nf + i]));
+        for (int d = 0; d < b->count; d++) {
+            const double dq = b->mass[d] * (out[2 * nf + 3 * d + c] - x[2 * nf + 3 * d + c]);
+            change[c] += dq, moved[c] += fabs(dq);
+        }
+    }
+    printf("implicit_films: momentum change (%.3e, %.3e) of (%.3e, %.3e) moved\n", change[0], change[1], moved[0],
+           moved[1]);
+    expect_below("implicit_films: |x momentum change| / momentum moved", fabs(change[0]) / moved[0], 1e-12);
+    expect_below("implicit_films: |y momentum change| / momentum moved", fabs(change[1]) / moved[1], 1e-12);
+    const int rows = w->disc_rows;
+    double *u = malloc((size_t)rows * sizeof *u), *force = calloc((size_t)rows, sizeof *force);
+    memcpy(u, x + 2 * nf, (size_t)rows * sizeof *u);
+    implicit_films_solve(sim, FILMS_PRESSURE, u);
+    implicit_film_forces(sim, u, force);
+    double error = 0, size = 0, changed = 0;
+    for (int q = 0; q < rows; q++) {
+        const int d = q / 3;
+        const double dt_over_mass = q % 3 < 2 ? sim->dt_s * b->inv_mass[d]
+                                              : sim->dt_s * b->inv_inertia[d] * b->radius[d] * b->radius[d];
+        error = fmax(error, fabs(u[q] - dt_over_mass * force[q] - x[2 * nf + q]));
+        size = fmax(size, fabs(x[2 * nf + q]));
+        changed = fmax(changed, fabs(u[q] - x[2 * nf + q]));
+    }
+    printf("implicit_films: block solve then I + dt M^-1 K: largest error %.3e of %.3e (the solve changed it by up to "
+           "%.3e)\n", error, size, changed);
+    expect_below("implicit_films: the solve changes the close discs' velocities (relative)", changed > 1e-3 * size ? 0 : 1,
+                 0);
+    expect_below("implicit_films: (I + dt M^-1 K) solve(x) = x (relative)", error / size, 1e-10);
+    free(u);
+    free(force);
+    free(x);
+    free(out);
+    surge_sim_destroy(sim);
+    return failures;
+}
+
 /* The still tank (dp 1 cm) without gravity, with a disc of radius 5 dp at its centre, a step short enough that the
  * particles stay put */
 #define CAVITY_DISC_X_M 0.2
@@ -1639,6 +1713,8 @@ int main(int argc, char **argv)
         return test_implicit_dry_spin() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_disc_momentum"))
         return test_implicit_disc_momentum() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_films"))
+        return test_implicit_films() ? 1 : 0;
     if (!strcmp(argv[1], "kernel"))
         return test_kernel() ? 1 : 0;
     if (!strcmp(argv[1], "eos"))

@@ -3,7 +3,7 @@
 # (pyproject.toml, python/surgepy) editable into Debian's python3, and builds surge in Release into build/.
 set -e
 cd "$(dirname "$0")/.."
-packages="build-essential cmake pkg-config libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core ffmpeg libzmq3-dev libcjson-dev libhypre-dev python3 python3-numpy python3-zmq python3-matplotlib"
+packages="build-essential cmake pkg-config libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core ffmpeg libzmq3-dev libcjson-dev libhypre-dev liblapacke-dev python3 python3-numpy python3-zmq python3-matplotlib"
 # what installs surgepy, offline: Debian's pip and setuptools (without pip's recommended python3-dev)
 python_build="python3-pip python3-setuptools python3-wheel"
 missing_of() {

@@ -40,8 +40,11 @@ void boulders_save_step_start(boulder_set *b, int i);
 void boulders_restore_step_start(boulder_set *b, int i);
 void boulders_restore(surge_sim *sim);                        /* back to the step start (roll-back) */
 /* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
- * alpha; the disc particles follow. -1 when the contact solver runs out of memory. */
-int boulders_advance_with_contacts(surge_sim *sim, double dt_s);
+ * alpha, with the lubrication films (contacts.lubrication) when with_lubrication; the disc particles follow. -1 when
+ * the contact solver runs out of memory. */
+int boulders_advance_with_contacts(surge_sim *sim, double dt_s, int with_lubrication);
+/* The lubrication films of the discs' gaps at their present positions (contacts.lubrication; contact_solver_films) */
+int boulders_films(surge_sim *sim, contact_film **films, int *count, int *capacity);
 /* A disc's acceleration without the fluid: gravity on its mass; the driving force of a channel on its volume */
 void boulders_own_acceleration(const surge_sim *sim, double *gx, double *gy);
 /* The particles of ring k (0: the outer one) of a disc of radius r_m */

@@ -233,6 +233,26 @@ static int find_disc_contacts(contact_solver *s, const contact_discs *d, double 
     return 0;
 }
 
+/* Every pair of a disc and a wall or two discs whose gap is below margin, into s->now */
+static int find_contacts(contact_solver *s, const contact_discs *d, const contact_wall *walls, int wall_count,
+                         double period, double margin)
+{
+    s->now_count = 0;
+    for (int i = 0; i < d->count; i++) {
+        for (int w = 0; w < wall_count; w++) {
+            double nx, ny;
+            const double gap = wall_gap(&walls[w], d->x[i], d->y[i], d->radius[i], period, &nx, &ny);
+            if (!(gap < margin)) /* non-finite: no contact */
+                continue;
+            contact c = {.key = contact_key(-1 - w, i), .a = -1 - w, .b = i, .nx = nx, .ny = ny, .gap_m = gap,
+                         .rb = d->radius[i], .wall_vx = walls[w].vx_mps, .wall_vy = walls[w].vy_mps};
+            if (push_contact(s, c) != 0)
+                return -1;
+        }
+    }
+    return find_disc_contacts(s, d, period, margin);
+}
+
 static int compare_keys(const void *a, const void *b)
 {
     const int64_t ka = ((const contact *)a)->key, kb = ((const contact *)b)->key;
@@ -293,6 +313,17 @@ static void apply_torques(const contact *c, contact_discs *d, double pt)
         d->omega[c->a] -= d->inv_inertia[c->a] * c->ra * pt;
 }
 
+/* The lubrication film's dampings of a contact, between the surfaces (radii and gap without the contact margin) */
+static void film_dampings(contact *c, const contact_settings *set)
+{
+    const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
+    const double radius_m = c->a >= 0 ? ra * rb / (ra + rb) : rb, gap_m = c->gap_m + set->gap_offset_m;
+    c->lubrication = lubrication_damping(set->lubrication_viscosity_pa_s, radius_m, gap_m, set->lubrication_cutoff_m,
+                                         set->lubrication_min_gap_m);
+    c->lubrication_t = lubrication_sliding_damping(set->lubrication_viscosity_pa_s, radius_m, gap_m,
+                                                   set->lubrication_cutoff_m, set->lubrication_min_gap_m);
+}
+
 static void prepare(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
 {
     for (int k = 0; k < s->now_count; k++) {
@@ -307,14 +338,7 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         c->target_vn = c->gap_m > 0 ? -c->gap_m / h : set->erp * -c->gap_m / h;
         if (vn0 < -set->restitution_min_mps && -vn0 * h > c->gap_m)
             c->target_vn = fmax(c->target_vn, -set->restitution * vn0);
-        /* the lubrication film, between the surfaces (radii and gap without the contact margin) */
-        const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
-        c->lubrication = lubrication_damping(set->lubrication_viscosity_pa_s, c->a >= 0 ? ra * rb / (ra + rb) : rb,
-                                             c->gap_m + set->gap_offset_m, set->lubrication_cutoff_m,
-                                             set->lubrication_min_gap_m);
-        c->lubrication_t = lubrication_sliding_damping(set->lubrication_viscosity_pa_s,
-                                                       c->a >= 0 ? ra * rb / (ra + rb) : rb, c->gap_m + set->gap_offset_m,
-                                                       set->lubrication_cutoff_m, set->lubrication_min_gap_m);
+        film_dampings(c, set);
         c->lambda_l = 0, c->lambda_lt = 0;
         const contact *old = find_before(s, c->key);
         c->lambda_n = old ? old->lambda_n : 0;
@@ -387,20 +411,7 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         double margin = 0.1 * r_min + 2 * h * v_max;
         if (set->lubrication_viscosity_pa_s > 0)
             margin = fmax(margin, set->lubrication_cutoff_m - set->gap_offset_m);
-        s->now_count = 0;
-        for (int i = 0; i < d->count; i++) {
-            for (int w = 0; w < wall_count; w++) {
-                double nx, ny;
-                const double gap = wall_gap(&walls[w], d->x[i], d->y[i], d->radius[i], period, &nx, &ny);
-                if (!(gap < margin)) /* non-finite: no contact */
-                    continue;
-                contact c = {.key = contact_key(-1 - w, i), .a = -1 - w, .b = i, .nx = nx, .ny = ny, .gap_m = gap,
-                             .rb = d->radius[i], .wall_vx = walls[w].vx_mps, .wall_vy = walls[w].vy_mps};
-                if (push_contact(s, c) != 0)
-                    return -1;
-            }
-        }
-        if (find_disc_contacts(s, d, period, margin) != 0)
+        if (find_contacts(s, d, walls, wall_count, period, margin) != 0)
             return -1;
         for (int k = 0; k < s->now_count; k++)
             s->stats.max_overlap_m = fmax(s->stats.max_overlap_m, -s->now[k].gap_m);
@@ -425,5 +436,33 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         s->before_count = s->now_count;
         s->stats.contacts = s->now_count;
     }
+    return 0;
+}
+
+int contact_solver_films(contact_solver *s, const contact_discs *d, const contact_wall *walls, int wall_count,
+                         const contact_settings *set, contact_film **films, int *count, int *capacity)
+{
+    *count = 0;
+    if (d->count == 0 || !(set->lubrication_viscosity_pa_s > 0))
+        return 0;
+    if (find_contacts(s, d, walls, wall_count, set->period_m, set->lubrication_cutoff_m - set->gap_offset_m) != 0)
+        return -1;
+    for (int k = 0; k < s->now_count; k++) {
+        contact *c = &s->now[k];
+        film_dampings(c, set);
+        if (!(c->lubrication > 0) && !(c->lubrication_t > 0))
+            continue;
+        if (*count == *capacity) {
+            const int grown = *capacity ? 2 * *capacity : 64;
+            contact_film *more = realloc(*films, (size_t)grown * sizeof *more);
+            if (!more)
+                return -1;
+            *films = more, *capacity = grown;
+        }
+        (*films)[(*count)++] = (contact_film){.a = c->a, .b = c->b, .nx = c->nx, .ny = c->ny, .ra = c->ra, .rb = c->rb,
+                                              .normal_damping = c->lubrication, .sliding_damping = c->lubrication_t,
+                                              .wall_vx = c->wall_vx, .wall_vy = c->wall_vy};
+    }
+    s->now_count = 0;
     return 0;
 }

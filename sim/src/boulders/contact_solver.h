@@ -60,6 +60,22 @@ int contact_solver_advance(contact_solver *solver, contact_discs *discs, const c
                            const contact_settings *settings, double dt_s, const double *ax, const double *ay,
                            const double *alpha);
 
+/* A lubrication film (lubrication.h) between disc b and disc a, or a wall -1 - a where a < 0: the normal n from a to
+ * b, the lever arms (a wall's 0), and the unresolved parts of the squeeze film's force per unit approach speed and of
+ * the sliding film's per unit sliding speed (N s m^-2); the sliding film acts through torques alone, r_a f and r_b f
+ * for f = sliding_damping v_t, v_t the speed of b's surface past a's along t = (-n_y, n_x) */
+typedef struct contact_film {
+    int a, b;
+    double nx, ny, ra, rb;
+    double normal_damping, sliding_damping;
+    double wall_vx, wall_vy;
+} contact_film;
+
+/* The films of the discs' gaps narrower than settings' lubrication cut-off, at their present positions, into films
+ * (grown as needed, *capacity its size). Returns 0, or -1 when out of memory. */
+int contact_solver_films(contact_solver *solver, const contact_discs *discs, const contact_wall *walls, int wall_count,
+                         const contact_settings *settings, contact_film **films, int *count, int *capacity);
+
 contact_stats contact_solver_stats(const contact_solver *solver);
 
 /* The warm-start impulses the next advance starts from (for checkpoints): key, normal and tangent impulse of each

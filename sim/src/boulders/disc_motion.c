@@ -141,25 +141,37 @@ static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_
     return n;
 }
 
-/* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
- * alpha; the disc particles follow. -1 when the contact solver runs out of memory. The time since the caller's last
- * phase mark (its accelerations) is the discs' phase, the solver's sub-steps the contacts'. */
-int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
+/* The contact solver's settings; with_lubrication 0: no film (a scheme that takes the films into its own solve) */
+static contact_settings contact_settings_of(const surge_sim *sim, int with_lubrication)
 {
-    boulder_set *b = &sim->boulders;
     const surge_params *p = &sim->params;
-    contact_wall walls[CONTACT_WALLS_MAX];
-    const int wall_count = contact_walls(sim, walls);
-    contact_discs discs = {b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
-                           b->inv_inertia, b->spin_damping};
     const double dp = p->numerics.dp_m;
-    const contact_settings settings = {
+    return (contact_settings){
         .friction = p->contacts.friction, .restitution = p->contacts.restitution,
         .restitution_min_mps = p->contacts.restitution_min_mps, .substeps = p->contacts.substeps,
         .iterations = p->contacts.iterations, .erp = p->contacts.erp, .period_m = sim->grid.period_m,
-        .lubrication_viscosity_pa_s = p->contacts.lubrication ? p->fluid.density_kgpm3 * p->fluid.viscosity_m2ps : 0,
+        .lubrication_viscosity_pa_s = with_lubrication && p->contacts.lubrication
+                                          ? p->fluid.density_kgpm3 * p->fluid.viscosity_m2ps : 0,
         .lubrication_cutoff_m = p->contacts.lubrication_cutoff_dp * dp,
         .lubrication_min_gap_m = p->contacts.lubrication_min_gap_dp * dp, .gap_offset_m = p->contacts.margin_dp * dp};
+}
+
+static contact_discs contact_discs_of(boulder_set *b)
+{
+    return (contact_discs){b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
+                           b->inv_inertia, b->spin_damping};
+}
+
+/* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
+ * alpha; the disc particles follow. -1 when the contact solver runs out of memory. The time since the caller's last
+ * phase mark (its accelerations) is the discs' phase, the solver's sub-steps the contacts'. */
+int boulders_advance_with_contacts(surge_sim *sim, double dt_s, int with_lubrication)
+{
+    boulder_set *b = &sim->boulders;
+    contact_wall walls[CONTACT_WALLS_MAX];
+    const int wall_count = contact_walls(sim, walls);
+    contact_discs discs = contact_discs_of(b);
+    const contact_settings settings = contact_settings_of(sim, with_lubrication);
     phase_end(sim, &sim->phase_times.discs_s);
     const int advanced = contact_solver_advance(b->contacts, &discs, walls, wall_count, &settings, dt_s, b->ax, b->ay,
                                                 b->alpha);
@@ -169,6 +181,16 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s)
     boulders_place_particles(sim);
     phase_end(sim, &sim->phase_times.discs_s);
     return 0;
+}
+
+int boulders_films(surge_sim *sim, contact_film **films, int *count, int *capacity)
+{
+    boulder_set *b = &sim->boulders;
+    contact_wall walls[CONTACT_WALLS_MAX];
+    const int wall_count = contact_walls(sim, walls);
+    const contact_discs discs = contact_discs_of(b);
+    const contact_settings settings = contact_settings_of(sim, 1);
+    return contact_solver_films(b->contacts, &discs, walls, wall_count, &settings, films, count, capacity);
 }
 
 /* A disc's acceleration without the fluid: gravity on its mass; the driving force of a channel (a pressure

@@ -39,5 +39,5 @@ int explicit_discs_correct(surge_sim *sim, double dt_s)
         b->ay[i] = b->fy[i] * b->inv_mass[i] + gy;
         b->alpha[i] = b->torque[i] * b->inv_inertia[i] + b->spin_damping[i] * b->omega_forces[i];
     }
-    return boulders_advance_with_contacts(sim, dt_s);
+    return boulders_advance_with_contacts(sim, dt_s, 1);
 }

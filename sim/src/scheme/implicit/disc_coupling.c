@@ -196,6 +196,7 @@ void implicit_discs_viscous_system(surge_sim *sim, double dt)
         diag[3 * d] += b->inv_mass[d] * stiffness, diag[3 * d + 1] += b->inv_mass[d] * stiffness;
         diag[3 * d + 2] += b->inv_inertia[d] * stiffness * 0.5 * b->radius[d] * b->radius[d];
     }
+    implicit_films_factor(sim, dt, diag);
 }
 
 /* The coupled viscous operator on x = (vx | vy | U): the fluid's rows with the disc particles' mirrors at u_k(U),
@@ -221,6 +222,7 @@ void implicit_coupled_viscous_operator(surge_sim *sim, const double *x, double *
         force[3 * d] += fx, force[3 * d + 1] += fy;
         force[3 * d + 2] += (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
     }
+    implicit_film_forces(sim, disc_x, force);
     const double dt = sim->dt_s;
     for (int d = 0; d < b->count; d++) {
         const double *u = disc_x + 3 * d, radius = b->radius[d];
@@ -242,6 +244,7 @@ static void pressure_velocity_change(surge_sim *sim, const double *x, double dt)
         change[3 * d] *= dt * b->inv_mass[d], change[3 * d + 1] *= dt * b->inv_mass[d];
         change[3 * d + 2] *= dt * b->inv_inertia[d] * b->radius[d] * b->radius[d];
     }
+    implicit_films_solve(sim, FILMS_PRESSURE, change); /* with the films: (M + dt K) dU = dt F_p */
 }
 
 /* The coupled pressure operator: implicit_pressure_operator's -lap phi, plus (rho0/dt) times what the discs' change of

@@ -33,6 +33,24 @@ enum { MULTIGRID_VISCOUS, MULTIGRID_PRESSURE };
 /* The vectors a hierarchy's V-cycle takes at once: the viscous solve's two velocity components, the pressure */
 static inline int multigrid_blocks(int which) { return which == MULTIGRID_VISCOUS ? 2 : 1; }
 
+/* The discs that lubrication films join, as blocks solved directly (films.c) */
+enum { FILMS_VISCOUS, FILMS_PRESSURE };
+typedef struct film_blocks {
+    int count;                           /* blocks this step */
+    int *of_disc;                        /* per disc: its block, -1 without a film */
+    int *place;                          /* per disc: its place in its block (union-find scratch while they form) */
+    int *first;                          /* scratch: the clusters' first members before they are cut into blocks */
+    int *members;                        /* the blocks' discs, block k's from start[k] to start[k + 1], in disc order */
+    int *start;
+    double *lu[2];                       /* per block, one after another: its rows' LU factors (FILMS_VISCOUS,
+                                          * FILMS_PRESSURE), column-major */
+    int *pivots[2];                      /* 3 per member */
+    double *scratch;
+    int factored;                        /* this step's blocks are factored (implicit_films_factor) */
+    size_t disc_capacity, place_capacity, first_capacity, members_capacity, start_capacity, lu_capacity[2],
+        pivot_capacity[2], scratch_capacity;
+} film_blocks;
+
 typedef struct implicit_work {
     size_t fluid_cap, wall_cap, mirror_cap, ghost_cap; /* entries the per-entry arrays hold */
     real *fluid_w, *fluid_gx, *fluid_gy; /* per fluid-list entry: Laplacian weight, V_b f r_ab */
@@ -54,6 +72,10 @@ typedef struct implicit_work {
     double *disc_force;                  /* 3 per disc: force (N/m) and torque (N), scratch */
     double *disc_reference_pa;           /* per disc: the mean pressure of its particles */
     double *spin_drag;                   /* per disc: c in the viscous torque's missing part -c Omega (N s) */
+    contact_film *films;                 /* the step's lubrication films (contacts.lubrication), taken into the viscous
+                                          * solve's disc rows (disc_coupling.c) */
+    int film_count, film_capacity;
+    film_blocks film_blocks;             /* the discs they join, solved as blocks */
     real *fluid_pc, *wall_pc;            /* per list entry: the pressure operator's coefficient (implicit_assemble_pressure) */
     double *pressure_diag;               /* per fluid particle: the pressure operator's diagonal */
     held_multigrid multigrid[2];         /* implicit.preconditioner = amg: the viscous and the pressure hierarchy */
@@ -231,6 +253,12 @@ double implicit_image_laplacian_row(surge_sim *sim, int i, double ux, double uy)
 void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double list_entries, double bytes);
 /* disc_coupling.c: the discs' velocities as unknowns of the viscous and the pressure solves */
 void implicit_discs_prepare(surge_sim *sim);
+/* films.c: the lubrication films in the viscous solve's disc rows and the pressure correction's change */
+int implicit_discs_films(surge_sim *sim); /* -1 when out of memory */
+void implicit_film_forces(const surge_sim *sim, const double *disc_x, double *force);
+void implicit_films_factor(surge_sim *sim, double dt, double *diag);
+void implicit_films_solve(surge_sim *sim, int which, double *x);
+void implicit_films_free(film_blocks *fb);
 void implicit_discs_viscous_system(surge_sim *sim, double dt);
 void implicit_coupled_viscous_operator(surge_sim *sim, const double *x, double *out);
 void implicit_discs_mirror(surge_sim *sim, const double *disc_velocity);

@@ -5,8 +5,8 @@
 /* The discs' step (docs/method.md, "Boulders in the implicit scheme"): each disc ends the fluid's step at the
  * velocity the coupled solves gave it, U_n+1, less the reaction of the contact rule's velocity changes of fluid
  * particles on its face (-m_a dv_a / m each; radial, no torque). The contact solver's sub-steps then take it from U_n
- * to there at the constant acceleration (U_n+1 - U_n) / dt, with their impulses; the viscous torque is in the solve,
- * so the sub-steps damp no spin. */
+ * to there at the constant acceleration (U_n+1 - U_n) / dt, with their impulses; the viscous torque and the
+ * lubrication films are in the solves (films.c), so the sub-steps damp no spin and add no film. */
 int implicit_discs_advance(surge_sim *sim, double dt_s)
 {
     implicit_work *w = implicit_of(sim);
@@ -31,5 +31,5 @@ int implicit_discs_advance(surge_sim *sim, double dt_s)
         b->alpha[d] = (velocity[3 * d + 2] / b->radius[d] - b->omega[d]) / dt_s;
         b->spin_damping[d] = 0;
     }
-    return boulders_advance_with_contacts(sim, dt_s);
+    return boulders_advance_with_contacts(sim, dt_s, 0);
 }

@@ -706,7 +706,8 @@ static int implicit_step(surge_sim *sim)
     phase_end(sim, &t->neighbours_s);
     if (lists != 0 || implicit_reserve_work(sim) != 0 ||
         implicit_mixing_reserve(w, sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_history : 0,
-                                sim->count - sim->wall_count) != 0) {
+                                sim->count - sim->wall_count) != 0 ||
+        implicit_discs_films(sim) != 0) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = step_n + 1,
                                      .time_s = t_n};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");

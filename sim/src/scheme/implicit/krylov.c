@@ -132,22 +132,30 @@ static void apply_linear(surge_sim *sim, affine_operator op, int linear, const d
 }
 
 /* out = M^-1 in: the diagonal (Jacobi) or one V-cycle per block of nf unknowns (the fluid's) and the diagonal on the
- * rows after them (the discs'); -1 when hypre fails */
+ * rows after them (the discs'), where lubrication films join discs their blocks solved directly (films.c); -1 when
+ * hypre fails */
 static int precondition(surge_sim *sim, const double *in, double *out, int n)
 {
     implicit_work *w = implicit_of(sim);
+    const int nf = sim->count - sim->wall_count;
     if (w->vcycle_blocks == 0) {
         #pragma omp parallel for schedule(static) if (wide(sim))
         for (int i = 0; i < n; i++)
             out[i] = in[i] / w->diag[i];
-        return 0;
+    } else {
+        if (amg_vcycle(w->amg, w->vcycle_blocks, in, out) != 0)
+            return -1;
+        for (int i = w->vcycle_blocks * nf; i < n; i++)
+            out[i] = in[i] / w->diag[i];
     }
-    const int nf = sim->count - sim->wall_count;
-    if (amg_vcycle(w->amg, w->vcycle_blocks, in, out) != 0)
-        return -1;
-    for (int i = w->vcycle_blocks * nf; i < n; i++)
-        out[i] = in[i] / w->diag[i];
-    if (w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
+    if (w->film_blocks.factored && n == 2 * nf + w->disc_rows) { /* the viscous solve's disc rows */
+        memcpy(out + 2 * nf, in + 2 * nf, (size_t)w->disc_rows * sizeof *out);
+        implicit_films_solve(sim, FILMS_VISCOUS, out + 2 * nf);
+        for (int q = 0; q < w->disc_rows; q++) /* the discs outside blocks keep the diagonal */
+            if (w->film_blocks.of_disc[q / 3] < 0)
+                out[2 * nf + q] = in[2 * nf + q] / w->diag[2 * nf + q];
+    }
+    if (w->vcycle_blocks > 0 && w->vcycle_honours_fixed) /* the pressure's free-surface rows are the identity (held hierarchies differ) */
         for (int i = 0; i < nf; i++)
             if (w->fixed[i])
                 out[i] = in[i];

@@ -103,7 +103,7 @@ void implicit_destroy(surge_sim *sim)
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->mirror_nw, w->ghost_w, w->ghost_nw, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
                       w->disc_entry, w->disc_entry_fluid, w->surface_x, w->surface_y, w->lever_x, w->lever_y, w->disc_divergence,
-                      w->disc_velocity, w->disc_force, w->spin_drag,
+                      w->disc_velocity, w->disc_force, w->spin_drag, w->films,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
                       w->grad_y, w->pressure_n, w->fixed, w->near_disc, w->other_face, w->other_push_x, w->other_push_y, w->expected_ratio, w->wall_x, w->wall_y,
@@ -113,6 +113,7 @@ void implicit_destroy(surge_sim *sim)
                       w->mixing_dg, w->mixing_df};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
+    implicit_films_free(&w->film_blocks);
     amg_destroy(w->multigrid[MULTIGRID_VISCOUS].amg);
     amg_destroy(w->multigrid[MULTIGRID_PRESSURE].amg);
     free(w->matrix_first);
