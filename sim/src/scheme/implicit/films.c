@@ -95,8 +95,8 @@ int implicit_discs_films(surge_sim *sim)
                 fb->place[ra < rb ? ra : rb] = ra < rb ? rb : ra;
         }
     }
-    /* blocks in the order of their smallest disc; a root's block index kept in its of_disc until its members are in */
-    int *block_of_root = fb->members; /* scratch: the members follow once the blocks are counted */
+    /* clusters numbered in the order of their smallest disc */
+    int *block_of_root = fb->members; /* scratch: the members follow once the clusters are counted */
     for (int d = 0; d < discs; d++)
         block_of_root[d] = -1;
     int blocks = 0;
