@@ -74,7 +74,7 @@ int implicit_discs_films(surge_sim *sim)
     implicit_work *w = implicit_of(sim);
     film_blocks *fb = &w->film_blocks;
     const int discs = sim->boulders.count;
-    w->film_count = 0, fb->count = 0, fb->factored = 0;
+    w->film_count = 0, fb->count = 0, fb->factored = 0, fb->singular = 0;
     if (discs == 0)
         return 0;
     if (boulders_films(sim, &w->films, &w->film_count, &w->film_capacity) != 0 ||
@@ -209,23 +209,23 @@ static int factor_block(surge_sim *sim, int which, int k, size_t at, const doubl
     return LAPACKE_dgetrf(LAPACK_COL_MAJOR, rows, rows, a, rows, fb->pivots[which] + 3 * first) == 0 ? 0 : -1;
 }
 
-/* The viscous solve's disc rows: factors both blocks (the viscous one on diag's disc rows as they are, without the
- * films), then adds the films' part of the diagonal (K's diagonal times dt / M) to diag, for the rows outside
- * blocks' reach in the Jacobi preconditioner and for the iteration's own use */
+/* The viscous solve's disc rows: at the step's first pass factors both blocks (the viscous one on diag's disc rows
+ * as they are, without the films; the passes' are the same), then adds the films' part of the diagonal (K's diagonal
+ * times dt / M) to diag. fb->singular: LAPACK found a block singular (the step fails, implicit_step.c) */
 void implicit_films_factor(surge_sim *sim, double dt, double *diag)
 {
     implicit_work *w = implicit_of(sim);
     film_blocks *fb = &w->film_blocks;
     const boulder_set *b = &sim->boulders;
-    fb->factored = fb->count > 0;
     size_t at = 0;
-    for (int k = 0; k < fb->count; k++) {
+    for (int k = 0; k < fb->count && !fb->factored; k++) {
         const size_t rows = 3 * (size_t)(fb->start[k + 1] - fb->start[k]);
         if (factor_block(sim, FILMS_VISCOUS, k, at, diag, dt) != 0 ||
             factor_block(sim, FILMS_PRESSURE, k, at, NULL, dt) != 0)
-            fb->factored = 0; /* not expected (the blocks are diagonally dominant by their base); solve leaves them */
+            fb->singular = 1;
         at += rows * rows;
     }
+    fb->factored = fb->count > 0 && !fb->singular;
     for (int f = 0; f < w->film_count; f++) {
         const contact_film *film = &w->films[f];
         double g_n[6], g_t[6], wall_vn, wall_vt;

@@ -47,6 +47,7 @@ typedef struct film_blocks {
     int *pivots[2];                      /* 3 per member */
     double *scratch;
     int factored;                        /* this step's blocks are factored (implicit_films_factor) */
+    int singular;                        /* and one of them was found singular */
     size_t disc_capacity, place_capacity, first_capacity, members_capacity, start_capacity, lu_capacity[2],
         pivot_capacity[2], scratch_capacity;
 } film_blocks;

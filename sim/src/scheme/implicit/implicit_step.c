@@ -192,6 +192,15 @@ static int viscous_predict(surge_sim *sim, double dt, int first_pass)
     const int first = sim->wall_count, nf = sim->count - first, n = 2 * nf + w->disc_rows;
     const double dt_nu = dt * prm->fluid.viscosity_m2ps;
     viscous_system(sim, dt, first_pass);
+    if (w->film_blocks.singular) { /* not expected: each block is its diagonal plus dt M^-1 K, K >= 0 in the normal */
+        sim->health = (surge_health){.check = SURGE_CHECK_SOLVER, .particle_id = -1, .step = sim->step + 1,
+                                     .time_s = sim->time_s};
+        snprintf(sim->health.message, sizeof sim->health.message,
+                 "health check failed: %s at step %lld, t = %.9g s (LAPACK found the rows of discs joined by "
+                 "lubrication films singular; contacts.lubrication = false runs without them)",
+                 surge_health_check_name(SURGE_CHECK_SOLVER), (long long)sim->step + 1, sim->time_s);
+        return -1;
+    }
     if (dt_nu > 0) {
         /* by multigrid: one hierarchy for both components (the walls mirror each component on its own) */
         const int by_multigrid = implicit_multigrid(sim, true);
