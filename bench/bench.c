@@ -69,6 +69,7 @@ static const struct {
     {"geometry", offsetof(surge_phase_times, geometry_s)},
     {"surface", offsetof(surge_phase_times, surface_s)},
     {"assembly", offsetof(surge_phase_times, assembly_s)},
+    {"multigrid", offsetof(surge_phase_times, multigrid_s)},
     {"viscous_solve", offsetof(surge_phase_times, viscous_solve_s)},
     {"pressure_solve", offsetof(surge_phase_times, pressure_solve_s)},
     {"disc_coupling", offsetof(surge_phase_times, disc_coupling_s)},

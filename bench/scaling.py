@@ -1,8 +1,8 @@
 #!/usr/bin/python3
 """scaling: how the solver's speed grows with the thread count, on the scenes users run.
 
-  bench/scaling.py [--bench build/surge-bench] [--max-threads N | --threads 1,T2,...] [--scene NAME,...] [--quick]
-                   [--multigrid-parts N|threads]
+  bench/scaling.py [--bench build/surge-bench] [--max-threads N | --threads 1,T2,...] [--scene NAME,...]
+                   [--scheme explicit,implicit] [--quick] [--multigrid-parts N|threads]
 
 For each scene and scheme it runs surge-bench once per thread count, 1, 2, 4, ... up to the machine's physical cores,
 or the CPUs this process may use where fewer (or N, the last count also when it is not a power of two; or the counts
@@ -12,8 +12,8 @@ particle-steps/s, the speed-up against 1 thread, two estimates of the serial fra
 the time. Then, per scene and scheme, each phase's seconds at every thread count and its own speed-up. The phases
 are surge-bench's (surge_phase_times in sim/include/surge/sim.h; docs/performance.md, "Where a step's time goes").
 
-- serial: the share of the run's time in the phases that run on one thread, the contact solver and the rest of the
-  step outside the named phases (other). At 1 thread it is Amdahl's serial fraction, as far as the phases tell
+- serial: the share of the run's time in the phases that run on one thread, the contact solver, the implicit
+  scheme's multigrid builds and the rest of the step outside the named phases (other). At 1 thread it is Amdahl's serial fraction, as far as the phases tell
   serial work from shared.
 - karp-flatt: the serial fraction the measured speed-up S on p threads implies, (1/S - 1/p) / (1 - 1/p). It also
   counts what holds the parallel phases back: waits at their barriers, memory bandwidth, loops a scene is too small
@@ -60,7 +60,7 @@ SCENES = {
     "freydier": ("freydier_id1.ini", "1.8", "0", ["-s", "numerics.dp_m=0.0005"], {"implicit": 0.3}),
 }
 QUICK = {"tiny": ("incline_film.ini", "1.0", "4", ["-s", "numerics.dp_m=0.02"], {"explicit": 0.005, "implicit": 0.1})}
-SERIAL_PHASES = ("contacts", "other")
+SERIAL_PHASES = ("contacts", "multigrid", "other")
 
 RUN_LINE = re.compile(r"(\d+) fluid \+ (\d+) wall particles, (\d+) steps in [0-9.]+ s: ([0-9.]+) million "
                       r"particle-steps/s")
@@ -217,6 +217,9 @@ def main():
                         help="the thread counts to run, rising from 1 (instead of the powers of 2)")
     parser.add_argument("--scene", type=cli_checks.names(list(SCENES)),
                         help="comma-separated scenes among %s (default all)" % ", ".join(SCENES))
+    parser.add_argument("--scheme", type=cli_checks.names(["explicit", "implicit"]),
+                        help="comma-separated schemes among explicit, implicit (default both; the freydier scene "
+                             "runs the implicit one only)")
     parser.add_argument("--quick", action="store_true",
                         help="a tiny scene on 1 and 2 threads, a few steps: that it runs, in seconds")
     parser.add_argument("--multigrid-parts", type=multigrid_parts, metavar="N|threads",
@@ -248,6 +251,8 @@ def main():
     failures, tables, program_lines = 0, [], []
     for name, scene in scenes.items():
         for scheme in scene[4]:
+            if args.scheme and scheme not in args.scheme:
+                continue
             runs = []
             for threads in counts:
                 result = run_bench(args.bench, scene, scheme, threads, env, args.multigrid_parts)

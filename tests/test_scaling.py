@@ -21,7 +21,7 @@ BENCH, SOURCE, WORK = sys.argv[1:4]
 SCALING = os.path.join(SOURCE, "bench", "scaling.py")
 COLUMNS = ["scene", "scheme", "fluid", "threads", "steps", "wall_s", "rate", "speed-up", "serial", "karp-flatt",
            "largest phase"]
-PHASES = {"neighbours", "interaction", "boundary", "discs", "contacts", "geometry", "surface", "assembly",
+PHASES = {"neighbours", "interaction", "boundary", "discs", "contacts", "geometry", "surface", "assembly", "multigrid",
           "viscous_solve", "pressure_solve", "disc_coupling", "update", "other"}
 NUMBER = re.compile(r"^[0-9]+(\.[0-9]+)?$")
 
@@ -153,6 +153,18 @@ check("--multigrid-parts threads: the implicit runs get their thread count as pa
 r = scaling(BENCH, "--quick", "--multigrid-parts", "many")
 check("--multigrid-parts many: refused (exit status 2), the value named",
       r.returncode == 2 and "expected a whole number >= 1 or 'threads', got 'many'" in r.stderr, r.stderr)
+
+# ---- one scheme ----
+os.remove(arguments)
+r = scaling(logging, "--quick", "--scheme", "implicit")
+with open(arguments) as f:
+    schemes = [re.search(r"numerics\.scheme=(\w+)", c).group(1) for c in f.read().splitlines()]
+check("--scheme implicit: exit status 0, the implicit runs only (2)", r.returncode == 0 and schemes == ["implicit"] * 2,
+      "rc %d, schemes %s, stderr: %s" % (r.returncode, schemes, r.stderr))
+r = scaling(BENCH, "--quick", "--scheme", "semi-implicit")
+check("--scheme semi-implicit: refused (exit status 2), the value named",
+      r.returncode == 2 and "expected comma-separated names among explicit, implicit, got 'semi-implicit'" in r.stderr,
+      r.stderr)
 
 # ---- a surge-bench that fails ----
 failing = stand_in("failing-bench", 'echo "surge-bench: stand-in failure"\nexit 1\n')

@@ -152,7 +152,7 @@ void surge_sim_phase_times(const surge_sim *sim, surge_phase_times *times)
     const surge_phase_times *t = &sim->phase_times;
     *times = *t;
     const double named_s = t->neighbours_s + t->interaction_s + t->boundary_s + t->discs_s + t->contacts_s +
-                           t->geometry_s + t->surface_s + t->assembly_s + t->viscous_solve_s + t->pressure_solve_s +
+                           t->geometry_s + t->surface_s + t->assembly_s + t->multigrid_s + t->viscous_solve_s + t->pressure_solve_s +
                            t->disc_coupling_s + t->update_s;
     /* the phases are disjoint spans of each step: only rounding takes their sum past the total */
     times->other_s = fmax(0.0, t->total_s - named_s);

@@ -116,8 +116,10 @@ typedef struct surge_phase_times {
     double contacts_s;       /* the contact solver's sub-steps (one thread) */
     double geometry_s;       /* implicit: the step's pair coefficients, moment matrices, kernel sums, mirror weights */
     double surface_s;        /* implicit: the free-surface layer and the surface's mirror images */
-    double assembly_s;       /* implicit: the operators' coefficients, the solves' right-hand sides and diagonals, the
-                              * multigrid hierarchies' set-up */
+    double assembly_s;       /* implicit: the operators' coefficients, the solves' right-hand sides and diagonals */
+    double multigrid_s;      /* implicit: the multigrid hierarchies: their builds (the matrix's sparse stand-in,
+                              * hypre's coarsening; one after another, on one thread), the check that a held one
+                              * still serves, and hypre's start before the first */
     double viscous_solve_s;  /* implicit: the viscous solve's iterations */
     double pressure_solve_s; /* implicit: the pressure and rest-density solves' iterations and their gradients */
     double disc_coupling_s;  /* implicit: the discs' rows of the coupled solves outside their iterations, and the

@@ -22,6 +22,7 @@ int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const 
     implicit_work *w = implicit_of(sim);
     held_multigrid *m = &w->multigrid[which];
     char reason[160] = "";
+    phase_end(sim, &sim->phase_times.assembly_s); /* what came before; from here the multigrid's phase */
     if (!m->amg)
         m->amg = amg_create(reason, sizeof reason, multigrid_blocks(which), sim->params.implicit.multigrid_parts);
     const int first = sim->wall_count, nf = sim->count - first;
@@ -29,13 +30,16 @@ int implicit_multigrid_setup(surge_sim *sim, int which, const char *what, const 
     const int slowed = m->base_iterations >= 0 &&
                        m->last_iterations > m->base_iterations + (m->base_iterations / 2 > 2 ? m->base_iterations / 2 : 2);
     if (m->amg && amg_rows(m->amg) == nf && sim->step - m->built_step < sim->params.implicit.multigrid_rebuild_steps &&
-        !slowed && amg_follow(m->amg, sim->id + first, nf) == 0)
+        !slowed && amg_follow(m->amg, sim->id + first, nf) == 0) {
+        phase_end(sim, &sim->phase_times.multigrid_s);
         return 0;
+    }
     if (m->amg && implicit_assemble_sparse(sim, diag, fluid_coef, fluid_scale, wall_coef, wall_scale, honour_fixed) != 0)
         snprintf(reason, sizeof reason, "out of memory for the %s matrix's sparse stand-in", what);
     else if (m->amg && amg_setup(m->amg, nf, w->matrix_first, w->matrix_col, w->matrix_val, sim->id + first,
                                  sim->count) != 0)
         snprintf(reason, sizeof reason, "hypre could not build the multigrid hierarchy of the %s matrix", what);
+    phase_end(sim, &sim->phase_times.multigrid_s);
     if (!reason[0]) {
         m->built_step = sim->step, m->base_iterations = -1;
         return 0;

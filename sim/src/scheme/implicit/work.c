@@ -17,6 +17,11 @@ static int grow(void **array, size_t need, size_t size)
 
 #define GROW(field, need) (grow((void **)&w->field, need, sizeof *w->field))
 
+/* The entries a per-entry array is given room for when the lists outgrow it: half again, as the lists' own (the lists
+ * change a little at each build, and an array grown to the exact count was copied and its new pages faulted in at
+ * nearly every build) */
+static size_t with_headroom(size_t need) { return need + need / 2 + 64; }
+
 /* Sizes the work arrays for the current lists; -1 when out of memory. */
 int implicit_reserve_work(surge_sim *sim)
 {
@@ -27,22 +32,25 @@ int implicit_reserve_work(surge_sim *sim)
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
     const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
-        if (GROW(fluid_w, fe) || GROW(fluid_gx, fe) || GROW(fluid_gy, fe) || GROW(fluid_pc, fe) ||
-            GROW(fluid_iw, fe) || GROW(fluid_igx, fe) || GROW(fluid_igy, fe))
+        const size_t room = with_headroom(fe);
+        if (GROW(fluid_w, room) || GROW(fluid_gx, room) || GROW(fluid_gy, room) || GROW(fluid_pc, room) ||
+            GROW(fluid_iw, room) || GROW(fluid_igx, room) || GROW(fluid_igy, room))
             return -1;
-        w->fluid_cap = fe;
+        w->fluid_cap = room;
     }
-    if (we > w->wall_cap || !w->wall_w) {
-        if (GROW(wall_w, we) || GROW(wall_gx, we) || GROW(wall_gy, we) || GROW(wall_pc, we) ||
-            GROW(wall_iw, we) || GROW(wall_igx, we) || GROW(wall_igy, we) || GROW(wall_side, we) ||
-            (discs > 0 && (GROW(disc_entry, we) || GROW(disc_entry_fluid, we) || GROW(disc_divergence, 3 * we))))
+    if (we > w->wall_cap || !w->wall_w || (discs > 0 && !w->disc_entry)) {
+        const size_t room = with_headroom(we);
+        if (GROW(wall_w, room) || GROW(wall_gx, room) || GROW(wall_gy, room) || GROW(wall_pc, room) ||
+            GROW(wall_iw, room) || GROW(wall_igx, room) || GROW(wall_igy, room) || GROW(wall_side, room) ||
+            (discs > 0 && (GROW(disc_entry, room) || GROW(disc_entry_fluid, room) || GROW(disc_divergence, 3 * room))))
             return -1;
-        w->wall_cap = we;
+        w->wall_cap = room;
     }
     if (me > w->mirror_cap || !w->mirror_w) {
-        if (GROW(mirror_w, me) || GROW(mirror_nw, me))
+        const size_t room = with_headroom(me);
+        if (GROW(mirror_w, room) || GROW(mirror_nw, room))
             return -1;
-        w->mirror_cap = me;
+        w->mirror_cap = room;
     }
     if (sim->boulders.count > w->disc_cap || !w->disc_reference_pa) {
         if (GROW(disc_reference_pa, discs) || GROW(spin_drag, discs) || GROW(disc_velocity, 3 * discs) ||
@@ -51,9 +59,10 @@ int implicit_reserve_work(surge_sim *sim)
         w->disc_cap = sim->boulders.count;
     }
     if (ge > w->ghost_cap || !w->ghost_w) {
-        if (GROW(ghost_w, ge) || GROW(ghost_nw, ge))
+        const size_t room = with_headroom(ge);
+        if (GROW(ghost_w, room) || GROW(ghost_nw, room))
             return -1;
-        w->ghost_cap = ge;
+        w->ghost_cap = room;
     }
     double **by_id[] = {&w->phi_by_id, &w->psi_by_id, &w->dvx_by_id, &w->dvy_by_id};
     for (size_t k = 0; k < sizeof by_id / sizeof by_id[0]; k++)
