@@ -103,7 +103,7 @@ r = subprocess.run([sys.executable, PL, "convergence", "--csv", conv, "--png", c
 lines = r.stdout.splitlines()
 check("poiseuille_loaded convergence: r/dp 4 and 8 without the model (+2.0 %), r/dp 4 with it, no explicit row, "
       "a chart", r.returncode == 0 and any("1.5300 (+2.0 %)" in line for line in lines) and
-      any("with the lubrication model" in line for line in lines) and "9.0000" not in r.stdout and
+      any("lubrication model, cut-off 1 dp" in line for line in lines) and "9.0000" not in r.stdout and
       os.path.getsize(conv_png) > 10000, (r.stdout + r.stderr).strip()[-600:])
 r = subprocess.run([sys.executable, PL, "convergence", "--csv", conv, "--c0", "40"], capture_output=True, text=True,
                    timeout=60)
@@ -189,6 +189,57 @@ check("poiseuille_loaded shell_density: 3 in the shell 0.4-0.5 dp out, 1 elsewhe
       len(density) == 20 and abs(edges[-1] - 2) < 1e-12 and np.allclose(density, shell_expected, atol=1e-6)
       and abs(density[4] - 3) < 0.1 and np.all(np.abs(np.delete(density, 4) - 1) < 0.2),
       " ".join("%.3f" % x for x in density))
+# add: a finished run made by hand, its settings read from its params.ini (the implicit scheme, the model at a 2 dp
+# cut-off, the fluid packed), measured into a table: the fluid on the parabola of centre speed U gives
+# mu_eq/mu0 = B^2 F / (8 U nu0) = 0.36 * 0.5 / (8 * 0.08 * 0.25) = 1.125 over the band within 1 cm of the centre
+added = os.path.join(work, "pl_added")
+os.makedirs(added, exist_ok=True)
+band = np.linspace(0.291, 0.309, 10)
+for k, t in enumerate((0.8, 0.9, 1.0)):
+    vtp.write_vtp(os.path.join(added, "snap_%d.vtp" % k), np.stack([0 * band, band], axis=1),
+                  {"kind": np.zeros(band.size, dtype=np.int32), "velocity_mps": np.stack([U + 0 * band, 0 * band], axis=1)},
+                  t, k)
+    vtp.write_vtp(os.path.join(added, "discs_%d.vtp" % k), np.array([[0.5, 0.3]]), {"radius_m": np.array([0.02])}, t, k)
+vtp.write_pvd(os.path.join(added, "run.pvd"), [(t, "snap_%d.vtp" % k) for k, t in enumerate((0.8, 0.9, 1.0))])
+vtp.write_pvd(os.path.join(added, "boulders.pvd"), [(t, "discs_%d.vtp" % k) for k, t in enumerate((0.8, 0.9, 1.0))])
+with open(os.path.join(added, "params.ini"), "w") as f:
+    f.write("# derived: h_m = 0.009, c0_mps = 15 (expected speed 0.077 m/s)\n# derived: fluid particles = 1000\n"
+            "[domain]\nlength_m = 1\nheight_m = 0.6\n[fluid]\ndensity_kgpm3 = 1000\nviscosity_m2ps = 0.25\n"
+            "[body]\nforce_x_mps2 = 0.5\n[numerics]\nscheme = implicit\ndp_m = 0.005\nch = 1.8\n"
+            "density_diffusion = 0\n[boulders]\nplacement = random\nsolid_fraction = 0.3\nseed = 2\n"
+            "pack_fluid = true\n[contacts]\nlubrication = true\nlubrication_cutoff_dp = 2\n[time]\nend_s = 1\n")
+with open(os.path.join(added, "diagnostics.csv"), "w") as f:
+    f.write("time_s,step\n0,0\n1.0,40\n")
+with open(os.path.join(added, "checkpoint.bin"), "wb") as f:
+    f.write(b"stand-in")
+added_csv = os.path.join(work, "added.csv")
+if os.path.exists(added_csv):
+    os.remove(added_csv)
+r = subprocess.run([sys.executable, PL, "add", added, "--csv", added_csv, "--wall-s", "12.5"], capture_output=True,
+                   text=True, timeout=60)
+added_rows = study.read_rows("test", added_csv, {}) if os.path.exists(added_csv) else []
+expected = {"phi": "0.3", "dp_m": "0.005", "ch": "1.8", "seed": "2", "wall_s": "12.5", "particle_steps": "40000",
+            "sim_time_s": "1.000", "mu_eq_over_mu0": "1.125", "n_discs": "1", "status": "ok", "c0_mps": "15",
+            "density_diffusion": "0", "scheme": "implicit", "lubrication": "1", "lubrication_cutoff_dp": "2",
+            "pack_fluid": "1"}
+check("poiseuille_loaded add: one row with the run's settings, measured (mu_eq/mu0 1.125)",
+      r.returncode == 0 and len(added_rows) == 1 and all(added_rows[0][k] == v for k, v in expected.items()),
+      "%s %s" % (added_rows, r.stderr.strip()))
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", added_csv, "--seed", "2"], capture_output=True,
+                   text=True, timeout=60)
+check("poiseuille_loaded convergence names the run's model and placement",
+      r.returncode == 0 and "lubrication model, cut-off 2 dp, fluid packed around the discs" in r.stdout,
+      (r.stdout + r.stderr).strip()[-400:])
+with open(os.path.join(added, "diagnostics.csv"), "w") as f:
+    f.write("time_s,step\n0,0\n0.5,20\n")
+r = subprocess.run([sys.executable, PL, "add", added, "--csv", added_csv], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded add: a run stopped at 0.5 s of its 1 s refused, named, and not added",
+      r.returncode == 2 and added in r.stderr and "not finished" in r.stderr and len(study.read_rows("test", added_csv, {})) == 1,
+      r.stderr.strip())
+os.remove(os.path.join(added, "checkpoint.bin"))
+r = subprocess.run([sys.executable, PL, "add", added, "--csv", added_csv], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded add: a folder without a checkpoint refused, named", r.returncode == 2 and added in r.stderr,
+      r.stderr.strip())
 r = subprocess.run([sys.executable, PL, "shells", work], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded shells: a folder that is not a run refused with its name",
       r.returncode == 2 and work in r.stderr, r.stderr.strip())

@@ -275,12 +275,16 @@ with open(no_clear, "w", newline="") as f:
     writer.writeheader()
     for phi in (0.1, 0.2, 0.3):
         writer.writerow(dict(dict.fromkeys(poiseuille_loaded.COLUMNS, "1"), phi=phi, phi_actual=phi, status="ok",
-                             mu_eq_over_mu0=1 + 2 * phi, scheme="explicit", lubrication=0))
+                             mu_eq_over_mu0=1 + 2 * phi, scheme="explicit", lubrication=0, pack_fluid=0))
 r = tool(PL, "report", "--csv", no_clear)
 expect("poiseuille_loaded report without a phi = 0 run", r, "phi = 0")
 check("poiseuille_loaded report without a phi = 0 run prints no nan", "nan" not in r.stdout, r.stdout)
 expect("poiseuille_loaded report of the implicit runs when the table has none", tool(PL, "report", "--csv", no_clear,
        "--scheme", "implicit"), "0 finished runs")
+expect("poiseuille_loaded add: a folder that does not exist", tool(PL, "add", path("no_such_run"), "--csv", no_clear),
+       "no_such_run", "checkpoint")
+expect("poiseuille_loaded add: --wall-s -1", tool(PL, "add", path("no_such_run"), "--wall-s", "-1"), "--wall-s")
+expect("poiseuille_loaded run --cutoff-dp 0", tool(PL, "run", "--cutoff-dp", "0", "--csv", no_clear), "--cutoff-dp")
 expect("poiseuille_loaded run: a scheme that does not exist", tool(PL, "run", "--scheme", "sph", "--csv", no_clear),
        "--scheme", "sph")
 

@@ -65,6 +65,11 @@ class RunParams:
             raise ParamsError("%s: [%s] %s = %g must be > 0" % (self.path, section, key, value))
         return value
 
+    def word(self, section, key, default=None):
+        """[section] key as text (an enumeration's value, say: 'implicit'); default where the key is absent."""
+        text = self._text(section, key, default)
+        return default if text is None else text.strip()
+
     def flag(self, section, key, default=None):
         """[section] key as a boolean (true/false, 1/0, yes/no, on/off); default where the key is absent."""
         text = self._text(section, key, default)

@@ -5,7 +5,10 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 
   studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
-        [--scheme explicit|implicit] [--lubrication] [--budget-s SECONDS] [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
+        [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1]] [--pack-fluid] [--budget-s SECONDS]
+        [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
+  studies/poiseuille_loaded/poiseuille_loaded.py add RUN_DIR [--wall-s S] [--threads N] [--csv ...]
+        # a finished run made by hand (surge run cases/poiseuille_loaded.ini ...) measured into the table
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   studies/poiseuille_loaded/poiseuille_loaded.py discs RUN_DIR        # how the discs move against the flow
   studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
@@ -13,7 +16,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication] [--seed 1]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
-        [--c0 C0] [--diffusion DELTA] [--seed 1]   # mu_eq/mu0 per phi and r/dp, without and with the lubrication model
+        [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8]   # mu_eq/mu0 per phi and r/dp, per lubrication model
+        # and placement of the fluid
   studies/poiseuille_loaded/poiseuille_loaded.py seeds [--csv ...] [--scheme implicit|explicit] [--c0 C0]
         [--diffusion DELTA] [--lubrication]  # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
 
@@ -29,8 +33,10 @@ out to 2 dp; the count in the annulus over its area times 1/dp^2, the lattice's 
 annulus stays clear of the plates; 1 is the lattice's density, a shell of particles shows as a peak.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
---scheme sets numerics.scheme and --lubrication contacts.lubrication for the runs; `report` takes the rows of one
-scheme, with or without the lubrication model (default: explicit, without). `convergence` takes one placement (--seed,
+--scheme sets numerics.scheme, --lubrication contacts.lubrication (with --cutoff-dp its cut-off,
+contacts.lubrication_cutoff_dp) and --pack-fluid boulders.pack_fluid for the runs; `add` reads them, and every other
+setting the table records, from the run folder's params.ini. `report` takes the rows of one scheme, with or without
+the lubrication model (default: explicit, without), at the default placement of the fluid. `convergence` takes one placement (--seed,
 default 1) at every resolution; `seeds` gives, per phi and r/dp, each seed's mu_eq/mu0, their mean and standard
 deviation, and the change of the mean from the next coarser r/dp run with at least two seeds, with its standard
 error (the two means' standard errors combined, over the coarser mean).
@@ -60,7 +66,8 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
-           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion", "scheme", "lubrication"]
+           "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion", "scheme", "lubrication",
+           "lubrication_cutoff_dp", "pack_fluid"]
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
@@ -226,7 +233,8 @@ def run_one(args, phi, deadline):
     name = "phi%g_dp%g_ch%g_seed%d%s%s%s%s" % (phi, args.dp, args.ch, args.seed, "_c0%g" % args.c0 if args.c0 else "",
                                               "_dd%g" % args.diffusion if args.diffusion >= 0 else "",
                                               "_implicit" if args.scheme == "implicit" else "",
-                                              "_lubrication" if args.lubrication else "")
+                                              "_lubrication%g" % args.cutoff_dp if args.lubrication else "") + \
+        ("_packed" if args.pack_fluid else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
     fresh = [args.surge, "run", os.path.join(ROOT, "cases", "poiseuille_loaded.ini"), "-o", folder, "--overwrite",
@@ -234,23 +242,14 @@ def run_one(args, phi, deadline):
     fresh += ["-s", "boulders.solid_fraction=%g" % phi] if phi > 0 else ["-s", "boulders.placement=none"]
     fresh += ["-s", "numerics.c0_mps=%g" % args.c0] if args.c0 else []
     fresh += ["-s", "numerics.density_diffusion=%g" % args.diffusion] if args.diffusion >= 0 else []
-    fresh += ["-s", "numerics.scheme=%s" % args.scheme, "-s", "contacts.lubrication=%s" % str(args.lubrication).lower()]
+    fresh += ["-s", "numerics.scheme=%s" % args.scheme, "-s", "contacts.lubrication=%s" % str(args.lubrication).lower(),
+              "-s", "contacts.lubrication_cutoff_dp=%g" % args.cutoff_dp,
+              "-s", "boulders.pack_fluid=%s" % str(args.pack_fluid).lower()]
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
         return False
-    steps, sim_time = study.particle_steps(TOOL, folder)
-    row = {"phi": phi, "dp_m": "%.6g" % args.dp, "ch": args.ch, "seed": args.seed, "threads": args.threads,
-           "wall_s": "%.1f" % progress["wall_s"], "u_max_mps": "nan", "mu_eq_over_mu0": "nan",
-           "phi_actual": "nan", "n_discs": 0, "particle_steps": steps, "sim_time_s": "%.3f" % sim_time,
-           "scheme": args.scheme, "lubrication": int(args.lubrication)}
     try:
-        params = RunParams(folder)
-        row.update({"c0_mps": "%.4g" % params.derived("c0_mps"),
-                    "density_diffusion": "%g" % params.real("numerics", "density_diffusion")})
-        if rc == 0:
-            u_max, mu_ratio, phi_actual, n_discs = measure(folder)
-            row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
-                        "phi_actual": "%.4f" % phi_actual, "n_discs": n_discs, "status": "ok"})
+        row = table_row(folder, args.threads, progress["wall_s"], rc == 0)
     except ValueError as e:  # ParamsError, VtpError, nothing to measure
         fail("%s: %s" % (name, e))
     if rc != 0:
@@ -262,16 +261,59 @@ def run_one(args, phi, deadline):
     return True
 
 
+def table_row(folder, threads, wall_s, finished):
+    """The table's row of a run folder, its settings read from its params.ini; measured where finished (ValueError,
+    naming the file, where it cannot be)."""
+    params = RunParams(folder)
+    steps, sim_time = study.particle_steps(TOOL, folder)
+    lubrication = params.flag("contacts", "lubrication", False)
+    phi = params.real("boulders", "solid_fraction") if params.word("boulders", "placement", "random") != "none" else 0
+    row = {"phi": "%g" % phi, "dp_m": "%.6g" % params.positive("numerics", "dp_m"),
+           "ch": "%g" % params.positive("numerics", "ch"), "seed": int(params.real("boulders", "seed")),
+           "threads": threads, "wall_s": "%.1f" % wall_s, "u_max_mps": "nan", "mu_eq_over_mu0": "nan",
+           "phi_actual": "nan", "n_discs": 0, "particle_steps": steps, "sim_time_s": "%.3f" % sim_time,
+           "c0_mps": "%.4g" % params.derived("c0_mps"),
+           "density_diffusion": "%g" % params.real("numerics", "density_diffusion"),
+           "scheme": params.word("numerics", "scheme", "explicit"), "lubrication": int(lubrication),
+           "lubrication_cutoff_dp": "%g" % params.real("contacts", "lubrication_cutoff_dp") if lubrication else "",
+           "pack_fluid": int(params.flag("boulders", "pack_fluid", False))}
+    if finished:
+        u_max, mu_ratio, phi_actual, n_discs = measure(folder)
+        row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
+                    "phi_actual": "%.4f" % phi_actual, "n_discs": n_discs, "status": "ok"})
+    return row
+
+
+def command_add(args):
+    """A finished run made by hand, measured into the table (its settings from its params.ini)."""
+    study.existing_rows(TOOL, args.csv, COLUMNS, {})
+    if not os.path.isfile(os.path.join(args.run_dir, "checkpoint.bin")):
+        fail("%s: no checkpoint.bin: not a finished run" % args.run_dir)
+    try:
+        row = table_row(args.run_dir, args.threads, args.wall_s, True)
+        end_s = RunParams(args.run_dir).real("time", "end_s")
+    except (OSError, ValueError) as e:
+        fail(str(e))
+    if float(row["sim_time_s"]) < end_s - 1e-6:
+        fail("%s: ran to %s s of its %g s: not finished" % (args.run_dir, row["sim_time_s"], end_s))
+    study.append_row(args.csv, COLUMNS, row)
+    print("%s: %s: %s" % (TOOL, args.run_dir, row), flush=True)
+    return 0
+
+
 def command_run(args):
     rows = study.existing_rows(TOOL, args.csv, COLUMNS, dict(
-        phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float, scheme=str, lubrication=int))
+        phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float, scheme=str, lubrication=int,
+        lubrication_cutoff_dp=str, pack_fluid=int))
     deadline = time.time() + args.budget_s if args.budget_s else None
     diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
     done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
-             float(r["density_diffusion"]), r["scheme"], int(r["lubrication"])) for r in rows}
+             float(r["density_diffusion"]), r["scheme"], int(r["lubrication"]), r["lubrication_cutoff_dp"],
+             int(r["pack_fluid"])) for r in rows}
     for phi in args.phi:
         if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion,
-                args.scheme, int(args.lubrication)) in done:
+                args.scheme, int(args.lubrication), "%g" % args.cutoff_dp if args.lubrication else "",
+                int(args.pack_fluid)) in done:
             continue
         if deadline and time.time() > deadline:
             print("%s: budget spent; run again to continue" % TOOL, flush=True)
@@ -331,9 +373,9 @@ def command_report(args):
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
         density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str,
-        seed=int))
+        seed=int, pack_fluid=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
-        (r["lubrication"] == str(int(args.lubrication)) or float(r["phi"]) == 0)]
+        (float(r["phi"]) == 0 or (r["lubrication"] == str(int(args.lubrication)) and r["pack_fluid"] != "1"))]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
@@ -462,21 +504,26 @@ def command_convergence(args):
     a table with each value's change from the next coarser resolution, and a chart against r/dp per phi."""
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, wall_s=float, seed=int))
+        lubrication=str, lubrication_cutoff_dp=str, pack_fluid=str, wall_s=float, seed=int, ch=float))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
+        abs(float(r["ch"]) - args.ch) < 1e-9 and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
         (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
     if not rows:
         fail("%s: no finished %s run with the settings asked" % (args.csv, args.scheme))
     series = {}
-    for r in rows:  # the last row of a (lubrication, phi, dp) counts: a rerun replaces its run
-        series.setdefault(r["lubrication"], {}).setdefault(float(r["phi"]), {})[
+    for r in rows:  # the last row of a (setting, phi, dp) counts: a rerun replaces its run
+        setting = model_setting(r)
+        series.setdefault(setting, {}).setdefault(float(r["phi"]), {})[
             round(RADIUS_M / float(r["dp_m"]), 2)] = (float(r["mu_eq_over_mu0"]), float(r["wall_s"]))
-    for lub in sorted(series):
-        by_phi = series[lub]
+    clear = {rd: v for s in series.values() for rd, v in s.get(0.0, {}).items()}
+    for setting in series:  # the clear fluid has no discs: its runs count for every setting
+        if 0.0 not in series[setting] and clear:
+            series[setting][0.0] = clear
+    for setting in sorted(series):
+        by_phi = series[setting]
         resolutions = sorted({rd for values in by_phi.values() for rd in values})
-        print("%s scheme, %s the lubrication model: mu_eq/mu0 (change from the next coarser r/dp)"
-              % (args.scheme, "with" if lub == "1" else "without"))
+        print("%s scheme, %s: mu_eq/mu0 (change from the next coarser r/dp)" % (args.scheme, setting))
         print("  phi   " + "".join("%20s" % ("r/dp %g" % rd) for rd in resolutions))
         for phi in sorted(by_phi):
             cells, before = [], None
@@ -493,25 +540,33 @@ def command_convergence(args):
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(figsize=(8, 6))
-        phis = sorted({phi for by_phi in series.values() for phi in by_phi})
+        fig, ax = plt.subplots(figsize=(9, 9))
+        phis = sorted({phi for by_phi in series.values() for phi in by_phi if phi > 0})
+        styles = ("o-", "s--", "^:", "D-.", "v-", "x--")
         for k, phi in enumerate(phis):
-            for lub, style in (("0", "o-"), ("1", "s--")):
-                values = series.get(lub, {}).get(phi)
+            for j, setting in enumerate(sorted(series)):
+                values = series[setting].get(phi)
                 if not values:
                     continue
                 rds = sorted(values)
-                ax.plot(rds, [values[rd][0] for rd in rds], style, color="C%d" % k, mfc="none" if lub == "1" else None,
-                        label="$\phi$ %g%s" % (phi, ", lubrication model" if lub == "1" else ""))
+                ax.plot(rds, [values[rd][0] for rd in rds], styles[j % len(styles)], color="C%d" % (k % 10),
+                        mfc="none" if j else None, label="$\phi$ %g, %s" % (phi, setting))
         ax.set_xlabel("disc radius over particle spacing, r/dp")
         ax.set_ylabel("$\mu_{eq}/\mu_0$")
         ax.set_title("Loaded Poiseuille, %s scheme: convergence in dp" % args.scheme)
-        ax.legend(fontsize=7, ncol=2)
+        ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.08))
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(args.png, dpi=120)
         print("%s: wrote %s" % (TOOL, args.png))
     return 0
+
+
+def model_setting(row):
+    """The lubrication model and the fluid's placement of a table row, in words."""
+    model = ("lubrication model, cut-off %s dp" % (row["lubrication_cutoff_dp"] or "1")) if row["lubrication"] == "1" \
+        else "no lubrication model"
+    return model + (", fluid packed around the discs" if row["pack_fluid"] == "1" else ", default placement")
 
 
 def command_seeds(args):
@@ -520,8 +575,9 @@ def command_seeds(args):
     lubrication = "1" if args.lubrication else "0"
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, seed=int))
+        lubrication=str, seed=int, pack_fluid=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == lubrication and
+        r["pack_fluid"] != "1" and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
         (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
     if not rows:
@@ -583,10 +639,19 @@ def main():
     run.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="numerics.scheme")
     run.add_argument("--lubrication", action="store_true",
                      help="contacts.lubrication = true (without it false, though the model is on by default)")
+    run.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
+                     help="contacts.lubrication_cutoff_dp, the lubrication model's cut-off gap in dp (default 1)")
+    run.add_argument("--pack-fluid", action="store_true", help="boulders.pack_fluid = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
     run.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
+    add = sub.add_parser("add")
+    add.add_argument("run_dir", type=cli_checks.folder)
+    add.add_argument("--wall-s", type=cli_checks.non_negative, default=float("nan"),
+                     help="the run's wall time in seconds, where known (default nan)")
+    add.add_argument("--threads", type=cli_checks.positive_int, default=1, help="the threads it ran on (default 1)")
+    add.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
     sub.add_parser("discs").add_argument("run_dir")
@@ -615,6 +680,7 @@ def main():
     conv.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
     conv.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
     conv.add_argument("--seed", type=int, default=1, help="the placement (boulders.seed) taken at every resolution")
+    conv.add_argument("--ch", type=cli_checks.positive, default=1.8, help="only the runs with this C_h (default 1.8)")
     seeds = sub.add_parser("seeds")
     seeds.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     seeds.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
@@ -630,6 +696,8 @@ def main():
         if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
             fail("--diffusion must be in [0, 1]")
         return command_run(args)
+    if args.command == "add":
+        return command_add(args)
     if args.command == "reference":
         return command_reference(args)
     if args.command == "measure":
