@@ -14,7 +14,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
-        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication] [--seed 1]
+        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1]]
+        [--pack-fluid] [--seed 1]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
         [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8]   # mu_eq/mu0 per phi and r/dp, per lubrication model
         # and placement of the fluid
@@ -36,7 +37,8 @@ then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) 
 --scheme sets numerics.scheme, --lubrication contacts.lubrication (with --cutoff-dp its cut-off,
 contacts.lubrication_cutoff_dp) and --pack-fluid boulders.pack_fluid for the runs; `add` reads them, and every other
 setting the table records, from the run folder's params.ini. `report` takes the rows of one scheme, with or without
-the lubrication model (default: explicit, without), at the default placement of the fluid. `convergence` takes one placement (--seed,
+the lubrication model (default: explicit, without; --cutoff-dp its cut-off), at the default placement of the fluid
+or (--pack-fluid) packed. `convergence` takes one placement (--seed,
 default 1) at every resolution; `seeds` gives, per phi and r/dp, each seed's mu_eq/mu0, their mean and standard
 deviation, and the change of the mean from the next coarser r/dp run with at least two seeds, with its standard
 error (the two means' standard errors combined, over the coarser mean).
@@ -373,9 +375,11 @@ def command_report(args):
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
         density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str,
-        seed=int, pack_fluid=str))
+        seed=int, pack_fluid=str, lubrication_cutoff_dp=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
-        (float(r["phi"]) == 0 or (r["lubrication"] == str(int(args.lubrication)) and r["pack_fluid"] != "1"))]
+        (float(r["phi"]) == 0 or (r["lubrication"] == str(int(args.lubrication)) and
+                                   (r["pack_fluid"] == "1") == args.pack_fluid and
+                                   (not args.lubrication or float(r["lubrication_cutoff_dp"] or 1) == args.cutoff_dp)))]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
@@ -668,6 +672,9 @@ def main():
     rep.add_argument("--dp", type=cli_checks.positive, default=None, help="fit only the runs at this dp")
     rep.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="the runs of this scheme")
     rep.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
+    rep.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
+                     help="with --lubrication: the runs with this cut-off (default 1 dp)")
+    rep.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
     rep.add_argument("--reference", default=REFERENCE_CSV)
