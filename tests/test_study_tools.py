@@ -88,6 +88,15 @@ r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--scheme", "
                     "0"], capture_output=True, text=True, timeout=120)
 check("poiseuille_loaded report fits one placement: the implicit r/dp 4 runs of seed 1 (6), not the other seeds' rows",
       r.returncode == 0 and "fit of mu_eq/mu0 over 6 runs" in r.stdout, (r.stdout + r.stderr).strip()[-300:])
+r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--scheme", "implicit", "--lubrication", "--pack-fluid",
+                    "--c0", "15", "--diffusion", "0"], capture_output=True, text=True, timeout=120)
+check("poiseuille_loaded report --lubrication --pack-fluid: the six packed r/dp 4 runs with the model at 1 dp",
+      r.returncode == 0 and "fit of mu_eq/mu0 over 6 runs" in r.stdout and "2.4804" in r.stdout,
+      (r.stdout + r.stderr).strip()[-300:])
+r = subprocess.run([sys.executable, PL, "report", "--dp", "0.005", "--scheme", "implicit", "--lubrication", "--pack-fluid",
+                    "--cutoff-dp", "2", "--c0", "15", "--diffusion", "0"], capture_output=True, text=True, timeout=120)
+check("poiseuille_loaded report --cutoff-dp 2: the one packed r/dp 4 run at 2 dp, too few to fit",
+      r.returncode == 2 and "1 finished runs with discs" in r.stderr, (r.stdout + r.stderr).strip()[-300:])
 # convergence on a synthetic table: two resolutions without the model, one with it, and a row of another scheme
 conv = os.path.join(work, "convergence.csv")
 if os.path.exists(conv):
