@@ -172,7 +172,7 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
         grow((void **)&amg->kept_first, rows, sizeof *amg->kept_first) ||
         grow((void **)&amg->row_of_id, (size_t)id_count, sizeof *amg->row_of_id))
         return -1;
-    if (nnz > amg->kept_cap || !amg->kept_col) { /* an eighth to spare: the entries change a little */
+    if (nnz > amg->kept_cap || !amg->kept_col) { /* an eighth to spare, as implicit_room_for */
         const size_t room = nnz + nnz / 8 + 64;
         if (grow((void **)&amg->kept_col, room, sizeof *amg->kept_col) ||
             grow((void **)&amg->kept_val, room, sizeof *amg->kept_val) ||

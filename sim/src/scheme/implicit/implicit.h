@@ -146,6 +146,12 @@ enum { AFFINE, LINEAR_FROM_ZERO, LINEAR_FROM_GUESS }; /* implicit_solve()'s oper
  * the 2-core Xeon VM: the 800-particle tank 0.53 s on one thread, 4.75 s on two; Freydier ID1 at 4,590 fluid
  * particles 3.2 s and 4.2 s; at 10,075, 5.23 and 4.77 s; docs/performance.md) */
 #define WIDE_FLUID_PARTICLES 10000
+/* The entries an array sized to the neighbour lists is given when they outgrow it: an eighth to spare. The lists
+ * change a little at each build; arrays grown to the exact count were copied and their new pages faulted in at nearly
+ * every build (Freydier ID1 at dp 0.5 mm, 104 steps: 60,208 page faults, about 32,900 of them in the first step; with
+ * an eighth to spare 48,767, with half 49,181; docs/performance.md). amg.c's kept matrix follows the same rule */
+static inline size_t implicit_room_for(size_t need) { return need + need / 8 + 64; }
+
 static inline int wide(const surge_sim *sim) { return sim->count - sim->wall_count >= WIDE_FLUID_PARTICLES; }
 
 /* A wall's ghost-node list: a fixed wall's is its wall_fluid list, a disc particle's its ghost_fluid list (the

@@ -157,8 +157,8 @@ int implicit_assemble_sparse(surge_sim *sim, const double *diag, const real *flu
     const size_t room = (size_t)nl->fluid_first[nf] + (size_t)nf;
     if (!w->matrix_first && !(w->matrix_first = malloc((size_t)(nf + 1) * sizeof *w->matrix_first)))
         return -1;
-    if (room > w->matrix_cap || !w->matrix_col) { /* an eighth to spare (work.c) */
-        const size_t grown = room + room / 8 + 64;
+    if (room > w->matrix_cap || !w->matrix_col) {
+        const size_t grown = implicit_room_for(room);
         int32_t *col = realloc(w->matrix_col, grown * sizeof *col);
         if (col)
             w->matrix_col = col;

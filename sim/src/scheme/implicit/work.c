@@ -17,12 +17,6 @@ static int grow(void **array, size_t need, size_t size)
 
 #define GROW(field, need) (grow((void **)&w->field, need, sizeof *w->field))
 
-/* The entries a per-entry array is given room for when the lists outgrow it: an eighth to spare. The lists change a
- * little at each build; arrays grown to the exact count were copied and their new pages faulted in at nearly every
- * build (Freydier ID1 at dp 0.5 mm, a run of 104 steps: 60,208 page faults, 33,011 of them in the first step; with an
- * eighth to spare 48,767, with half 49,181) */
-static size_t with_headroom(size_t need) { return need + need / 8 + 64; }
-
 /* Sizes the work arrays for the current lists; -1 when out of memory. */
 int implicit_reserve_work(surge_sim *sim)
 {
@@ -33,14 +27,14 @@ int implicit_reserve_work(surge_sim *sim)
     const size_t fe = (size_t)nl->fluid_first[nf], we = (size_t)nl->wall_first[nf];
     const size_t me = (size_t)nl->wall_fluid_first[nw], ge = (size_t)nl->ghost_fluid_first[nw];
     if (fe > w->fluid_cap || !w->fluid_w) {
-        const size_t room = with_headroom(fe);
+        const size_t room = implicit_room_for(fe);
         if (GROW(fluid_w, room) || GROW(fluid_gx, room) || GROW(fluid_gy, room) || GROW(fluid_pc, room) ||
             GROW(fluid_iw, room) || GROW(fluid_igx, room) || GROW(fluid_igy, room))
             return -1;
         w->fluid_cap = room;
     }
     if (we > w->wall_cap || !w->wall_w || (discs > 0 && !w->disc_entry)) {
-        const size_t room = with_headroom(we);
+        const size_t room = implicit_room_for(we);
         if (GROW(wall_w, room) || GROW(wall_gx, room) || GROW(wall_gy, room) || GROW(wall_pc, room) ||
             GROW(wall_iw, room) || GROW(wall_igx, room) || GROW(wall_igy, room) || GROW(wall_side, room) ||
             (discs > 0 && (GROW(disc_entry, room) || GROW(disc_entry_fluid, room) || GROW(disc_divergence, 3 * room))))
@@ -48,7 +42,7 @@ int implicit_reserve_work(surge_sim *sim)
         w->wall_cap = room;
     }
     if (me > w->mirror_cap || !w->mirror_w) {
-        const size_t room = with_headroom(me);
+        const size_t room = implicit_room_for(me);
         if (GROW(mirror_w, room) || GROW(mirror_nw, room))
             return -1;
         w->mirror_cap = room;
@@ -60,7 +54,7 @@ int implicit_reserve_work(surge_sim *sim)
         w->disc_cap = sim->boulders.count;
     }
     if (ge > w->ghost_cap || !w->ghost_w) {
-        const size_t room = with_headroom(ge);
+        const size_t room = implicit_room_for(ge);
         if (GROW(ghost_w, room) || GROW(ghost_nw, room))
             return -1;
         w->ghost_cap = room;
