@@ -8,7 +8,7 @@
  * gap below the cut-off, and at free fall above it. The sliding film's shear (lubrication.h) against Reynolds'
  * equation for a face sliding past a plane, with the net force its pressure leaves; a disc spinning by a wall, and two
  * discs spinning the same way, slow at the rate its torques give and do not move.
- * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication */
+ * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -415,6 +415,81 @@ static int test_lubrication(void)
     return failures;
 }
 
+/* The measured model (contacts.lubrication_resolved = measured): the exact resistance, the share the SPH resolves,
+ * and a disc driven onto a plane through the contact solver with it */
+static int test_lubrication_measured(void)
+{
+    const double mu = 467, r = 0.02, dp = 0.02 / 4, kernel_h = 1.8 * sqrt(2.0) * dp;
+    /* the exact resistance tends to the film's at contact, the next order 21/20 h/R above it (its series); the two
+     * ways it is evaluated meet at alpha = 0.1 (h/R = cosh 0.1 - 1) */
+    for (int k = 0; k < 3; k++) {
+        const double ratio = (const double[]){1e-3, 1e-2, 1e-1}[k];
+        const double h0 = ratio * r;
+        const double excess = lubrication_exact_damping(mu, r, h0) / lubrication_film_damping(mu, r, h0) - 1;
+        char what[96];
+        snprintf(what, sizeof what, "exact resistance over the film's, less 1, over h/R - 1.05, at h/R %g", ratio);
+        expect_below(what, fabs(excess / ratio - 1.05), 0.01);
+    }
+    const double switch_gap = (cosh(0.1) - 1) * r;
+    expect_below("exact resistance: the series and tanh meet at alpha 0.1",
+                 fabs(lubrication_exact_damping(mu, r, switch_gap * (1 - 1e-9)) /
+                          lubrication_exact_damping(mu, r, switch_gap * (1 + 1e-9)) - 1), 1e-8);
+    /* the share: 0 at contact, never falling, 1 from the table's end on */
+    double worst_fall = 0, last = lubrication_resolved_share(0);
+    for (double x = 0; x < LUBRICATION_RESOLVED_END + 0.5; x += 0.01) {
+        worst_fall = fmax(worst_fall, last - lubrication_resolved_share(x));
+        last = lubrication_resolved_share(x);
+    }
+    expect_below("resolved share at contact", lubrication_resolved_share(0), 1e-12);
+    expect_below("resolved share: largest fall with the gap", worst_fall, 0);
+    expect_below("resolved share beyond the table's end, less 1", fabs(lubrication_resolved_share(4) - 1), 1e-12);
+    /* the damping: the exact less the share; none from the end on; the gap taken at least min_gap */
+    const double gap = 0.6 * kernel_h;
+    expect_below("measured damping at 0.6 h against (1 - share) exact",
+                 fabs(lubrication_measured_damping(mu, r, gap, kernel_h, 0.01 * dp) /
+                          ((1 - lubrication_resolved_share(0.6)) * lubrication_exact_damping(mu, r, gap)) - 1), 1e-12);
+    expect_below("measured damping at the table's end",
+                 lubrication_measured_damping(mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h, 0.01 * dp), 0);
+    expect_below("measured damping below the smallest gap, against at it",
+                 fabs(lubrication_measured_damping(mu, r, 1e-5 * dp, kernel_h, 0.01 * dp) /
+                          lubrication_measured_damping(mu, r, 0.01 * dp, kernel_h, 0.01 * dp) - 1), 1e-12);
+    /* a disc driven onto a plane through the contact solver: free fall beyond the model's reach, then the terminal
+     * speed F / c(h) of the measured damping */
+    world w;
+    world_init(&w, 0, 0);
+    w.settings.lubrication_viscosity_pa_s = mu;
+    w.settings.lubrication_cutoff_m = dp;
+    w.settings.lubrication_min_gap_m = 0.01 * dp;
+    w.settings.lubrication_kernel_h_m = kernel_h;
+    const double a = 100.0, reach = LUBRICATION_RESOLVED_END * kernel_h, start_gap = reach + 0.5 * dp;
+    add_plane(&w, 0, 1, 0);
+    const int disc = add_disc(&w, 0.5, r + start_gap, r, 0);
+    w.ay[disc] = -a;
+    const double mass = 1 / w.inv_mass[disc];
+    const double targets[] = {(reach + 0.1 * dp) / dp, 2, 1, 0.5, 0.2}; /* gaps in dp */
+    int next = 0;
+    double worst = 0, free_fall = 0;
+    for (int step = 0; step < 100000 && next < 5; step++) {
+        const double gap_before = w.y[disc] - r;
+        run(&w, gap_before > reach ? 1e-6 : 1e-3, 1);
+        if (gap_before > targets[next] * dp)
+            continue;
+        const double gap_after = w.y[disc] - r, approach = -w.vy[disc];
+        if (next == 0)
+            free_fall = fabs(approach / sqrt(2 * a * (start_gap - gap_before)) - 1);
+        else
+            worst = fmax(worst, fabs(approach / (mass * a / lubrication_measured_damping(
+                                                    mu, r, 0.5 * (gap_before + gap_after), kernel_h, 0.01 * dp)) -
+                                     1));
+        next++;
+    }
+    expect_below("measured model, disc on a plane: beyond the reach, free fall", free_fall, 0.02);
+    expect_below("measured model, disc on a plane: approach at 2-0.2 dp against F / c(h), worst",
+                 next == 5 ? worst : INFINITY, 0.02);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     const char *which = argc > 1 ? argv[1] : "";
@@ -434,6 +509,9 @@ int main(int argc, char **argv)
         return test_blown_up() != 0;
     if (!strcmp(which, "lubrication"))
         return test_lubrication() != 0;
-    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication\n");
+    if (!strcmp(which, "lubrication_measured"))
+        return test_lubrication_measured() != 0;
+    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|"
+                    "lubrication_measured\n");
     return 2;
 }

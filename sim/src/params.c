@@ -338,6 +338,10 @@ static const surge_param_info registry[] = {
     {"contacts", "lubrication_min_gap_dp", SURGE_PARAM_REAL, "dp", 0.01, 1e-4, 1, true, NULL,
      "The lubrication force is taken at this gap (dp) where the gap is narrower (surface roughness; it keeps the "
      "force finite at contact).", OFF(contacts.lubrication_min_gap_dp)},
+    {"contacts", "lubrication_resolved", SURGE_PARAM_ENUM, "-", SURGE_LUBRICATION_CUTOFF, 0, 1, true, "cutoff|measured",
+     "What the SPH resolves of a squeeze film, which the lubrication force leaves out: cutoff, the film's force at "
+     "lubrication_cutoff_dp below it; measured, the share of the exact resistance the implicit scheme resolves at "
+     "each gap, measured against the kernel's h (docs/boulders.md).", OFF(contacts.lubrication_resolved)},
 
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",
@@ -986,6 +990,12 @@ static int validate_contacts(const surge_params *p, char *err, size_t err_len)
     if (p->contacts.lubrication_min_gap_dp >= p->contacts.lubrication_cutoff_dp) {
         fail(err, err_len, "contacts.lubrication_min_gap_dp (%g) must be below contacts.lubrication_cutoff_dp (%g)",
              p->contacts.lubrication_min_gap_dp, p->contacts.lubrication_cutoff_dp);
+        return -1;
+    }
+    /* the measured share is the implicit scheme's: the explicit one resolves more of a film (docs/boulders.md) */
+    if (p->contacts.lubrication_resolved == SURGE_LUBRICATION_MEASURED && p->numerics.scheme != SURGE_SCHEME_IMPLICIT) {
+        fail(err, err_len, "contacts.lubrication_resolved = measured holds the share the implicit scheme resolves; the "
+             "explicit scheme resolves more of a film and takes cutoff");
         return -1;
     }
     return 0;

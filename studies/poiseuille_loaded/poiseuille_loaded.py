@@ -5,7 +5,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 
   studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
-        [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1]] [--pack-fluid] [--budget-s SECONDS]
+        [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid]
+        [--budget-s SECONDS]
         [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py add RUN_DIR [--wall-s S] [--threads N] [--csv ...]
         # a finished run made by hand (surge run cases/poiseuille_loaded.ini ...) measured into the table
@@ -14,8 +15,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
-        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1]]
-        [--pack-fluid] [--seed 1]
+        [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit]
+        [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid] [--seed 1]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
         [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8]   # mu_eq/mu0 per phi and r/dp, per lubrication model
         # and placement of the fluid
@@ -35,7 +36,8 @@ annulus stays clear of the plates; 1 is the lattice's density, a shell of partic
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme, --lubrication contacts.lubrication (with --cutoff-dp its cut-off,
-contacts.lubrication_cutoff_dp) and --pack-fluid boulders.pack_fluid for the runs; `add` reads them, and every other
+contacts.lubrication_cutoff_dp, and --resolved contacts.lubrication_resolved) and --pack-fluid boulders.pack_fluid for
+the runs; `add` reads them, and every other
 setting the table records, from the run folder's params.ini. `report` takes the rows of one scheme, with or without
 the lubrication model (default: explicit, without; --cutoff-dp its cut-off), at the default placement of the fluid
 or (--pack-fluid) packed. `convergence` takes one placement (--seed,
@@ -69,7 +71,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
            "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion", "scheme", "lubrication",
-           "lubrication_cutoff_dp", "pack_fluid"]
+           "lubrication_cutoff_dp", "pack_fluid", "lubrication_resolved"]
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
@@ -236,6 +238,7 @@ def run_one(args, phi, deadline):
                                               "_dd%g" % args.diffusion if args.diffusion >= 0 else "",
                                               "_implicit" if args.scheme == "implicit" else "",
                                               "_lubrication%g" % args.cutoff_dp if args.lubrication else "") + \
+        ("_measured" if args.lubrication and args.resolved == "measured" else "") + \
         ("_packed" if args.pack_fluid else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
@@ -246,6 +249,7 @@ def run_one(args, phi, deadline):
     fresh += ["-s", "numerics.density_diffusion=%g" % args.diffusion] if args.diffusion >= 0 else []
     fresh += ["-s", "numerics.scheme=%s" % args.scheme, "-s", "contacts.lubrication=%s" % str(args.lubrication).lower(),
               "-s", "contacts.lubrication_cutoff_dp=%g" % args.cutoff_dp,
+              "-s", "contacts.lubrication_resolved=%s" % args.resolved,
               "-s", "boulders.pack_fluid=%s" % str(args.pack_fluid).lower()]
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
@@ -278,7 +282,8 @@ def table_row(folder, threads, wall_s, finished):
            "density_diffusion": "%g" % params.real("numerics", "density_diffusion"),
            "scheme": params.word("numerics", "scheme", "explicit"), "lubrication": int(lubrication),
            "lubrication_cutoff_dp": "%g" % params.real("contacts", "lubrication_cutoff_dp") if lubrication else "",
-           "pack_fluid": int(params.flag("boulders", "pack_fluid", False))}
+           "pack_fluid": int(params.flag("boulders", "pack_fluid", False)),
+           "lubrication_resolved": params.word("contacts", "lubrication_resolved", "cutoff") if lubrication else ""}
     if finished:
         u_max, mu_ratio, phi_actual, n_discs = measure(folder)
         row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
@@ -306,16 +311,16 @@ def command_add(args):
 def command_run(args):
     rows = study.existing_rows(TOOL, args.csv, COLUMNS, dict(
         phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float, scheme=str, lubrication=int,
-        lubrication_cutoff_dp=str, pack_fluid=int))
+        lubrication_cutoff_dp=str, pack_fluid=int, lubrication_resolved=str))
     deadline = time.time() + args.budget_s if args.budget_s else None
     diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
     done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
              float(r["density_diffusion"]), r["scheme"], int(r["lubrication"]), r["lubrication_cutoff_dp"],
-             int(r["pack_fluid"])) for r in rows}
+             int(r["pack_fluid"]), r["lubrication_resolved"]) for r in rows}
     for phi in args.phi:
         if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion,
                 args.scheme, int(args.lubrication), "%g" % args.cutoff_dp if args.lubrication else "",
-                int(args.pack_fluid)) in done:
+                int(args.pack_fluid), args.resolved if args.lubrication else "") in done:
             continue
         if deadline and time.time() > deadline:
             print("%s: budget spent; run again to continue" % TOOL, flush=True)
@@ -369,17 +374,23 @@ def read_reference(path):
             for r in study.read_rows(TOOL, path, dict(phi=float, mu_local_einstein=float))}
 
 
+def same_model(row, args):
+    """Whether a row with the lubrication model ran it with the cut-off and resolved share asked for."""
+    return float(row["lubrication_cutoff_dp"] or 1) == args.cutoff_dp and \
+        (row["lubrication_resolved"] or "cutoff") == args.resolved
+
+
 def command_report(args):
     # the clear fluid (phi = 0) has no gaps for the lubrication model: its runs count with the model or without
     every_run = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
         density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str,
-        seed=int, pack_fluid=str, lubrication_cutoff_dp=str))
+        seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         (float(r["phi"]) == 0 or (r["lubrication"] == str(int(args.lubrication)) and
                                    (r["pack_fluid"] == "1") == args.pack_fluid and
-                                   (not args.lubrication or float(r["lubrication_cutoff_dp"] or 1) == args.cutoff_dp)))]
+                                   (not args.lubrication or same_model(r, args))))]
     rows = every_run
     if args.diffusion is not None:
         rows = [r for r in rows if float(r["density_diffusion"]) == args.diffusion]
@@ -508,7 +519,8 @@ def command_convergence(args):
     a table with each value's change from the next coarser resolution, and a chart against r/dp per phi."""
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, lubrication_cutoff_dp=str, pack_fluid=str, wall_s=float, seed=int, ch=float))
+        lubrication=str, lubrication_cutoff_dp=str, pack_fluid=str, wall_s=float, seed=int, ch=float,
+        lubrication_resolved=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         abs(float(r["ch"]) - args.ch) < 1e-9 and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
@@ -568,8 +580,12 @@ def command_convergence(args):
 
 def model_setting(row):
     """The lubrication model and the fluid's placement of a table row, in words."""
-    model = ("lubrication model, cut-off %s dp" % (row["lubrication_cutoff_dp"] or "1")) if row["lubrication"] == "1" \
-        else "no lubrication model"
+    if row["lubrication"] != "1":
+        model = "no lubrication model"
+    elif row["lubrication_resolved"] == "measured":
+        model = "lubrication model, measured share"
+    else:
+        model = "lubrication model, cut-off %s dp" % (row["lubrication_cutoff_dp"] or "1")
     return model + (", fluid packed around the discs" if row["pack_fluid"] == "1" else ", default placement")
 
 
@@ -645,6 +661,8 @@ def main():
                      help="contacts.lubrication = true (without it false, though the model is on by default)")
     run.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
                      help="contacts.lubrication_cutoff_dp, the lubrication model's cut-off gap in dp (default 1)")
+    run.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
+                     help="contacts.lubrication_resolved, what the SPH is taken to resolve of a squeeze film")
     run.add_argument("--pack-fluid", action="store_true", help="boulders.pack_fluid = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
@@ -674,6 +692,8 @@ def main():
     rep.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
     rep.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
                      help="with --lubrication: the runs with this cut-off (default 1 dp)")
+    rep.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
+                     help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
     rep.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")

@@ -42,6 +42,11 @@ typedef enum surge_fluid_shape {
     SURGE_SHAPE_LUBRICATION = 1, /* steady lubrication front with the block's volume, from x0 downstream */
 } surge_fluid_shape;
 
+typedef enum surge_lubrication_resolved {
+    SURGE_LUBRICATION_CUTOFF = 0,  /* the film's force at lubrication_cutoff_dp, below it */
+    SURGE_LUBRICATION_MEASURED = 1 /* the measured share of the exact resistance at each gap over the kernel's h */
+} surge_lubrication_resolved;
+
 typedef enum surge_color_field {
     SURGE_FIELD_SPEED = 0,    /* |v| */
     SURGE_FIELD_VX_REL = 1,   /* vx - belt speed: velocity relative to the belt */
@@ -177,6 +182,7 @@ typedef struct surge_params {
         bool lubrication;        /* the lubrication force of gaps narrower than the cut-off (lubrication.h) */
         double lubrication_cutoff_dp;  /* gaps below this (dp) take the unresolved part of the lubrication force */
         double lubrication_min_gap_dp; /* the force's gap is at least this (dp): surface roughness */
+        surge_lubrication_resolved lubrication_resolved; /* what the SPH is taken to resolve of a squeeze film */
     } contacts;
     struct {
         int form;                    /* surge_shifting_form */

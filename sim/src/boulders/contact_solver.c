@@ -313,6 +313,12 @@ static void apply_torques(const contact *c, contact_discs *d, double pt)
         d->omega[c->a] -= d->inv_inertia[c->a] * c->ra * pt;
 }
 
+/* The widest gap a film acts across */
+static double lubrication_reach_m(const contact_settings *set)
+{
+    return fmax(set->lubrication_cutoff_m, LUBRICATION_RESOLVED_END * set->lubrication_kernel_h_m);
+}
+
 /* The lubrication film's dampings of a contact, between the surfaces (radii and gap without the contact margin) */
 static void film_dampings(contact *c, const contact_settings *set)
 {
@@ -322,6 +328,16 @@ static void film_dampings(contact *c, const contact_settings *set)
                                          set->lubrication_min_gap_m);
     c->lubrication_t = lubrication_sliding_damping(set->lubrication_viscosity_pa_s, radius_m, gap_m,
                                                    set->lubrication_cutoff_m, set->lubrication_min_gap_m);
+}
+
+/* The measured squeeze film in place of the cut-off model's (settings' lubrication_kernel_h_m > 0), taken apart from
+ * film_dampings so that the cut-off model's arithmetic compiles as before */
+static void measured_squeeze_film(contact *c, const contact_settings *set)
+{
+    const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
+    c->lubrication = lubrication_measured_damping(set->lubrication_viscosity_pa_s, c->a >= 0 ? ra * rb / (ra + rb) : rb,
+                                                  c->gap_m + set->gap_offset_m, set->lubrication_kernel_h_m,
+                                                  set->lubrication_min_gap_m);
 }
 
 static void prepare(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
@@ -345,6 +361,9 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         c->lambda_t = old ? old->lambda_t : 0;
         apply_impulse(c, d, c->lambda_n, c->lambda_t);
     }
+    if (set->lubrication_kernel_h_m > 0)
+        for (int k = 0; k < s->now_count; k++)
+            measured_squeeze_film(&s->now[k], set);
 }
 
 static void solve(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
@@ -410,7 +429,7 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         /* pairs that may touch within the sub-step, and those within the lubrication cut-off */
         double margin = 0.1 * r_min + 2 * h * v_max;
         if (set->lubrication_viscosity_pa_s > 0)
-            margin = fmax(margin, set->lubrication_cutoff_m - set->gap_offset_m);
+            margin = fmax(margin, lubrication_reach_m(set) - set->gap_offset_m);
         if (find_contacts(s, d, walls, wall_count, period, margin) != 0)
             return -1;
         for (int k = 0; k < s->now_count; k++)
@@ -445,11 +464,13 @@ int contact_solver_films(contact_solver *s, const contact_discs *d, const contac
     *count = 0;
     if (d->count == 0 || !(set->lubrication_viscosity_pa_s > 0))
         return 0;
-    if (find_contacts(s, d, walls, wall_count, set->period_m, set->lubrication_cutoff_m - set->gap_offset_m) != 0)
+    if (find_contacts(s, d, walls, wall_count, set->period_m, lubrication_reach_m(set) - set->gap_offset_m) != 0)
         return -1;
     for (int k = 0; k < s->now_count; k++) {
         contact *c = &s->now[k];
         film_dampings(c, set);
+        if (set->lubrication_kernel_h_m > 0)
+            measured_squeeze_film(c, set);
         if (!(c->lubrication > 0) && !(c->lubrication_t > 0))
             continue;
         if (*count == *capacity) {

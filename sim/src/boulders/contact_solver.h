@@ -42,6 +42,9 @@ typedef struct contact_settings {
      * contacts; viscosity 0: none. Gaps and radii are the surfaces' (the solver's less gap_offset_m, a contact
      * margin that the discs' radii and the walls carry half each) */
     double lubrication_viscosity_pa_s, lubrication_cutoff_m, lubrication_min_gap_m, gap_offset_m;
+    /* > 0: the squeeze film's unresolved part is the measured one (lubrication_measured_damping) for this kernel
+     * smoothing length, out to LUBRICATION_RESOLVED_END of it; 0: the film's less its value at the cut-off */
+    double lubrication_kernel_h_m;
 } contact_settings;
 
 typedef struct contact_stats {

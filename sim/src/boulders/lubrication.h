@@ -44,6 +44,24 @@ static inline double lubrication_damping(double viscosity_pa_s, double radius_m,
     return lubrication_unresolved(lubrication_film_damping, viscosity_pa_s, radius_m, gap_m, cutoff_m, min_gap_m);
 }
 
+/* The exact Stokes resistance of a cylinder of radius R approaching a plane at gap h0 (per unit approach speed and
+ * metre of width): 4 pi mu / (alpha - tanh alpha), cosh alpha = 1 + h0 / R (Jeffrey & Onishi 1981); near contact
+ * the squeeze film's 3 sqrt(2) pi mu (R / h0)^(3/2). A pair of discs takes its reduced radius R. (lubrication.c) */
+double lubrication_exact_damping(double viscosity_pa_s, double radius_m, double gap_m);
+
+/* The share of the exact resistance the implicit scheme resolves at gap h0 = x h (h the kernel's smoothing length),
+ * measured with a disc settling onto the bed (docs/boulders.md, "What the SPH resolves of a squeeze film"): 1 from
+ * x = LUBRICATION_RESOLVED_END on */
+#define LUBRICATION_RESOLVED_STEP 0.125
+#define LUBRICATION_RESOLVED_POINTS 25
+#define LUBRICATION_RESOLVED_END (LUBRICATION_RESOLVED_STEP * (LUBRICATION_RESOLVED_POINTS - 1))
+double lubrication_resolved_share(double gap_over_h);
+
+/* The squeeze film's unresolved part, measured: the exact resistance less the share the scheme resolves, at the gap
+ * taken at least min_gap_m; 0 from LUBRICATION_RESOLVED_END kernel lengths on */
+double lubrication_measured_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
+                                    double min_gap_m);
+
 /* The sliding film's unresolved part */
 static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
                                                  double min_gap_m)
