@@ -4,9 +4,10 @@ viscous solve V-cycles its two velocity components at once, on two copies of its
 thread one copy serves both in turn. The copies must be the same hierarchy, so the two runs must end in the same
 state hash (the Freydier ID1 front at dp = 2 mm, C_h 1.8, 0.2 s, the multigrid forced for both solves).
 
-With PARTS > 1 each hierarchy is cut into that many parts (implicit.multigrid_parts), V-cycled side by side on the
-threads: the result depends on the parts, not on the threads, so 1 and 2 threads must again end in the same state,
-and that state must differ from the one of a single hierarchy (else the parts were not used).
+With PARTS > 1 each hierarchy is cut into that many parts (implicit.multigrid_parts), built and V-cycled side by side
+on the threads: the result depends on the parts, not on the threads, so 1, 2 and 4 threads (more threads than parts'
+copies, the builds handed out in whatever order the threads come) must again end in the same state, and that state
+must differ from the one of a single hierarchy (else the parts were not used).
 Usage: test_implicit_threads.py SURGE ROOT OUTDIR [PARTS]"""
 import csv
 import os
@@ -18,7 +19,7 @@ surge, root, out = sys.argv[1:4]
 parts = int(sys.argv[4]) if len(sys.argv) > 4 else 1
 hashes = {}
 failures = 0
-for threads, run_parts in ((1, parts), (2, parts)) + (((0, 1),) if parts > 1 else ()):
+for threads, run_parts in ((1, parts), (2, parts)) + (((4, parts), (0, 1)) if parts > 1 else ()):
     folder = os.path.join(out, "threads_%d_parts_%d" % (threads, run_parts))
     cmd = [surge, "run", os.path.join(root, "cases", "freydier_id1.ini"), "-o", folder, "--overwrite",
            "-s", "numerics.dp_m=0.002", "-s", "numerics.ch=1.8", "-s", "walls.layers=0", "-s", "fluid.shape=lubrication",
@@ -39,11 +40,12 @@ for threads, run_parts in ((1, parts), (2, parts)) + (((0, 1),) if parts > 1 els
     if viscous <= 0:
         print("FAIL: no viscous iterations recorded, so the multigrid's viscous V-cycles were not exercised")
         failures += 1
-if hashes[1] != hashes[2]:
-    print("FAIL: the state hashes differ (1 thread %s, 2 threads %s)" % (hashes[1], hashes[2]))
+counts = [t for t in (1, 2, 4) if t in hashes]
+if len({hashes[t] for t in counts}) != 1:
+    print("FAIL: the state hashes differ (%s)" % ", ".join("%d threads %s" % (t, hashes[t]) for t in counts))
     failures += 1
 else:
-    print("ok: 1 and 2 threads end in the same state hash")
+    print("ok: %s threads end in the same state hash" % " and ".join(map(str, counts)))
 if parts > 1 and hashes[0] == hashes[1]:
     print("FAIL: %d parts end in the state of one hierarchy (%s): the parts were not used" % (parts, hashes[0]))
     failures += 1

@@ -5,11 +5,13 @@
  * smoothing (the hypre reference manual, "BoomerAMG"; on the Freydier front threshold 0.25, no aggressive level,
  * symmetric or l1 Gauss-Seidel were all slower, docs/method.md). hypre is built without threads here, so its
  * results do not depend on the thread count. A system that takes blocks of vectors (the viscous solve's two velocity
- * components) holds one copy of the hierarchy per block, built one after another on the same matrix (hypre's
- * coarsening reseeds its random numbers at each build, so the copies are the same), and V-cycles the blocks on
- * their own threads, one copy each: the same arithmetic as one copy block after block. With parts (amg_create), the
- * matrix is cut into diagonal blocks, a hierarchy each (and its copies), whose V-cycles run side by side: block
- * Jacobi between the parts, the same arithmetic whatever the thread count. */
+ * components) holds one copy of the hierarchy per block and V-cycles the blocks on their own threads, one copy
+ * each: the same arithmetic as one copy block after block. With parts (amg_create), the matrix is cut into diagonal
+ * blocks, a hierarchy each (and its copies), whose V-cycles run side by side: block Jacobi between the parts, the
+ * same arithmetic whatever the thread count. The hierarchies of one part are built one after another, because
+ * HMIS coarsening draws hypre's one global random sequence (reseeded at each build, so the copies are the same);
+ * those of several parts take Ruge-Stuben coarsening, which draws none, and are built side by side, each hierarchy
+ * on a communicator of its own (MPI allows no two threads a collective call on the same one). */
 #include "scheme/implicit/amg.h"
 
 #include <math.h>
@@ -38,6 +40,7 @@ typedef struct amg_copy {
     HYPRE_ParCSRMatrix a;      /* the objects behind matrix, rhs and x, as the solver takes them */
     HYPRE_ParVector b, xv;
     HYPRE_Solver multigrid;
+    MPI_Comm comm;             /* its own duplicate of MPI_COMM_SELF, kept while the system lives */
 } amg_copy;
 
 struct amg_system {
@@ -47,6 +50,8 @@ struct amg_system {
     int parts_wanted;          /* the diagonal blocks asked for (amg_create) */
     int parts;                 /* those of the kept matrix: at most one per row */
     amg_copy *hierarchy;       /* copies x parts: copy c of part p at c * parts + p */
+    MPI_Comm *comm;            /* copies x parts_wanted: the hierarchies' communicators, made as first needed */
+    int comms;
     int *part_first;           /* parts + 1: part p's rows are the slots part_first[p] .. part_first[p+1] */
     int32_t *part_of_row;      /* per row: its part */
     int32_t *slot_of_row;      /* per row: its slot (part_first of its part + its row in the part's block) */
@@ -58,6 +63,7 @@ struct amg_system {
     int32_t *block_col;        /* the blocks' entries, slot after slot, columns numbered inside the block */
     double *block_val;
     int32_t *queue;            /* the partition's breadth-first order */
+    int64_t *part_entry_first; /* parts + 1: part p's block entries are block_col/val[part_entry_first[p] ..] */
     int32_t *row_id;           /* per row: its particle's id */
     int32_t *row_of_id;        /* per id: its row, or -1 */
     int id_count;
@@ -94,19 +100,27 @@ static void release(amg_system *amg)
     amg->parts = 0;
 }
 
-amg_system *amg_create(char *err, size_t err_len, int blocks, int parts)
+int amg_start(char *err, size_t err_len)
 {
     int initialized = 0, provided = MPI_THREAD_SINGLE;
     MPI_Initialized(&initialized);
-    if (!initialized) {
-        /* MPI_THREAD_MULTIPLE: the hierarchies' V-cycles call MPI (on one rank, no messages) from their threads */
-        if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
-            snprintf(err, err_len, "implicit.preconditioner = amg: MPI (which hypre needs) did not start");
-            return NULL;
-        }
-        atexit(finalize_mpi);
-        HYPRE_Init();
+    if (initialized)
+        return 0;
+    /* MPI_THREAD_MULTIPLE: the hierarchies are built and V-cycled on several threads (on one rank, no messages) */
+    if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
+        snprintf(err, err_len, "implicit.preconditioner = amg: MPI (which hypre needs) did not start");
+        return -1;
     }
+    atexit(finalize_mpi);
+    HYPRE_Init();
+    return 0;
+}
+
+amg_system *amg_create(char *err, size_t err_len, int blocks, int parts)
+{
+    int provided = MPI_THREAD_SINGLE;
+    if (amg_start(err, err_len) != 0)
+        return NULL;
     MPI_Query_thread(&provided);
     amg_system *amg = calloc(1, sizeof *amg);
     if (!amg) {
@@ -120,6 +134,12 @@ amg_system *amg_create(char *err, size_t err_len, int blocks, int parts)
      * it takes as many tasks in fewer parts */
     const int per_block = blocks > 1 ? (parts + blocks - 1) / blocks : parts;
     amg->parts_wanted = per_block < 1 ? 1 : per_block > AMG_MAX_PARTS ? AMG_MAX_PARTS : per_block;
+    amg->comm = malloc((size_t)amg->copies * (size_t)amg->parts_wanted * sizeof *amg->comm);
+    if (!amg->comm) {
+        free(amg);
+        snprintf(err, err_len, "out of memory for the multigrid solver");
+        return NULL;
+    }
     return amg;
 }
 
@@ -128,7 +148,13 @@ void amg_destroy(amg_system *amg)
     if (!amg)
         return;
     release(amg);
+    int finalized = 0;
+    MPI_Finalized(&finalized);
+    for (int c = 0; c < amg->comms && !finalized; c++)
+        MPI_Comm_free(&amg->comm[c]);
+    free(amg->comm);
     free(amg->part_first);
+    free(amg->part_entry_first);
     free(amg->part_of_row);
     free(amg->slot_of_row);
     free(amg->entry_of_slot);
@@ -168,6 +194,7 @@ static int reserve(amg_system *amg, int n, size_t nnz, int id_count)
         grow((void **)&amg->queue, rows, sizeof *amg->queue) ||
         grow((void **)&amg->buffer, rows * (size_t)amg->copies, sizeof *amg->buffer) ||
         grow((void **)&amg->part_first, (size_t)amg->parts_wanted + 1, sizeof *amg->part_first) ||
+        grow((void **)&amg->part_entry_first, (size_t)amg->parts_wanted + 1, sizeof *amg->part_entry_first) ||
         grow((void **)&amg->row_id, rows, sizeof *amg->row_id) ||
         grow((void **)&amg->kept_first, rows, sizeof *amg->kept_first) ||
         grow((void **)&amg->row_of_id, (size_t)id_count, sizeof *amg->row_of_id))
@@ -230,6 +257,42 @@ static void partition(amg_system *amg, int n)
         amg->slot_of_row[i] = next_slot[amg->part_of_row[i]]++;
 }
 
+/* Hierarchy h on part p's diagonal block, whose entries start at block_col/val: Ruge-Stuben coarsening where
+ * several parts are built side by side, HMIS where one is */
+static void build_hierarchy(const amg_system *amg, amg_copy *h, int p, const int32_t *block_col, const double *block_val)
+{
+    const int first_slot = amg->part_first[p], rows = amg->part_first[p + 1] - first_slot;
+    HYPRE_IJMatrixCreate(h->comm, 0, rows - 1, 0, rows - 1, &h->matrix);
+    HYPRE_IJMatrixSetObjectType(h->matrix, HYPRE_PARCSR);
+    HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes + first_slot);
+    HYPRE_IJMatrixInitialize(h->matrix);
+    HYPRE_IJMatrixSetValues(h->matrix, rows, amg->row_sizes + first_slot, amg->rows, (const HYPRE_BigInt *)block_col,
+                            block_val);
+    HYPRE_IJMatrixAssemble(h->matrix);
+    for (int k = 0; k < 2; k++) {
+        HYPRE_IJVector *v = k ? &h->x : &h->rhs;
+        HYPRE_IJVectorCreate(h->comm, 0, rows - 1, v);
+        HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
+        HYPRE_IJVectorInitialize(*v);
+        HYPRE_IJVectorAssemble(*v);
+    }
+    HYPRE_BoomerAMGCreate(&h->multigrid);
+    HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
+    HYPRE_BoomerAMGSetCoarsenType(h->multigrid, amg->parts > 1 ? 3 : 10); /* Ruge-Stuben with a third pass; HMIS */
+    HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);                         /* extended+i */
+    HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
+    HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
+    HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
+    HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3); /* hybrid Gauss-Seidel, forward */
+    HYPRE_BoomerAMGSetKeepTranspose(h->multigrid, 1);
+    HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
+    HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
+    HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);
+    HYPRE_IJVectorGetObject(h->rhs, (void **)&h->b);
+    HYPRE_IJVectorGetObject(h->x, (void **)&h->xv);
+    HYPRE_BoomerAMGSetup(h->multigrid, h->a, h->b, h->xv);
+}
+
 /* The hierarchies on the kept matrix of n rows and row ids: one per part, on its diagonal block (the entries
  * between parts left out: block Jacobi between the parts) */
 static int build(amg_system *amg, int n)
@@ -244,28 +307,31 @@ static int build(amg_system *amg, int n)
         amg->row_of_id[amg->row_id[i]] = i;
     }
     partition(amg, n);
-    const int parts = amg->parts;
-    amg->hierarchy = calloc((size_t)amg->copies * (size_t)parts, sizeof *amg->hierarchy);
+    const int parts = amg->parts, tasks = amg->copies * parts;
+    amg->hierarchy = calloc((size_t)tasks, sizeof *amg->hierarchy);
     if (!amg->hierarchy) {
         amg->n = 0, amg->parts = 0;
         return -1;
     }
+    for (; amg->comms < tasks; amg->comms++)
+        if (MPI_Comm_dup(MPI_COMM_SELF, &amg->comm[amg->comms]) != MPI_SUCCESS) {
+            release(amg);
+            amg->n = 0;
+            return -1;
+        }
+    for (int t = 0; t < tasks; t++)
+        amg->hierarchy[t].comm = amg->comm[t];
     int32_t *row_of_slot = amg->queue; /* free again after the partition */
     for (int i = 0; i < n; i++)
         row_of_slot[amg->slot_of_row[i]] = i, amg->row_sizes[amg->slot_of_row[i]] = 0;
+    if (parts == 1)
+        for (int i = 0; i < n; i++)
+            amg->row_sizes[i] = (HYPRE_Int)(amg->kept_first[i + 1] - amg->kept_first[i]);
     int64_t filled = 0;
-    HYPRE_ClearAllErrors();
-    for (int p = 0; p < parts; p++) {
+    for (int p = 0; p < parts; p++) { /* the blocks' entries, part after part (one part: the kept matrix itself) */
         const int first_slot = amg->part_first[p], rows = amg->part_first[p + 1] - first_slot;
-        const int64_t block_start = filled;
-        const int32_t *block_col = amg->block_col + block_start; /* one part: the kept matrix itself */
-        const double *block_val = amg->block_val + block_start;
-        if (parts == 1) {
-            for (int i = 0; i < n; i++)
-                amg->row_sizes[i] = (HYPRE_Int)(amg->kept_first[i + 1] - amg->kept_first[i]);
-            block_col = amg->kept_col, block_val = amg->kept_val;
-        }
-        for (int slot = first_slot; parts > 1 && slot < first_slot + rows; slot++) { /* the block's entries */
+        amg->part_entry_first[p] = filled;
+        for (int slot = first_slot; parts > 1 && slot < first_slot + rows; slot++) {
             const int i = row_of_slot[slot];
             for (int64_t e = amg->kept_first[i]; e < amg->kept_first[i + 1]; e++) {
                 const int col = amg->kept_col[e];
@@ -276,38 +342,14 @@ static int build(amg_system *amg, int n)
                 }
             }
         }
-        for (int c = 0; c < amg->copies; c++) { /* one after another: the coarsening's random numbers are global */
-            amg_copy *h = &amg->hierarchy[c * parts + p];
-            HYPRE_IJMatrixCreate(MPI_COMM_SELF, 0, rows - 1, 0, rows - 1, &h->matrix);
-            HYPRE_IJMatrixSetObjectType(h->matrix, HYPRE_PARCSR);
-            HYPRE_IJMatrixSetRowSizes(h->matrix, amg->row_sizes + first_slot);
-            HYPRE_IJMatrixInitialize(h->matrix);
-            HYPRE_IJMatrixSetValues(h->matrix, rows, amg->row_sizes + first_slot, amg->rows,
-                                    (const HYPRE_BigInt *)block_col, block_val);
-            HYPRE_IJMatrixAssemble(h->matrix);
-            for (int k = 0; k < 2; k++) {
-                HYPRE_IJVector *v = k ? &h->x : &h->rhs;
-                HYPRE_IJVectorCreate(MPI_COMM_SELF, 0, rows - 1, v);
-                HYPRE_IJVectorSetObjectType(*v, HYPRE_PARCSR);
-                HYPRE_IJVectorInitialize(*v);
-                HYPRE_IJVectorAssemble(*v);
-            }
-            HYPRE_BoomerAMGCreate(&h->multigrid);
-            HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
-            HYPRE_BoomerAMGSetCoarsenType(h->multigrid, 10);   /* HMIS */
-            HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);     /* extended+i */
-            HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
-            HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
-            HYPRE_BoomerAMGSetAggNumLevels(h->multigrid, 1);
-            HYPRE_BoomerAMGSetRelaxType(h->multigrid, 3);      /* hybrid Gauss-Seidel, forward */
-            HYPRE_BoomerAMGSetKeepTranspose(h->multigrid, 1);
-            HYPRE_BoomerAMGSetMaxIter(h->multigrid, 1);
-            HYPRE_BoomerAMGSetTol(h->multigrid, 0.0);
-            HYPRE_IJMatrixGetObject(h->matrix, (void **)&h->a);
-            HYPRE_IJVectorGetObject(h->rhs, (void **)&h->b);
-            HYPRE_IJVectorGetObject(h->x, (void **)&h->xv);
-            HYPRE_BoomerAMGSetup(h->multigrid, h->a, h->b, h->xv);
-        }
+    }
+    const int32_t *col = parts == 1 ? amg->kept_col : amg->block_col;
+    const double *val = parts == 1 ? amg->kept_val : amg->block_val;
+    HYPRE_ClearAllErrors();
+    #pragma omp parallel for schedule(dynamic, 1) if (amg->concurrent && parts > 1)
+    for (int t = 0; t < tasks; t++) {
+        const int p = t % parts;
+        build_hierarchy(amg, &amg->hierarchy[t], p, col + amg->part_entry_first[p], val + amg->part_entry_first[p]);
     }
     if (HYPRE_GetError()) {
         release(amg);

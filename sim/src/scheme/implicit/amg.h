@@ -9,6 +9,10 @@
 
 typedef struct amg_system amg_system;
 
+/* Starts MPI and hypre, once a process (about 0.4 s): the implicit scheme does it as it is created where its solves
+ * use the multigrid, so that no step carries it. -1 when MPI cannot start (the message in err). */
+int amg_start(char *err, size_t err_len);
+
 /* NULL when MPI or hypre cannot start (the message in err). blocks: the vectors each amg_vcycle takes (1, or 2 for
  * two components); where threads allow, a hierarchy is held for each, so that their V-cycles run at once. parts: the
  * V-cycles each application runs side by side: the matrix is cut into parts / blocks diagonal blocks (rounded up), a

@@ -96,7 +96,7 @@ int implicit_create(surge_sim *sim, char *err, size_t err_len)
     }
     for (int a = sim->wall_count; a < sim->count; a++) /* ids are the indices until the first sort */
         w->pressure_by_id[sim->id[a]] = sim->pressure[a];
-    return 0;
+    return implicit_multigrid(sim, false) ? amg_start(err, err_len) : 0;
 }
 
 void implicit_destroy(surge_sim *sim)
