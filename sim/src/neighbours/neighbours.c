@@ -250,13 +250,17 @@ static void prefix_sum(int64_t *first, int n)
         first[i + 1] += first[i];
 }
 
+/* The particles a thread lists at a time: handed out as the threads come, as a wall particle's lists (the fluid
+ * around it, none deep in a wall) cost far less than a fluid particle's and the walls come first */
+#define LIST_CHUNK 256
+
 /* The lists from the build positions, which the arrays are sorted by (grid_sort_*). */
 static int build_lists(surge_sim *sim)
 {
     neighbour_lists *nl = &sim->neighbours;
     const int nf = sim->count - sim->wall_count, nw = sim->wall_count;
     const double reach = 2.0 * sim->derived.h_m + nl->skin_m, reach2 = reach * reach;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(dynamic, LIST_CHUNK)
     for (int a = 0; a < sim->count; a++)
         list_particle(sim, a, reach2, 0);
     prefix_sum(nl->fluid_first, nf);
@@ -272,7 +276,7 @@ static int build_lists(surge_sim *sim)
                 (size_t)nl->ghost_fluid_first[nw]) ||
         reserve(&nl->solid_index, &nl->solid_dx0, &nl->solid_dy0, &nl->solid_capacity, (size_t)nl->solid_first[nw]))
         return -1;
-    #pragma omp parallel for schedule(static)
+    #pragma omp parallel for schedule(dynamic, LIST_CHUNK)
     for (int a = 0; a < sim->count; a++)
         list_particle(sim, a, reach2, 1);
     nl->valid = 1;
