@@ -143,6 +143,26 @@ r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubricat
                    timeout=60)
 check("poiseuille_loaded seeds: no run with the model is refused", r.returncode == 2 and "no finished" in r.stderr,
       r.stderr.strip())
+# the models apart: packed runs with the measured film (2.0, 2.2), one with the cut-off model at 2 dp (9.9) and one
+# with the measured film at the default placement (8.8), all at r/dp 4: only the first two are the model asked for
+for seed, mu, cutoff, resolved, packed in ((1, 2.0, 1, "measured", 1), (2, 2.2, 1, "measured", 1),
+                                         (3, 9.9, 2, "cutoff", 1), (3, 8.8, 1, "measured", 0)):
+    study.append_row(seeds_csv, poiseuille_loaded.COLUMNS, {
+        "phi": 0.5, "phi_actual": 0.5, "mu_eq_over_mu0": mu, "status": "ok", "dp_m": 0.005, "ch": 1.8, "seed": seed,
+        "c0_mps": 15, "wall_s": 1, "density_diffusion": 0, "scheme": "implicit", "lubrication": 1,
+        "lubrication_cutoff_dp": cutoff, "lubrication_resolved": resolved, "pack_fluid": packed})
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubrication", "--resolved", "measured",
+                    "--pack-fluid"], capture_output=True, text=True, timeout=60)
+rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
+check("poiseuille_loaded seeds --lubrication --resolved measured --pack-fluid: the two packed measured runs only "
+      "(mean 2.1000), named in the header",
+      r.returncode == 0 and rows.get(("0.5", "4"), [])[2:4] == ["2", "2.1000"] and
+      "measured share, fluid packed" in r.stdout, (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubrication", "--cutoff-dp", "2",
+                    "--pack-fluid"], capture_output=True, text=True, timeout=60)
+rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
+check("poiseuille_loaded seeds --cutoff-dp 2 --pack-fluid: the one run with that cut-off (9.9000)",
+      r.returncode == 0 and rows.get(("0.5", "4"), [])[2:4] == ["1", "9.9000"], (r.stdout + r.stderr).strip()[-600:])
 r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded convergence takes seed 1 at every r/dp: 1.4000 then 1.6500 (+17.9 %)",
       r.returncode == 0 and "1.4000" in r.stdout and "1.6500 (+17.9 %)" in r.stdout, (r.stdout + r.stderr)[-600:])

@@ -285,6 +285,10 @@ expect("poiseuille_loaded add: a folder that does not exist", tool(PL, "add", pa
        "no_such_run", "checkpoint")
 expect("poiseuille_loaded add: --wall-s -1", tool(PL, "add", path("no_such_run"), "--wall-s", "-1"), "--wall-s")
 expect("poiseuille_loaded run --cutoff-dp 0", tool(PL, "run", "--cutoff-dp", "0", "--csv", no_clear), "--cutoff-dp")
+expect("poiseuille_loaded seeds --cutoff-dp -1", tool(PL, "seeds", "--cutoff-dp", "-1", "--csv", no_clear),
+       "--cutoff-dp")
+expect("poiseuille_loaded seeds --resolved exact", tool(PL, "seeds", "--resolved", "exact", "--csv", no_clear),
+       "--resolved", "exact")
 expect("poiseuille_loaded run: a scheme that does not exist", tool(PL, "run", "--scheme", "sph", "--csv", no_clear),
        "--scheme", "sph")
 

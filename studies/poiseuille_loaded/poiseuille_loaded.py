@@ -21,7 +21,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
         [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8]   # mu_eq/mu0 per phi and r/dp, per lubrication model
         # and placement of the fluid
   studies/poiseuille_loaded/poiseuille_loaded.py seeds [--csv ...] [--scheme implicit|explicit] [--c0 C0]
-        [--diffusion DELTA] [--lubrication]  # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
+        [--diffusion DELTA] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid]
+        # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -595,9 +596,9 @@ def command_seeds(args):
     lubrication = "1" if args.lubrication else "0"
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, seed=int, pack_fluid=str))
+        lubrication=str, seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == lubrication and
-        r["pack_fluid"] != "1" and
+        (r["pack_fluid"] == "1") == args.pack_fluid and (not args.lubrication or same_model(r, args)) and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
         (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
     if not rows:
@@ -606,8 +607,10 @@ def command_seeds(args):
     for r in rows:  # the last row of a (phi, r/dp, seed) counts: a rerun replaces its run
         cells.setdefault((float(r["phi"]), round(RADIUS_M / float(r["dp_m"]), 2)), {})[int(r["seed"])] = \
             float(r["mu_eq_over_mu0"])
-    print("%s scheme, %s the lubrication model: mu_eq/mu0 over the seeds (placements) run"
-          % (args.scheme, "with" if args.lubrication else "without"))
+    print("%s scheme, %s: mu_eq/mu0 over the seeds (placements) run"
+          % (args.scheme, model_setting({"lubrication": lubrication, "lubrication_resolved": args.resolved,
+                                         "lubrication_cutoff_dp": "%g" % args.cutoff_dp,
+                                         "pack_fluid": "1" if args.pack_fluid else "0"})))
     print("  %-6s %-6s %-6s %-8s %-8s %-28s %s" % ("phi", "r/dp", "seeds", "mean", "sd (%)", "change of the mean",
                                                   "by seed"))
     for phi in sorted({phi for phi, _ in cells}):
@@ -712,6 +715,11 @@ def main():
     seeds.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     seeds.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
     seeds.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
+    seeds.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
+                       help="with --lubrication: the runs with this cut-off (default 1 dp)")
+    seeds.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
+                       help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
+    seeds.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
     seeds.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
     seeds.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
     args = parser.parse_args()
