@@ -13,8 +13,9 @@ the time. Then, per scene and scheme, each phase's seconds at every thread count
 are surge-bench's (surge_phase_times in sim/include/surge/sim.h; docs/performance.md, "Where a step's time goes").
 
 - serial: the share of the run's time in the phases that run on one thread, the contact solver, the implicit
-  scheme's multigrid builds and the rest of the step outside the named phases (other). At 1 thread it is Amdahl's serial fraction, as far as the phases tell
-  serial work from shared.
+  scheme's multigrid builds (on one thread in one hierarchy; with --multigrid-parts the parts are built side by side,
+  and the column overstates) and the rest of the step outside the named phases (other). At 1 thread it is Amdahl's
+  serial fraction, as far as the phases tell serial work from shared.
 - karp-flatt: the serial fraction the measured speed-up S on p threads implies, (1/S - 1/p) / (1 - 1/p). It also
   counts what holds the parallel phases back: waits at their barriers, memory bandwidth, loops a scene is too small
   to share (the implicit scheme keeps its loops on one thread below 10,000 fluid particles), serial loops inside

@@ -118,8 +118,8 @@ typedef struct surge_phase_times {
     double surface_s;        /* implicit: the free-surface layer and the surface's mirror images */
     double assembly_s;       /* implicit: the operators' coefficients, the solves' right-hand sides and diagonals */
     double multigrid_s;      /* implicit: the multigrid hierarchies: their builds (the matrix's sparse stand-in,
-                              * hypre's coarsening; one after another, on one thread), the check that a held one
-                              * still serves, and hypre's start before the first */
+                              * hypre's coarsening; on one thread, or the parts side by side), and the check that
+                              * a held one still serves */
     double viscous_solve_s;  /* implicit: the viscous solve's iterations */
     double pressure_solve_s; /* implicit: the pressure and rest-density solves' iterations and their gradients */
     double disc_coupling_s;  /* implicit: the discs' rows of the coupled solves outside their iterations, and the
