@@ -172,7 +172,7 @@ static const surge_param_info registry[] = {
     {"implicit", "multigrid_parts", SURGE_PARAM_INT, "-", 1, 1, 256, false, NULL,
      "Implicit scheme, amg: the parts the pressure's multigrid hierarchy is cut into (slices of the fluid across its "
      "longest extent, in the matrix's breadth-first order; the viscous one, whose two components already run side by "
-     "side, in half as many, rounded up), each with a hierarchy of its own (Ruge-Stuben coarsening), built and "
+     "side, in half as many, rounded up), each with a hierarchy of its own (Ruge-Stueben coarsening), built and "
      "V-cycled side by side on the threads (block Jacobi between the parts); 1: one hierarchy on the whole fluid (HMIS "
      "coarsening). For machines with many cores: each part "
      "costs iterations; the results depend on the parts, not on the threads (docs/method.md, \"Linear solvers\").",

@@ -10,7 +10,7 @@
  * blocks, a hierarchy each (and its copies), whose V-cycles run side by side: block Jacobi between the parts, the
  * same arithmetic whatever the thread count. The hierarchies of one part are built one after another, because
  * HMIS coarsening draws hypre's one global random sequence (reseeded at each build, so the copies are the same);
- * those of several parts take Ruge-Stuben coarsening, which draws none, and are built side by side, each hierarchy
+ * those of several parts take Ruge-Stueben coarsening, which draws none, and are built side by side, each hierarchy
  * on a communicator of its own (MPI allows no two threads a collective call on the same one). */
 #include "scheme/implicit/amg.h"
 
@@ -257,7 +257,7 @@ static void partition(amg_system *amg, int n)
         amg->slot_of_row[i] = next_slot[amg->part_of_row[i]]++;
 }
 
-/* Hierarchy h on part p's diagonal block, whose entries start at block_col/val: Ruge-Stuben coarsening where
+/* Hierarchy h on part p's diagonal block, whose entries start at block_col/val: Ruge-Stueben coarsening where
  * several parts are built side by side, HMIS where one is */
 static void build_hierarchy(const amg_system *amg, amg_copy *h, int p, const int32_t *block_col, const double *block_val)
 {
@@ -278,7 +278,7 @@ static void build_hierarchy(const amg_system *amg, amg_copy *h, int p, const int
     }
     HYPRE_BoomerAMGCreate(&h->multigrid);
     HYPRE_BoomerAMGSetPrintLevel(h->multigrid, 0);
-    HYPRE_BoomerAMGSetCoarsenType(h->multigrid, amg->parts > 1 ? 3 : 10); /* Ruge-Stuben with a third pass; HMIS */
+    HYPRE_BoomerAMGSetCoarsenType(h->multigrid, amg->parts > 1 ? 3 : 10); /* Ruge-Stueben with a third pass; HMIS */
     HYPRE_BoomerAMGSetInterpType(h->multigrid, 6);                         /* extended+i */
     HYPRE_BoomerAMGSetPMaxElmts(h->multigrid, 4);
     HYPRE_BoomerAMGSetStrongThreshold(h->multigrid, 0.5);
