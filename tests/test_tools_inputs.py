@@ -34,6 +34,7 @@ AB = os.path.join(SOURCE, "bench", "ab_bench.py")
 SC = os.path.join(SOURCE, "bench", "scaling.py")
 from checks import check, finish, load_module  # noqa: E402
 from surgepy import vtp  # noqa: E402
+from surgepy.run_params import RunParams  # noqa: E402
 freydier_convergence = load_module(FC)
 poiseuille_loaded = load_module(PL)
 
@@ -362,6 +363,39 @@ expect("disc_on_bed measure: a run without discs", tool(DB, "measure", folder("n
 d = folder("one_disc_file", RUN_FILES)
 vtp.write_pvd(os.path.join(d, "boulders.pvd"), [(0.0, "boulders_000000000.vtp")])
 expect("disc_on_bed measure: one disc file", tool(DB, "measure", d), "at least 3")
+
+
+def disc_files(name, centres, times, radius=0.0125):
+    """A copy of the run with boulders.pvd and one disc file per time; centres(t) gives the discs' (x, y)."""
+    d = folder(name, RUN_FILES)
+    entries = []
+    for k, t in enumerate(times):
+        f = "boulders_%09d.vtp" % k
+        xy = np.array(centres(t), dtype=float)
+        vtp.write_vtp(os.path.join(d, f), xy, {"radius_m": np.full(len(xy), radius)}, t, k)
+        entries.append((t, f))
+    vtp.write_pvd(os.path.join(d, "boulders.pvd"), entries)
+    return d
+
+
+ROW_TIMES = [0.25 * k for k in range(17)]
+expect("disc_on_bed row: a missing folder", tool(DB, "row", path("no_such_run")), "no_such_run")
+expect("disc_on_bed row: a run without discs", tool(DB, "row", folder("row_no_discs", RUN_FILES)), "boulders.pvd")
+expect("disc_on_bed row: one disc a file", tool(DB, "row", disc_files("row_one", lambda t: [(0.01, 0.05)], ROW_TIMES)),
+       "two a period")
+expect("disc_on_bed row: discs closer than a diameter",
+       tool(DB, "row", disc_files("row_close", lambda t: [(0.01, 0.05), (0.03, 0.05)], ROW_TIMES)), "diameter")
+# a row falling at 1 mm/s with a gap of a quarter radius: W/U and the slot's resistance from the run's parameters
+d = disc_files("row_falling", lambda t: [(0.01, 0.05 - 0.001 * t), (0.038125, 0.05 - 0.001 * t)], ROW_TIMES)
+write(os.path.join(d, "params.ini"), params_with(density_ratio=2))
+r = tool(DB, "row", d)
+rp = RunParams(d)
+rho0, nu = rp.positive("fluid", "density_kgpm3"), rp.positive("fluid", "viscosity_m2ps")
+weight = (rp.positive("boulders", "density_ratio") - 1) * rho0 * rp.positive("body", "gravity_mps2") * np.pi * 0.0125 ** 2
+slot = 4.5 * np.pi * rho0 * nu * 0.028125 ** 2 * np.sqrt(0.0125) / 0.003125 ** 2.5
+check("disc_on_bed row: W/U and the slot's resistance of a row falling at 1 mm/s",
+      r.returncode == 0 and r.stdout.count("W/U = %.4g " % (weight / 0.001)) == 4 and ("%.4g" % slot) in r.stdout
+      and "s/a 0.250" in r.stdout, r.stdout + r.stderr)
 
 # ---- 9. surge_watch ----
 SW = "surge_watch.py"

@@ -13,6 +13,18 @@ the disc's particles (eq. 10's pressure term, -m (p_a + p_k)/(rho_a rho_k) grad 
 and the same sum over the bed's particles within reach: the support the bed takes out of the disc's kernels, whose
 pressure acts on the disc with contacts.solid_pressure (on by default; "acts: no" where the run had it off). The run's
 first disc is the one measured; the bed is y = 0.
+
+  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s numerics.scheme=implicit \\
+      -s contacts.lubrication=0 -s domain.periodic_x=true -s walls.left=false -s walls.right=false \\
+      -s domain.length_m=2L -s fluid.x1_m=2L -s domain.height_m=0.1 -s fluid.depth_m=0.1 \\
+      -s "boulders.list_m=L/2 0.05 0.0125, 3L/2 0.05 0.0125" -s time.end_s=4 --threads 1
+  studies/boulders/disc_on_bed.py row RUN_DIR
+
+A periodic row of discs (two a period, L apart, gap s = L - 2a) settling mid-height: the fluid the row displaces
+must pass through the gaps between discs that do not approach each other. It prints the row's resistance W/U over
+0.5-1, 1-2, 2-3 and 3-4 s against the slot's lubrication resistance (9 pi / 2) mu L^2 sqrt(a) / s^(5/2) per disc
+(Reynolds' equation through the gap h(x) = s + x^2 / a, flux U L; docs/validation/poiseuille_loaded.md, "Flow
+through a gap").
 """
 import argparse
 import os
@@ -99,12 +111,62 @@ def measure(folder):
     return weight, rows
 
 
+ROW_WINDOWS_S = ((0.5, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 4.0))
+
+
+def settling_row(folder):
+    """The row's resistance W/U per window and the slot's lubrication resistance, from the first two discs."""
+    params = RunParams(folder)
+    rho0, nu = params.positive("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
+    ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
+    discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+    if len(discs) < 3:
+        raise ValueError("%s: boulders.pvd lists %d disc files; the settling speed needs at least 3" %
+                         (folder, len(discs)))
+    times, heights, spacing, radius = [], [], None, None
+    for t, name in discs:
+        d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
+        if len(d["radius_m"]) < 2:
+            raise ValueError("%s: %s holds %d disc(s); a row needs two a period" % (folder, name, len(d["radius_m"])))
+        times.append(t)
+        heights.append(float(d["points"][0, 1]))
+        if spacing is None:
+            spacing = abs(float(d["points"][1, 0] - d["points"][0, 0]))
+            radius = float(d["radius_m"][0])
+    gap = spacing - 2.0 * radius
+    if not gap > 0:
+        raise ValueError("%s: the first two discs are %.4g m apart, not more than a diameter (%.4g m)" %
+                         (folder, spacing, 2.0 * radius))
+    times, heights = np.array(times), np.array(heights)
+    speeds = -np.gradient(heights, times)
+    weight = (ratio - 1.0) * rho0 * g * np.pi * radius * radius
+    slot = 4.5 * np.pi * rho0 * nu * spacing ** 2 * np.sqrt(radius) / gap ** 2.5
+    windows = []
+    for t0, t1 in ROW_WINDOWS_S:
+        inside = (times >= t0) & (times <= t1)
+        mean = float(np.mean(speeds[inside])) if inside.any() else float("nan")
+        windows.append((t0, t1, weight / mean if mean > 0 else float("nan")))
+    return radius, spacing, gap, slot, windows
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir", type=cli_checks.folder)
+    row_parser = sub.add_parser("row")
+    row_parser.add_argument("run_dir", type=cli_checks.folder)
     args = parser.parse_args()
+    if args.command == "row":
+        try:
+            radius, spacing, gap, slot, windows = settling_row(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("a = %.4g m, L = %.4g m, gap s = %.4g m (s/a %.3f); slot's lubrication resistance %.4g N s m^-2" %
+              (radius, spacing, gap, gap / radius, slot))
+        for t0, t1, resistance in windows:
+            print("%.1f-%.1f s   W/U = %.4g N s m^-2   over the slot's %.3f" % (t0, t1, resistance, resistance / slot))
+        return 0
     try:
         weight, rows = measure(args.run_dir)
         solid = RunParams(args.run_dir).flag("contacts", "solid_pressure", False)  # absent: a run from before the key
