@@ -14,7 +14,7 @@ and the same sum over the bed's particles within reach: the support the bed take
 pressure acts on the disc with contacts.solid_pressure (on by default; "acts: no" where the run had it off). The run's
 first disc is the one measured; the bed is y = 0.
 
-  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s numerics.scheme=implicit \\
+  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s numerics.scheme=implicit -s numerics.ch=1.8 \\
       -s contacts.lubrication=0 -s domain.periodic_x=true -s walls.left=false -s walls.right=false \\
       -s domain.length_m=2L -s fluid.x1_m=2L -s domain.height_m=0.1 -s fluid.depth_m=0.1 \\
       -s "boulders.list_m=L/2 0.05 0.0125, 3L/2 0.05 0.0125" -s time.end_s=4 --threads 1
