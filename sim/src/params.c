@@ -230,6 +230,14 @@ static const surge_param_info registry[] = {
      "are cut off, which lets a mode under the surface grow at steps shorter than the scheme's own (docs/method.md, "
      "\"Mirror images beyond the surface\").",
      OFF(implicit.surface_images)},
+    {"implicit", "quadratic_no_slip", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+     "Implicit scheme: the velocity a no-slip wall particle takes in the viscous solve. 0: mDBC's mirror, 2 u_wall - "
+     "u_ghost, exact where the velocity is linear across the wall; 1: u_wall + n (b0 + b1 t + b2 n) evaluated at the "
+     "particle, fitted by kernel-weighted least squares to the fluid around its ghost node (n the distance from the "
+     "wall's face, t along it), exact for the parabola of a pressure- or gravity-driven flow, so that a channel or "
+     "film a few particles across carries its flux; the mirror where the fit is ill-conditioned (docs/method.md, "
+     "\"Quadratic no-slip walls\").",
+     OFF(implicit.quadratic_no_slip)},
     {"implicit", "pressure_relaxation", SURGE_PARAM_REAL, "-", 0.5, 0, 1, true, NULL,
      "Implicit scheme, under a free surface: the last step's pressure is relaxed by one weighted Jacobi sweep of the "
      "pressure's Laplacian, p - beta (L p)/L_aa, before the step uses it. A linear (hydrostatic) field is kept; a "

@@ -147,6 +147,7 @@ typedef struct surge_params {
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
         bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */
+        bool quadratic_no_slip;    /* no-slip walls' velocity from a quadratic fit (else mDBC's mirror) */
         double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
         int disc_pressure_passes;  /* with discs: passes of the viscous and pressure solves a step (Uzawa) */
         int disc_pressure_history; /* and the earlier passes each pass's pressure is combined from (Anderson; 0: none) */

@@ -59,6 +59,9 @@ typedef struct implicit_work {
     real *mirror_w;                      /* per wall's ghost-list entry: its weight in the value at the ghost */
     real *mirror_nw;                     /* and in the derivative along the ghost's normal there */
     real *ghost_w, *ghost_nw;            /* the same for a disc particle's ghost list (ghost_span) */
+    real *mirror_qw, *ghost_qw;          /* and its weight in the wall particle's quadratic no-slip velocity */
+    double *quadratic_base;              /* per wall: the wall velocity's weight in it (1 - sum of the entries') */
+    uint8_t *quadratic_ok;               /* per wall: the quadratic fit is well-conditioned (else the mirror) */
     double *mirror_vx, *mirror_vy;       /* per wall: the wall velocity no-slip mirrors about (implicit_mirror_velocities) */
     int disc_cap;                        /* discs the per-disc arrays hold */
     int disc_rows;                       /* the coupled solves' unknowns beyond the fluid's: 3 per disc (disc_coupling.c) */
@@ -160,7 +163,7 @@ typedef struct ghost_span {
     int64_t from, to;
     const int32_t *index;
     const real *dx0, *dy0;
-    real *weight, *normal_weight;
+    real *weight, *normal_weight, *quadratic_weight;
     real shift_x, shift_y;
 } ghost_span;
 
@@ -170,9 +173,9 @@ static inline ghost_span ghost_span_of(const surge_sim *sim, int kw)
     implicit_work *w = implicit_of(sim);
     if (sim->wall_of[kw] != WALL_BOULDER)
         return (ghost_span){nl->wall_fluid_first[kw], nl->wall_fluid_first[kw + 1], nl->wall_fluid_index,
-                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, w->mirror_nw, 0, 0};
+                            nl->wall_fluid_dx0, nl->wall_fluid_dy0, w->mirror_w, w->mirror_nw, w->mirror_qw, 0, 0};
     return (ghost_span){nl->ghost_fluid_first[kw], nl->ghost_fluid_first[kw + 1], nl->ghost_fluid_index,
-                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w, w->ghost_nw,
+                        nl->ghost_fluid_dx0, nl->ghost_fluid_dy0, w->ghost_w, w->ghost_nw, w->ghost_qw,
                         nl->moved_x[kw] + (sim->ghost_dx[kw] - nl->ghost_dx_build[kw]),
                         nl->moved_y[kw] + (sim->ghost_dy[kw] - nl->ghost_dy_build[kw])};
 }
@@ -186,6 +189,24 @@ static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
         for (int l = 0; l < PAIR_LANES; l++)
             sum[l] += g.weight[e + l] * x[g.index[e + l] - sim->wall_count];
     return lanes_total(sum);
+}
+
+/* Wall kw's no-slip velocity component in the viscous solve, the fluid's component x and the wall's own u_wall:
+ * mDBC's mirror 2 u_wall - x(ghost), or the quadratic fit's value at the particle (implicit.quadratic_no_slip;
+ * geometry.c) */
+static inline double wall_no_slip_value(const surge_sim *sim, int kw, const double *x, double u_wall)
+{
+    const implicit_work *w = implicit_of(sim);
+    if (w->dry[kw])
+        return u_wall;
+    if (!sim->params.implicit.quadratic_no_slip || !w->quadratic_ok[kw])
+        return 2.0 * u_wall - ghost_value(sim, kw, x);
+    const ghost_span g = ghost_span_of(sim, kw);
+    double sum[PAIR_LANES] = {0};
+    for (int64_t e = g.from; e < g.to; e += PAIR_LANES)
+        for (int l = 0; l < PAIR_LANES; l++)
+            sum[l] += g.quadratic_weight[e + l] * x[g.index[e + l] - sim->wall_count];
+    return w->quadratic_base[kw] * u_wall + lanes_total(sum);
 }
 
 /* The fluid's velocity interpolated at wall kw's ghost node */

@@ -7,7 +7,8 @@
 
 #include "scheme/implicit/implicit.h"
 
-/* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost; x = (vx | vy). */
+/* Backward-Euler viscosity, F(v) = v - dt nu lap v with no-slip walls at 2 v_wall - v_ghost (or the quadratic fit's
+ * value, wall_no_slip_value); x = (vx | vy). */
 void implicit_viscous_operator(surge_sim *sim, const double *x, double *out)
 {
     implicit_work *w = implicit_of(sim);
@@ -17,8 +18,7 @@ void implicit_viscous_operator(surge_sim *sim, const double *x, double *out)
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int kw = 0; kw < sim->wall_count; kw++) {
         const double ux = w->mirror_vx[kw], uy = w->mirror_vy[kw];
-        const double gx = w->dry[kw] ? ux : ghost_value(sim, kw, x), gy = w->dry[kw] ? uy : ghost_value(sim, kw, x + nf);
-        w->wall_x[kw] = 2.0 * ux - gx, w->wall_y[kw] = 2.0 * uy - gy;
+        w->wall_x[kw] = wall_no_slip_value(sim, kw, x, ux), w->wall_y[kw] = wall_no_slip_value(sim, kw, x + nf, uy);
     }
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (int i = 0; i < nf; i++) {

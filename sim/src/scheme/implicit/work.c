@@ -43,7 +43,7 @@ int implicit_reserve_work(surge_sim *sim)
     }
     if (me > w->mirror_cap || !w->mirror_w) {
         const size_t room = implicit_room_for(me);
-        if (GROW(mirror_w, room) || GROW(mirror_nw, room))
+        if (GROW(mirror_w, room) || GROW(mirror_nw, room) || GROW(mirror_qw, room))
             return -1;
         w->mirror_cap = room;
     }
@@ -55,7 +55,7 @@ int implicit_reserve_work(surge_sim *sim)
     }
     if (ge > w->ghost_cap || !w->ghost_w) {
         const size_t room = implicit_room_for(ge);
-        if (GROW(ghost_w, room) || GROW(ghost_nw, room))
+        if (GROW(ghost_w, room) || GROW(ghost_nw, room) || GROW(ghost_qw, room))
             return -1;
         w->ghost_cap = room;
     }
@@ -76,6 +76,7 @@ int implicit_reserve_work(surge_sim *sim)
             GROW(imaged, nf) || GROW(own_iw, nf) || GROW(own_igx, nf) || GROW(own_igy, nf) ||
             GROW(wet_grad_x, nf) || GROW(wet_grad_y, nf) ||
             GROW(dry, nw) || GROW(wetness, nw) || GROW(immersion, nw) || GROW(wall_sum, nw) || GROW(wall_x, nw) || GROW(wall_y, nw) || GROW(neumann_pa, nw) ||
+            GROW(quadratic_base, nw) || GROW(quadratic_ok, nw) ||
             GROW(mirror_vx, nw) || GROW(mirror_vy, nw) || GROW(surface_x, nw) || GROW(surface_y, nw) ||
             GROW(lever_x, nw) || GROW(lever_y, nw))
             return -1;
@@ -105,7 +106,7 @@ void implicit_destroy(surge_sim *sim)
     if (!w)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
-                      w->mirror_nw, w->ghost_w, w->ghost_nw, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
+                      w->mirror_nw, w->mirror_qw, w->ghost_w, w->ghost_nw, w->ghost_qw, w->quadratic_base, w->quadratic_ok, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
                       w->disc_entry, w->disc_entry_fluid, w->surface_x, w->surface_y, w->lever_x, w->lever_y, w->disc_divergence,
                       w->disc_velocity, w->disc_force, w->spin_drag, w->films,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
