@@ -1,10 +1,10 @@
 #!/usr/bin/python3
-"""Quadratic no-slip walls (implicit.quadratic_no_slip, docs/method.md): with them the implicit scheme carries the
+"""Quadratic no-slip walls (walls.quadratic_no_slip, docs/method.md): with them the implicit scheme carries the
 flux of a channel or film only a few particles across. Plane Poiseuille flow (cases/poiseuille.ini, gap 1 mm) with
 2, 3 and 8 particles across the gap, run to its steady state: the particles' mean velocity within 3 % of the exact
 parabola's at their heights (measured +0.8, +1.6 and +1.5 %; mDBC's mirror +154, +78 and +11 %). A film down the
 incline (cases/incline_film.ini) 4 particles deep: within 8 % of the Nusselt film's (measured +6.5 %; the mirror
-+13.9 %), and closer than the mirror's.
++13.9 %), and closer than the mirror's. The explicit scheme refuses the option with a message.
 
 usage: test_quadratic_no_slip.py SURGE SOURCE_DIR WORK_DIR"""
 import math
@@ -55,7 +55,7 @@ for across in (2, 3, 8):
     for quadratic in (0, 1):
         results[quadratic] = run("poiseuille.ini", "poiseuille_%d_q%d" % (across, quadratic), "numerics.dp_m=%r" % dp,
                                  "domain.length_m=%r" % length, "fluid.x1_m=%r" % length, "time.end_s=2",
-                                 "output.snapshot_interval_s=0.5", "implicit.quadratic_no_slip=%d" % quadratic)
+                                 "output.snapshot_interval_s=0.5", "walls.quadratic_no_slip=%d" % quadratic)
     if results[0] is not None and results[1] is not None:
         mirror, fitted = mean_ratio(results[0], poiseuille), mean_ratio(results[1], poiseuille)
         check("Poiseuille %d particles across: the quadratic walls' mean velocity within 3 %% of the exact" % across,
@@ -69,11 +69,16 @@ def nusselt(y):
 
 
 films = [run("incline_film.ini", "film_q%d" % q, "numerics.dp_m=0.0625", "numerics.ch=1.8", "walls.layers=0",
-             "time.end_s=4", "output.snapshot_interval_s=1", "implicit.quadratic_no_slip=%d" % q) for q in (0, 1)]
+             "time.end_s=4", "output.snapshot_interval_s=1", "walls.quadratic_no_slip=%d" % q) for q in (0, 1)]
 if films[0] is not None and films[1] is not None:
     mirror, fitted = mean_ratio(films[0], nusselt), mean_ratio(films[1], nusselt)
     check("a film 4 particles deep: the quadratic walls' mean velocity within 8 % of the Nusselt film's",
           abs(fitted - 1) <= 0.08, "%+.4f" % (fitted - 1), show_detail=True)
     check("a film 4 particles deep: the quadratic walls closer to the Nusselt film than the mirror",
           abs(fitted - 1) < abs(mirror - 1), "%+.4f against %+.4f" % (fitted - 1, mirror - 1), show_detail=True)
+r = subprocess.run([surge, "check", os.path.join(source, "cases", "poiseuille.ini"), "-s", "walls.quadratic_no_slip=true"],
+                   capture_output=True, text=True, timeout=60)
+check("the explicit scheme refuses walls.quadratic_no_slip, naming it and the scheme",
+      r.returncode == 2 and "walls.quadratic_no_slip" in r.stderr and "numerics.scheme = implicit" in r.stderr,
+      r.stderr.strip())
 sys.exit(finish())

@@ -57,6 +57,14 @@ static const surge_param_info registry[] = {
      "Where fluid approaches a wall or the belt (not a boulder), the wall particle meets it with the mirrored normal "
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
+    {"walls", "quadratic_no_slip", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
+     "Implicit scheme (the explicit one refuses it): the velocity a no-slip wall particle (not a disc's) takes in the viscous solve. 0: mDBC's mirror, 2 u_wall - "
+     "u_ghost, exact where the velocity is linear across the wall; 1: u_wall + n (b0 + b1 t + b2 n) evaluated at the "
+     "particle, fitted by kernel-weighted least squares to the fluid around its ghost node (n the distance from the "
+     "wall's face, t along it), exact for the parabola of a pressure- or gravity-driven flow, so that a channel or "
+     "film a few particles across carries its flux; the mirror where the fit is ill-conditioned (docs/method.md, "
+     "\"Quadratic no-slip walls\").",
+     OFF(walls.quadratic_no_slip)},
     {"walls", "face_repulsion_reach_dp", SURGE_PARAM_REAL, "dp", 0.25, 0, 0.5, true, NULL,
      "A fluid particle closer than this to the face of the wall particle straight below it, or to a disc's circle, is "
      "pushed back along the wall normal, 0.1 c0^2/dp (1 - d/reach)^2, and loses its velocity toward the face; no "
@@ -230,14 +238,6 @@ static const surge_param_info registry[] = {
      "are cut off, which lets a mode under the surface grow at steps shorter than the scheme's own (docs/method.md, "
      "\"Mirror images beyond the surface\").",
      OFF(implicit.surface_images)},
-    {"implicit", "quadratic_no_slip", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
-     "Implicit scheme: the velocity a no-slip wall particle takes in the viscous solve. 0: mDBC's mirror, 2 u_wall - "
-     "u_ghost, exact where the velocity is linear across the wall; 1: u_wall + n (b0 + b1 t + b2 n) evaluated at the "
-     "particle, fitted by kernel-weighted least squares to the fluid around its ghost node (n the distance from the "
-     "wall's face, t along it), exact for the parabola of a pressure- or gravity-driven flow, so that a channel or "
-     "film a few particles across carries its flux; the mirror where the fit is ill-conditioned (docs/method.md, "
-     "\"Quadratic no-slip walls\").",
-     OFF(implicit.quadratic_no_slip)},
     {"implicit", "pressure_relaxation", SURGE_PARAM_REAL, "-", 0.5, 0, 1, true, NULL,
      "Implicit scheme, under a free surface: the last step's pressure is relaxed by one weighted Jacobi sweep of the "
      "pressure's Laplacian, p - beta (L p)/L_aa, before the step uses it. A linear (hydrostatic) field is kept; a "
@@ -999,6 +999,13 @@ static int validate_contacts(const surge_params *p, char *err, size_t err_len)
     if (p->contacts.lubrication_min_gap_dp >= p->contacts.lubrication_cutoff_dp) {
         fail(err, err_len, "contacts.lubrication_min_gap_dp (%g) must be below contacts.lubrication_cutoff_dp (%g)",
              p->contacts.lubrication_min_gap_dp, p->contacts.lubrication_cutoff_dp);
+        return -1;
+    }
+    /* the quadratic no-slip fit sits inside the implicit scheme's viscous solve */
+    if (p->walls.quadratic_no_slip && p->numerics.scheme != SURGE_SCHEME_IMPLICIT) {
+        fail(err, err_len, "walls.quadratic_no_slip = true needs numerics.scheme = implicit: in the explicit scheme the "
+                           "fit's extrapolation stiffens the viscous term beyond what its step limit sees "
+                           "(docs/method.md, \"Quadratic no-slip walls\")");
         return -1;
     }
     /* the measured share is the implicit scheme's: the explicit one resolves more of a film (docs/boulders.md) */

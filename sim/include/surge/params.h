@@ -101,6 +101,7 @@ typedef struct surge_params {
         bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
         bool disc_catcher;        /* discs (not fluid) cannot cross the end of the period, x = domain.length_m */
         bool no_penetration;      /* continuity sees approaching fluid met by the mirrored normal velocity */
+        bool quadratic_no_slip;   /* no-slip walls' velocity from a quadratic fit (else mDBC's mirror) */
         double face_repulsion_reach_dp; /* fluid closer than this to a wall face is pushed back (dp; 0: off) */
         double upstream_x_m;
         double upstream_height_m;
@@ -147,7 +148,6 @@ typedef struct surge_params {
         double pair_distance_dp;   /* two fluid particles closer than this (dp) are parted, their approach stopped */
         double wall_neumann_offset; /* 0..1: weight of phi's inhomogeneous Neumann offset at walls inside the fluid */
         bool surface_images;       /* p = 0 on the free surface by mirror images beyond it (else on its particles) */
-        bool quadratic_no_slip;    /* no-slip walls' velocity from a quadratic fit (else mDBC's mirror) */
         double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
         int disc_pressure_passes;  /* with discs: passes of the viscous and pressure solves a step (Uzawa) */
         int disc_pressure_history; /* and the earlier passes each pass's pressure is combined from (Anderson; 0: none) */

@@ -108,7 +108,7 @@ static inline __attribute__((always_inline)) void geometry_pairs(surge_sim *sim,
 /* Below this determinant of the quadratic fit's moment matrix (lengths in dp) the wall keeps mDBC's mirror */
 #define MIN_QUADRATIC_DETERMINANT 1e-6
 
-/* Wall kw's quadratic no-slip velocity (implicit.quadratic_no_slip; walls, not discs): in the frame of its face (n the distance from
+/* Wall kw's quadratic no-slip velocity (walls.quadratic_no_slip; walls, not discs): in the frame of its face (n the distance from
  * the face into the fluid, t along it, the face halfway between the particle and its ghost node) the fluid's
  * u - u_wall = b0 n + b1 n t + b2 n^2, which is u_wall on the face, fitted to the fluid of the ghost's list by least
  * squares weighted with the kernel at the ghost, is evaluated at the particle (n = -depth, t = 0). Each entry's
@@ -230,7 +230,7 @@ static void mirror_weights(surge_sim *sim)
         w->wetness[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.6) / 0.15));
         w->immersion[kw] = (real)fmin(1.0, fmax(0.0, (a[0][0] + w->wall_sum[kw] - 0.9) / 0.08));
         w->quadratic_ok[kw] = 0;
-        if (sim->params.implicit.quadratic_no_slip && sim->wall_of[kw] != WALL_BOULDER)
+        if (sim->params.walls.quadratic_no_slip && sim->wall_of[kw] != WALL_BOULDER)
             quadratic_no_slip_weights(sim, kw, &g);
         for (int64_t e = g.from; e < g.to; e++) {
             const int j = g.index[e];

@@ -192,14 +192,14 @@ static inline double ghost_value(const surge_sim *sim, int kw, const double *x)
 }
 
 /* Wall kw's no-slip velocity component in the viscous solve, the fluid's component x and the wall's own u_wall:
- * mDBC's mirror 2 u_wall - x(ghost), or the quadratic fit's value at the particle (implicit.quadratic_no_slip;
+ * mDBC's mirror 2 u_wall - x(ghost), or the quadratic fit's value at the particle (walls.quadratic_no_slip;
  * geometry.c) */
 static inline double wall_no_slip_value(const surge_sim *sim, int kw, const double *x, double u_wall)
 {
     const implicit_work *w = implicit_of(sim);
     if (w->dry[kw])
         return u_wall;
-    if (!sim->params.implicit.quadratic_no_slip || !w->quadratic_ok[kw])
+    if (!sim->params.walls.quadratic_no_slip || !w->quadratic_ok[kw])
         return 2.0 * u_wall - ghost_value(sim, kw, x);
     const ghost_span g = ghost_span_of(sim, kw);
     double sum[PAIR_LANES] = {0};
