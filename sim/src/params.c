@@ -58,8 +58,9 @@ static const surge_param_info registry[] = {
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
     {"walls", "quadratic_no_slip", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
-     "Implicit scheme (the explicit one refuses it): the velocity a no-slip wall particle (not a disc's) takes in the viscous solve. 0: mDBC's mirror, 2 u_wall - "
-     "u_ghost, exact where the velocity is linear across the wall; 1: u_wall + n (b0 + b1 t + b2 n) evaluated at the "
+     "Implicit scheme (the explicit one refuses it): the velocity a no-slip wall particle (not a disc's) takes in "
+     "the viscous solve. 0: mDBC's mirror, 2 u_wall - u_ghost, exact where the velocity is linear across the wall; "
+     "1: u_wall + n (b0 + b1 t + b2 n) evaluated at the "
      "particle, fitted by kernel-weighted least squares to the fluid around its ghost node (n the distance from the "
      "wall's face, t along it), exact for the parabola of a pressure- or gravity-driven flow, so that a channel or "
      "film a few particles across carries its flux; the mirror where the fit is ill-conditioned (docs/method.md, "

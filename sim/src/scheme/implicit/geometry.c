@@ -108,65 +108,65 @@ static inline __attribute__((always_inline)) void geometry_pairs(surge_sim *sim,
 /* Below this determinant of the quadratic fit's moment matrix (lengths in dp) the wall keeps mDBC's mirror */
 #define MIN_QUADRATIC_DETERMINANT 1e-6
 
-/* Wall kw's quadratic no-slip velocity (walls.quadratic_no_slip; walls, not discs): in the frame of its face (n the distance from
- * the face into the fluid, t along it, the face halfway between the particle and its ghost node) the fluid's
- * u - u_wall = b0 n + b1 n t + b2 n^2, which is u_wall on the face, fitted to the fluid of the ghost's list by least
+/* Fluid entry e of wall kw's ghost list in the frame of the wall's face (n the distance from the face into the fluid
+ * along the unit normal (nx, ny), t along it, both in dp; the face depth dp from the particle and from its ghost
+ * node): the basis (n, n t, n^2) of the quadratic no-slip fit, and the entry's kernel weight at the ghost, 0 beyond
+ * the support */
+static inline double face_basis(const surge_sim *sim, const ghost_span *g, int64_t e, double nx, double ny,
+                                double depth, double inv_dp, double basis[3])
+{
+    const kernel2d *k = &sim->kernel;
+    const int j = g->index[e];
+    const double dx = g->dx0[e] - sim->neighbours.moved_x[j] + g->shift_x; /* r_g - r_j */
+    const double dy = g->dy0[e] - sim->neighbours.moved_y[j] + g->shift_y;
+    const double r2 = dx * dx + dy * dy;
+    if (!(r2 < k->support2))
+        return 0;
+    const double n = (-dx * nx - dy * ny) * inv_dp + depth, t = (dx * ny - dy * nx) * inv_dp;
+    basis[0] = n, basis[1] = n * t, basis[2] = n * n;
+    return kernel2d_w_inside(k->alpha, k->inv_h, (real)sqrt(r2)) * (sim->mass / sim->rho0);
+}
+
+/* Wall kw's quadratic no-slip velocity (walls.quadratic_no_slip; walls, not discs): the fluid's u - u_wall =
+ * b0 n + b1 n t + b2 n^2 (face_basis), which is u_wall on the face, fitted to the fluid of the ghost's list by least
  * squares weighted with the kernel at the ghost, is evaluated at the particle (n = -depth, t = 0). Each entry's
  * weight c_j and the wall velocity's 1 - sum c_j go to wall_no_slip_value; exact for a velocity quadratic across the
  * wall, as a pressure- or gravity-driven flow's is. */
 static void quadratic_no_slip_weights(surge_sim *sim, int kw, const ghost_span *g)
 {
     implicit_work *w = implicit_of(sim);
-    const neighbour_lists *nl = &sim->neighbours;
-    const kernel2d *k = &sim->kernel;
-    const double inv_dp = 1.0 / sim->params.numerics.dp_m, vol = sim->mass / sim->rho0;
+    const double inv_dp = 1.0 / sim->params.numerics.dp_m;
     const double glen = sqrt((double)sim->ghost_dx[kw] * sim->ghost_dx[kw] + (double)sim->ghost_dy[kw] * sim->ghost_dy[kw]);
     const double nx = sim->ghost_dx[kw] / glen, ny = sim->ghost_dy[kw] / glen, depth = 0.5 * glen * inv_dp;
-    double a[3][3] = {{0}};
-    for (int pass = 0; pass < 2; pass++) {
-        double row[3] = {0, 0, 0}, base = 1.0;
-        if (pass == 1) {
-            const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-                               a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-                               a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-            w->quadratic_ok[kw] = !w->dry[kw] && fabs(det) >= MIN_QUADRATIC_DETERMINANT;
-            if (!w->quadratic_ok[kw])
-                return;
-            /* the particle's basis (-depth, 0, depth^2) times a^-1 (a is symmetric) */
-            const double inv[3][3] = {
-                {(a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det, -(a[0][1] * a[2][2] - a[0][2] * a[2][1]) / det,
-                 (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det},
-                {-(a[1][0] * a[2][2] - a[1][2] * a[2][0]) / det, (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det,
-                 -(a[0][0] * a[1][2] - a[0][2] * a[1][0]) / det},
-                {(a[1][0] * a[2][1] - a[1][1] * a[2][0]) / det, -(a[0][0] * a[2][1] - a[0][1] * a[2][0]) / det,
-                 (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det}};
-            for (int c = 0; c < 3; c++)
-                row[c] = -depth * inv[0][c] + depth * depth * inv[2][c];
-        }
-        for (int64_t e = g->from; e < g->to; e++) {
-            const int j = g->index[e];
-            const double dx = g->dx0[e] - nl->moved_x[j] + g->shift_x, dy = g->dy0[e] - nl->moved_y[j] + g->shift_y;
-            const double r2 = dx * dx + dy * dy; /* r_g - r_j */
-            double weight = 0;
-            if (r2 < k->support2) {
-                const double kernel = kernel2d_w_inside(k->alpha, k->inv_h, (real)sqrt(r2)) * vol;
-                const double n = (-dx * nx - dy * ny) * inv_dp + depth, t = (dx * ny - dy * nx) * inv_dp;
-                const double basis[3] = {n, n * t, n * n};
-                if (pass == 0)
-                    for (int q = 0; q < 3; q++)
-                        for (int c = 0; c < 3; c++)
-                            a[q][c] += kernel * basis[q] * basis[c];
-                else
-                    weight = kernel * (row[0] * basis[0] + row[1] * basis[1] + row[2] * basis[2]);
-            }
-            if (pass == 1) {
-                g->quadratic_weight[e] = (real)weight;
-                base -= (real)weight;
-            }
-        }
-        if (pass == 1)
-            w->quadratic_base[kw] = base;
+    double a[3][3] = {{0}}, basis[3];
+    for (int64_t e = g->from; e < g->to; e++) {
+        const double kernel = face_basis(sim, g, e, nx, ny, depth, inv_dp, basis);
+        if (kernel > 0)
+            for (int q = 0; q < 3; q++)
+                for (int c = 0; c < 3; c++)
+                    a[q][c] += kernel * basis[q] * basis[c];
     }
+    const double det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                       a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                       a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    w->quadratic_ok[kw] = !w->dry[kw] && fabs(det) >= MIN_QUADRATIC_DETERMINANT;
+    if (!w->quadratic_ok[kw])
+        return;
+    /* the particle's basis (-depth, 0, depth^2) times a^-1: rows 0 and 2 of the inverse */
+    const double inv0[3] = {(a[1][1] * a[2][2] - a[1][2] * a[2][1]) / det, -(a[0][1] * a[2][2] - a[0][2] * a[2][1]) / det,
+                            (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det};
+    const double inv2[3] = {(a[1][0] * a[2][1] - a[1][1] * a[2][0]) / det, -(a[0][0] * a[2][1] - a[0][1] * a[2][0]) / det,
+                            (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det};
+    double row[3], base = 1.0;
+    for (int c = 0; c < 3; c++)
+        row[c] = -depth * inv0[c] + depth * depth * inv2[c];
+    for (int64_t e = g->from; e < g->to; e++) {
+        const double kernel = face_basis(sim, g, e, nx, ny, depth, inv_dp, basis);
+        const double weight = kernel > 0 ? kernel * (row[0] * basis[0] + row[1] * basis[1] + row[2] * basis[2]) : 0;
+        g->quadratic_weight[e] = (real)weight;
+        base -= (real)weight;
+    }
+    w->quadratic_base[kw] = base;
 }
 
 /* The walls' ghost nodes: each fluid neighbour's weight in the first-order (kernel-corrected) interpolation at the
