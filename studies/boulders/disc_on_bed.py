@@ -60,6 +60,24 @@ def pressure_force_y(points, pressure, rho, disc, others, h, mass):
     return total
 
 
+def disc_track(folder, what, least):
+    """The disc files' times, the first `least` discs' centres (time, disc, xy) and each file's radii; ValueError
+    naming the file where the run has fewer than 3 disc files or a file fewer than `least` discs."""
+    discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+    if len(discs) < 3:
+        raise ValueError("%s: boulders.pvd lists %d disc files; %s needs at least 3" % (folder, len(discs), what))
+    times, points, radii = [], [], []
+    for t, name in discs:
+        d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
+        if len(d["radius_m"]) < least:
+            raise ValueError("%s: %s holds %d disc(s); %s" % (folder, name, len(d["radius_m"]),
+                             "a row needs two a period" if least > 1 else "no disc to measure"))
+        times.append(t)
+        points.append(d["points"][:least, :2].astype(float))
+        radii.append(d["radius_m"])
+    return np.array(times), np.array(points), radii
+
+
 def measure(folder):
     params = RunParams(folder)
     dp, ch = params.positive("numerics", "dp_m"), params.positive("numerics", "ch")
@@ -67,20 +85,9 @@ def measure(folder):
     ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
     h = ch * np.sqrt(2.0) * dp
     mass = rho0 * dp * dp
-    discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
+    times, points, radii = disc_track(folder, "the approach speed", 1)
     snaps = dict(vtp.read_pvd(os.path.join(folder, "run.pvd")))
-    if len(discs) < 3:
-        raise ValueError("%s: boulders.pvd lists %d disc files; the approach speed needs at least 3" %
-                         (folder, len(discs)))
-    times, heights, radius = [], [], None
-    for t, name in discs:
-        d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
-        if len(d["radius_m"]) == 0:
-            raise ValueError("%s: no disc in %s" % (folder, name))
-        times.append(t)
-        heights.append(float(d["points"][0, 1]))
-        radius = float(d["radius_m"][0])
-    times, heights = np.array(times), np.array(heights)
+    heights, radius = points[:, 0, 1], float(radii[-1][0])
     gaps = heights - radius
     speeds = -np.gradient(heights, times)
     weight = (ratio - 1.0) * rho0 * g * np.pi * radius * radius
@@ -119,25 +126,12 @@ def settling_row(folder):
     params = RunParams(folder)
     rho0, nu = params.positive("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
     ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
-    discs = vtp.read_pvd(os.path.join(folder, "boulders.pvd"))
-    if len(discs) < 3:
-        raise ValueError("%s: boulders.pvd lists %d disc files; the settling speed needs at least 3" %
-                         (folder, len(discs)))
-    times, heights, spacing, radius = [], [], None, None
-    for t, name in discs:
-        d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
-        if len(d["radius_m"]) < 2:
-            raise ValueError("%s: %s holds %d disc(s); a row needs two a period" % (folder, name, len(d["radius_m"])))
-        times.append(t)
-        heights.append(float(d["points"][0, 1]))
-        if spacing is None:
-            spacing = abs(float(d["points"][1, 0] - d["points"][0, 0]))
-            radius = float(d["radius_m"][0])
+    times, points, radii = disc_track(folder, "the settling speed", 2)
+    heights, spacing, radius = points[:, 0, 1], abs(float(points[0, 1, 0] - points[0, 0, 0])), float(radii[0][0])
     gap = spacing - 2.0 * radius
     if not gap > 0:
         raise ValueError("%s: the first two discs are %.4g m apart, not more than a diameter (%.4g m)" %
                          (folder, spacing, 2.0 * radius))
-    times, heights = np.array(times), np.array(heights)
     speeds = -np.gradient(heights, times)
     weight = (ratio - 1.0) * rho0 * g * np.pi * radius * radius
     slot = 4.5 * np.pi * rho0 * nu * spacing ** 2 * np.sqrt(radius) / gap ** 2.5
