@@ -8,7 +8,10 @@
  * gap below the cut-off, and at free fall above it. The sliding film's shear (lubrication.h) against Reynolds'
  * equation for a face sliding past a plane, with the net force its pressure leaves; a disc spinning by a wall, and two
  * discs spinning the same way, slow at the rate its torques give and do not move.
- * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured */
+ * The tangential film's resistance (contacts.lubrication_tangential = reynolds) against Reynolds' equation with the
+ * gap's shape moving, for a disc by a plane and two discs, and its null motions.
+ * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured|
+ *        lubrication_tangential */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -490,6 +493,116 @@ static int test_lubrication_measured(void)
     return failures;
 }
 
+/* Reynolds' equation on the exact gap between disc T (radius rt, above) and disc B (radius rb, below; rb <= 0: a
+ * plane at rest), their centres moving along the gap at UT, UB and turning at WT, WB: the gap's shape moves,
+ * dh/dt = -UT x / sqrt(rt^2 - x^2) - UB x / sqrt(rb^2 - x^2), the surfaces slide at uT = UT + WT sqrt(rt^2 - x^2) and
+ * uB = UB - WB sqrt(rb^2 - x^2), and h^3 p'/(12 mu) = int_0^x dh/dt + h (uT + uB)/2 + C with p = 0 at both ends of
+ * |x| < 0.999 min(rt, rb). Returns in out the x forces and the torques (F_T, T_T, F_B, T_B): the pressure on each
+ * curved face and the shear, -mu (uT - uB)/h - h p'/2 on T, +mu (uT - uB)/h - h p'/2 on B, its torque about each
+ * centre with the lever sqrt(r^2 - x^2) */
+static void reynolds_tangential(double mu, double rt, double rb, double h0, const double motion[4], double out[4])
+{
+    enum { N = 200000 };
+    const int plane = !(rb > 0);
+    const double half = 0.999 * (plane ? rt : fmin(rt, rb)), dx = 2 * half / N;
+    static double h[N], source[N], mean[N], grad[N];
+    double flux_sum = 0, inv_sum = 0, integral = 0;
+    for (int k = 0; k < N; k++) { /* midpoints; int_0^x dh/dt by the midpoint sums from the left end (a constant) */
+        const double x = -half + (k + 0.5) * dx, st = sqrt(rt * rt - x * x), sb = plane ? 0 : sqrt(rb * rb - x * x);
+        h[k] = h0 + rt - st + (plane ? 0 : rb - sb);
+        const double dhdt = -motion[0] * x / st - (plane ? 0 : motion[2] * x / sb);
+        const double ut = motion[0] + motion[1] * st, ub = plane ? 0 : motion[2] - motion[3] * sb;
+        integral += dhdt * dx;
+        mean[k] = ut - ub; /* kept for the shear */
+        source[k] = integral - 0.5 * dhdt * dx + 0.5 * h[k] * (ut + ub);
+        const double g = 12 * mu / (h[k] * h[k] * h[k]);
+        flux_sum += g * source[k] * dx, inv_sum += g * dx;
+    }
+    const double c = -flux_sum / inv_sum;
+    double p = 0;
+    for (int k = 0; k < 4; k++)
+        out[k] = 0;
+    for (int k = 0; k < N; k++) {
+        const double x = -half + (k + 0.5) * dx, st = sqrt(rt * rt - x * x), sb = plane ? 0 : sqrt(rb * rb - x * x);
+        grad[k] = 12 * mu * (source[k] + c) / (h[k] * h[k] * h[k]);
+        const double p_mid = p + 0.5 * grad[k] * dx;
+        p += grad[k] * dx;
+        const double shear_t = -mu * mean[k] / h[k] - 0.5 * h[k] * grad[k];
+        const double shear_b = mu * mean[k] / h[k] - 0.5 * h[k] * grad[k];
+        out[0] += (-p_mid * x / st + shear_t) * dx;
+        out[1] += st * shear_t * dx;
+        if (!plane) {
+            out[2] += (-p_mid * x / sb + shear_b) * dx;
+            out[3] += -sb * shear_b * dx;
+        }
+    }
+}
+
+/* The tangential film (contacts.lubrication_tangential = reynolds): lubrication_tangential_matrix against Reynolds'
+ * equation on the exact gap (a disc by a plane, two equal discs, a disc by one twice its size), unit motions one
+ * coordinate at a time; its null motions; lubrication_tangential_damping near contact and at the model's reach */
+static int test_lubrication_tangential(void)
+{
+    const double mu = 467, r = 0.02;
+    const double ratios[] = {1e-4, 1e-3, 1e-2}, bounds[] = {0.045, 0.14, 0.45}; /* leading order: next 2-4 (h/R)^1/2 */
+    const double pairs[][2] = {{r, 0}, {r, r}, {r, 2 * r}};
+    for (int c = 0; c < 3; c++)
+        for (int k = 0; k < 3; k++) {
+            const double rt = pairs[c][0], rb = pairs[c][1], R = rb > 0 ? rt * rb / (rt + rb) : rt;
+            const double h0 = ratios[k] * R, S = 3.14159265358979323846 * mu * sqrt(2 * R / h0);
+            double K[4][4], worst = 0, scale = 0;
+            lubrication_tangential_matrix(S, rt, rb, K);
+            const int n = rb > 0 ? 4 : 2;
+            double numeric[4][4];
+            for (int j = 0; j < n; j++) {
+                double motion[4] = {0, 0, 0, 0}, out[4];
+                motion[j] = 1; /* velocities in m/s, spins in rad/s: columns scaled by r below */
+                reynolds_tangential(mu, rt, rb, h0, motion, out);
+                for (int i = 0; i < n; i++)
+                    numeric[i][j] = -out[i];
+            }
+            /* in units where every coordinate is a surface speed: U, r Omega; forces and torques over r */
+            for (int i = 0; i < n; i++)
+                for (int j = 0; j < n; j++) {
+                    const double si = (i % 2 ? (i < 2 ? rt : rb) : 1), sj = (j % 2 ? (j < 2 ? rt : rb) : 1);
+                    scale = fmax(scale, fabs(K[i][j]) / (si * sj));
+                    worst = fmax(worst, fabs(K[i][j] - numeric[i][j]) / (si * sj));
+                }
+            char what[112];
+            snprintf(what, sizeof what, "tangential film, %s, h/R = %g: largest entry error over the largest entry",
+                     rb > 0 ? (rb == rt ? "two equal discs" : "disc by one twice its size") : "disc by a plane",
+                     ratios[k]);
+            expect_below(what, worst / scale, bounds[k]);
+        }
+    /* symmetric; no resistance to a common translation or to the pair turning as one body about its contact */
+    double K[4][4], asym = 0;
+    const double rt = r, rb = 1.5 * r;
+    lubrication_tangential_matrix(1.0, rt, rb, K);
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            asym = fmax(asym, fabs(K[i][j] - K[j][i]));
+    expect_below("tangential film: K - K^T, largest", asym, 1e-15);
+    const double translation[4] = {1, 0, 1, 0}, turn[4] = {-rt, 1, rb, 1}; /* Omega = 1 about the contact point */
+    double worst_null = 0;
+    for (int i = 0; i < 4; i++) {
+        double a = 0, b = 0;
+        for (int j = 0; j < 4; j++)
+            a += K[i][j] * translation[j], b += K[i][j] * turn[j];
+        worst_null = fmax(worst_null, fmax(fabs(a), fabs(b) / r));
+    }
+    expect_below("tangential film: force of a common translation and of the pair turning as one body", worst_null,
+                 1e-14);
+    /* the damping: pi mu (2R/h)^(1/2) near contact (next order about (2h/R)^(1/2)), times 1 - share; none at reach */
+    const double dp = r / 4, kernel_h = 1.8 * sqrt(2.0) * dp;
+    const double near = 1e-4 * r, lead = 3.14159265358979323846 * mu * sqrt(2 * r / near);
+    expect_below("tangential damping at h/R 1e-4 over pi mu (2R/h)^1/2 (1 - share), less 1",
+                 fabs(lubrication_tangential_damping(mu, r, near, kernel_h, 1e-6 * dp) /
+                          ((1 - lubrication_resolved_share(near / kernel_h)) * lead) - 1), 0.02);
+    expect_below("tangential damping at the model's reach",
+                 lubrication_tangential_damping(mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h, 0.01 * dp), 0);
+    return failures;
+}
+
 int main(int argc, char **argv)
 {
     const char *which = argc > 1 ? argv[1] : "";
@@ -511,7 +624,9 @@ int main(int argc, char **argv)
         return test_lubrication() != 0;
     if (!strcmp(which, "lubrication_measured"))
         return test_lubrication_measured() != 0;
+    if (!strcmp(which, "lubrication_tangential"))
+        return test_lubrication_tangential() != 0;
     fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|"
-                    "lubrication_measured\n");
+                    "lubrication_measured|lubrication_tangential\n");
     return 2;
 }

@@ -218,6 +218,51 @@ check("poiseuille_loaded shell_density: 3 in the shell 0.4-0.5 dp out, 1 elsewhe
       len(density) == 20 and abs(edges[-1] - 2) < 1e-12 and np.allclose(density, shell_expected, atol=1e-6)
       and abs(density[4] - 3) < 0.1 and np.all(np.abs(np.delete(density, 4) - 1) < 0.2),
       " ".join("%.3f" % x for x in density))
+# velocity_layers on a synthetic channel: the fluid on the steady parabola u = F y (B - y) / (2 nu0) reads a local
+# viscosity of exactly mu0 in every band (a band's mean of a parabola is its centre value less the same amount in
+# every band); a disc (r 20 mm at y 0.1 m, no fluid within it) moving at V without turning reads V in its bands
+layered = os.path.join(work, "pl_layers")
+os.makedirs(layered, exist_ok=True)
+F_l, nu_l, V_l = 0.8, 0.467, 0.003
+with open(os.path.join(layered, "params.ini"), "w") as f:
+    f.write("[domain]\nlength_m = 1\nheight_m = 0.6\n[fluid]\nviscosity_m2ps = %g\n[body]\nforce_x_mps2 = %g\n"
+            "[numerics]\ndp_m = 0.001\n" % (nu_l, F_l))
+if os.path.exists(os.path.join(layered, "boulders.pvd")):
+    os.remove(os.path.join(layered, "boulders.pvd"))
+
+
+def layered_fluid(ys):
+    for k, t in enumerate((0.8, 0.9, 1.0)):
+        u = F_l * ys * (B - ys) / (2 * nu_l)
+        vtp.write_vtp(os.path.join(layered, "snap_%d.vtp" % k), np.stack([0 * ys, ys], axis=1),
+                      {"kind": np.zeros(ys.size, dtype=np.int32), "velocity_mps": np.stack([u, 0 * u], axis=1)}, t, k)
+
+
+ys = np.arange(0.0005, 0.6, 0.001)
+layered_fluid(ys)
+vtp.write_pvd(os.path.join(layered, "run.pvd"), [(t, "snap_%d.vtp" % k) for k, t in enumerate((0.8, 0.9, 1.0))])
+edges, u_bands, mu_local, radius = poiseuille_loaded.velocity_layers(layered)
+check("poiseuille_loaded velocity_layers: a clear parabola reads mu_local/mu0 = 1 in every band (30 bands of 10 mm)",
+      edges.size == 31 and radius == 0 and np.all(np.abs(mu_local - 1) < 1e-3),
+      " ".join("%.4f" % m for m in mu_local))
+layered_fluid(ys[(np.abs(ys - 0.1) > 0.02) & (np.abs(ys - 0.5) > 0.02)])  # the upper half folds onto the lower
+for k, t in enumerate((0.8, 0.9, 1.0)):
+    vtp.write_vtp(os.path.join(layered, "discs_%d.vtp" % k), np.array([[0.5, 0.1]]),
+                  {"velocity_mps": np.array([[V_l, 0.0]]), "omega_radps": np.array([0.0]), "radius_m": np.array([0.02])},
+                  t, k)
+vtp.write_pvd(os.path.join(layered, "boulders.pvd"), [(t, "discs_%d.vtp" % k) for k, t in enumerate((0.8, 0.9, 1.0))])
+edges, u_bands, mu_local, radius = poiseuille_loaded.velocity_layers(layered)
+check("poiseuille_loaded velocity_layers: a disc moving at V without turning reads V in the bands it fills (80-120 mm)",
+      radius == 0.02 and np.allclose(u_bands[8:12], V_l, rtol=1e-6), " ".join("%.6f" % v for v in u_bands[6:14]))
+r = subprocess.run([sys.executable, PL, "layers", layered, layered, "--band-m", "0.02"], capture_output=True, text=True,
+                   timeout=60)
+check("poiseuille_loaded layers: two runs side by side, each one's speed gained to 2 r (40 mm) and beyond",
+      r.returncode == 0 and r.stdout.count("gained from the plates to 2 r (40 mm") == 2 and " 0.0- 20.0" in r.stdout,
+      (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "layers", layered, "--band-m", "0.4"], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded layers: a band wider than half the channel is refused, named",
+      r.returncode == 2 and "fewer than two bands" in r.stderr, (r.stdout + r.stderr).strip()[-300:])
+
 # add: a finished run made by hand, its settings read from its params.ini (the implicit scheme, the model at a 2 dp
 # cut-off, the fluid packed), measured into a table: the fluid on the parabola of centre speed U gives
 # mu_eq/mu0 = B^2 F / (8 U nu0) = 0.36 * 0.5 / (8 * 0.08 * 0.25) = 1.125 over the band within 1 cm of the centre

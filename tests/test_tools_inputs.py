@@ -397,6 +397,27 @@ check("disc_on_bed row: W/U and the slot's resistance of a row falling at 1 mm/s
       r.returncode == 0 and r.stdout.count("W/U = %.4g " % (weight / 0.001)) == 4 and ("%.4g" % slot) in r.stdout
       and "s/a 0.250" in r.stdout, r.stdout + r.stderr)
 
+# a disc 1 mm over the bed of a sheared channel (bed -5 mm/s, lid +5 mm/s, 0.1 m: shear 0.1 /s), moving at 1 mm/s
+# over the bed and turning at -0.02 rad/s from 1.5 s on (earlier files at other speeds are left out)
+d = folder("sheared", RUN_FILES)
+write(os.path.join(d, "params.ini"), params_with(bottom_speed_mps=-0.005, top_speed_mps=0.005, height_m=0.1))
+entries = []
+for k, t in enumerate((1.0, 1.5, 2.0, 2.5)):
+    f = "boulders_%09d.vtp" % k
+    vx, omega = (-0.003, -0.05) if t < 1.5 else (-0.004, -0.02)
+    vtp.write_vtp(os.path.join(d, f), np.array([[0.1, 0.0135]]), {"radius_m": np.array([0.0125]),
+                  "velocity_mps": np.array([[vx, 0.0]]), "omega_radps": np.array([omega])}, t, k)
+    entries.append((t, f))
+vtp.write_pvd(os.path.join(d, "boulders.pvd"), entries)
+r = tool(DB, "sheared", d)
+check("disc_on_bed sheared: 3 files from 1.5 s, gap/a 0.08, (V - u_bed)/(shear a) 0.8, omega/shear -0.2",
+      r.returncode == 0 and "3 disc files" in r.stdout and "gap/a 0.0800" in r.stdout and "shear a) 0.8000" in r.stdout
+      and "omega/shear -0.2000" in r.stdout, r.stdout + r.stderr)
+write(os.path.join(d, "params.ini"), params_with(bottom_speed_mps=0.005, top_speed_mps=0.005, height_m=0.1))
+expect("disc_on_bed sheared: a channel that is not sheared", tool(DB, "sheared", d), "not sheared")
+expect("disc_on_bed sheared: a run without discs", tool(DB, "sheared", folder("sheared_no_discs", RUN_FILES)),
+       "boulders.pvd")
+
 # ---- 9. surge_watch ----
 SW = "surge_watch.py"
 expect("surge_watch -e foo", tool(SW, "-e", "foo", "--record", path("rec")), "endpoint", "foo")

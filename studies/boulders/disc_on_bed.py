@@ -25,6 +25,15 @@ must pass through the gaps between discs that do not approach each other. It pri
 0.5-1, 1-2, 2-3 and 3-4 s against the slot's lubrication resistance (9 pi / 2) mu L^2 sqrt(a) / s^(5/2) per disc
 (Reynolds' equation through the gap h(x) = s + x^2 / a, flux U L; docs/validation/poiseuille_loaded.md, "Flow
 through a gap").
+
+  build/surge run cases/boulder_couette.ini -o RUN_DIR -s numerics.dp_m=a/K -s "boulders.list_m=0.1 a+g 0.0125" \\
+      -s numerics.scheme=implicit -s numerics.ch=1.8 -s contacts.lubrication_resolved=measured -s time.end_s=3 --threads 1
+  studies/boulders/disc_on_bed.py sheared RUN_DIR
+
+A free disc a gap g above the moving bed of the Couette channel (bed and lid at -U and +U, shear rate 2U/H): how
+fast it moves over the bed and turns, over the snapshots from 1.5 s on, as (V - u_bed)/(shear a) and omega/shear,
+with its gap over a; the tangential films between a disc and a wall set them (docs/validation/poiseuille_loaded.md,
+"The wall layer and the tangential film").
 """
 import argparse
 import os
@@ -143,6 +152,35 @@ def settling_row(folder):
     return radius, spacing, gap, slot, windows
 
 
+SHEARED_FROM_S = 1.5
+
+
+def sheared_disc(folder):
+    """(samples, gap over a, (V - u_bed)/(shear a), omega/shear) of the run's first disc from SHEARED_FROM_S on;
+    ValueError naming the folder where the channel is not sheared or no disc file is that late."""
+    params = RunParams(folder)
+    height = params.positive("domain", "height_m")
+    bed, lid = params.real("walls", "bottom_speed_mps"), params.real("walls", "top_speed_mps")
+    shear = (lid - bed) / height
+    if shear == 0:
+        raise ValueError("%s: walls.bottom_speed_mps = walls.top_speed_mps = %g m/s: the channel is not sheared"
+                         % (params.path, bed))
+    gaps, speeds, spins = [], [], []
+    for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd")):
+        if t < SHEARED_FROM_S - 1e-9:
+            continue
+        d = vtp.read_vtp(os.path.join(folder, name), ("velocity_mps", "omega_radps", "radius_m"), finite=True)
+        if not len(d["radius_m"]):
+            raise ValueError("%s: %s holds no disc" % (folder, name))
+        radius = float(d["radius_m"][0])
+        gaps.append((float(d["points"][0, 1]) - radius) / radius)
+        speeds.append((float(d["velocity_mps"][0, 0]) - bed) / (shear * radius))
+        spins.append(float(d["omega_radps"][0]) / shear)
+    if not gaps:
+        raise ValueError("%s: no disc file from %g s on" % (folder, SHEARED_FROM_S))
+    return len(gaps), float(np.mean(gaps)), float(np.mean(speeds)), float(np.mean(spins))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -150,7 +188,16 @@ def main():
     meas.add_argument("run_dir", type=cli_checks.folder)
     row_parser = sub.add_parser("row")
     row_parser.add_argument("run_dir", type=cli_checks.folder)
+    sub.add_parser("sheared").add_argument("run_dir", type=cli_checks.folder)
     args = parser.parse_args()
+    if args.command == "sheared":
+        try:
+            samples, gap, speed, spin = sheared_disc(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("%d disc files from %g s: gap/a %.4f, (V - u_bed)/(shear a) %.4f, omega/shear %.4f"
+              % (samples, SHEARED_FROM_S, gap, speed, spin))
+        return 0
     if args.command == "row":
         try:
             radius, spacing, gap, slot, windows = settling_row(args.run_dir)

@@ -13,6 +13,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py measure RUN_DIR      # u_max and mu_eq/mu0 of one finished run
   studies/poiseuille_loaded/poiseuille_loaded.py discs RUN_DIR        # how the discs move against the flow
   studies/poiseuille_loaded/poiseuille_loaded.py shells RUN_DIR       # how the fluid packs beside the discs
+  studies/poiseuille_loaded/poiseuille_loaded.py layers RUN_DIR [RUN_DIR ...] [--band-m 0.01]
+        # where across the channel the centre speed is gained, run beside run
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit]
@@ -34,6 +36,13 @@ the median spin ratio.
 `shells`: over the same snapshots, the fluid's number density at each distance from a disc's face (bins of 0.1 dp
 out to 2 dp; the count in the annulus over its area times 1/dp^2, the lattice's density), over every disc whose
 annulus stays clear of the plates; 1 is the lattice's density, a shell of particles shows as a peak.
+`layers`: over the same snapshots, the mean x velocity of the mixture in bands by the distance from the nearer plate
+(the two halves folded together): each fluid particle weighs dp^2, each disc is sampled on a grid of dp/2 moving
+rigidly (V - omega y'). Between neighbouring bands the local viscosity is the shear stress over the shear rate,
+rho F (B/2 - y) / (du/dy), over mu0; a band average of a parabola differs from its centre value by the same amount
+in every band, so a clear channel reads 1 exactly. Then, per run, the speed gained from the plates to two radii of
+the largest disc (the layer of the discs that touch a plate) and from there to the centre: where one resolution's
+centre speed differs from another's.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme, --lubrication contacts.lubrication (with --cutoff-dp its cut-off,
@@ -77,6 +86,7 @@ WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
 SHELL_BINS, SHELL_BIN_DP = 20, 0.1
+LAYER_BAND_M = 0.01
 DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
 RADIUS_M = 0.02  # the case's disc radius (boulders.radius_m): r/dp names a resolution
 REFERENCE_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded_reference.csv")
@@ -182,6 +192,60 @@ def local_einstein(centres_y, radius, length, gap):
     slope = (y0 - y) * fluidity
     u = np.concatenate([[0], np.cumsum((slope[1:] + slope[:-1]) / 2 * np.diff(y))])
     return gap * gap / 8 / u[np.abs(y - gap / 2) <= HALF_BAND_M].mean()
+
+
+def velocity_layers(folder, band_m=LAYER_BAND_M):
+    """The mixture's mean x velocity over the window in bands of band_m by the distance from the nearer plate (see the
+    module's `layers`): (band edges in m, u per band in m/s, the local mu/mu0 between neighbouring bands, the
+    discs' largest radius in m); ValueError naming the folder where a band holds nothing or no snapshot is in the
+    window."""
+    params = RunParams(folder)
+    dp, gap = params.positive("numerics", "dp_m"), params.positive("domain", "height_m")
+    force, nu0 = params.real("body", "force_x_mps2"), params.positive("fluid", "viscosity_m2ps")
+    edges = np.arange(0, gap / 2 + 1e-12, band_m)
+    if edges.size < 3:
+        raise ValueError("%s: a band of %g m leaves fewer than two bands across half the channel (%g m)"
+                         % (folder, band_m, gap / 2))
+    momentum, area = np.zeros(edges.size - 1), np.zeros(edges.size - 1)
+    disc_at = {}
+    if os.path.isfile(os.path.join(folder, "boulders.pvd")):
+        disc_at = {round(t, 9): name for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd"))}
+    radius_max, snapshots = 0.0, 0
+
+    def add(y, u, weight):
+        folded = np.minimum(y, gap - y)
+        momentum[:] += np.histogram(folded, edges, weights=u * weight)[0]
+        area[:] += np.histogram(folded, edges, weights=np.broadcast_to(weight, np.shape(y)))[0]
+
+    for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd")):
+        if not WINDOW_S[0] - 1e-9 <= t <= WINDOW_S[1] + 1e-6:
+            continue
+        s = vtp.read_vtp(os.path.join(folder, name), ("kind", "velocity_mps"), finite=True)
+        fluid = s["kind"] == 0
+        add(s["points"][fluid, 1], s["velocity_mps"][fluid, 0].astype(float), dp * dp)
+        snapshots += 1
+        if round(t, 9) not in disc_at:
+            continue
+        d = vtp.read_vtp(os.path.join(folder, disc_at[round(t, 9)]), ("velocity_mps", "omega_radps", "radius_m"),
+                         finite=True)
+        step = dp / 2  # each disc sampled on a grid of dp/2, moving rigidly
+        for cy, vx, omega, r in zip(d["points"][:, 1], d["velocity_mps"][:, 0], d["omega_radps"], d["radius_m"]):
+            offsets = np.arange(-r + step / 2, r, step)
+            ox, oy = np.meshgrid(offsets, offsets)
+            inside = oy[ox * ox + oy * oy < r * r]
+            add(cy + inside, vx - omega * inside, step * step)
+            radius_max = max(radius_max, float(r))
+    if not snapshots:
+        raise ValueError("%s: no snapshot between %g and %g s" % (folder, *WINDOW_S))
+    if not np.all(area > 0):
+        raise ValueError("%s: the band %g-%g m from the plates holds no fluid particle or disc"
+                         % (folder, edges[np.argmin(area)], edges[np.argmin(area) + 1]))
+    u = momentum / area
+    centres = 0.5 * (edges[1:] + edges[:-1])
+    stress = force * (gap / 2 - 0.5 * (centres[1:] + centres[:-1]))  # rho F (B/2 - y) over rho
+    with np.errstate(divide="ignore"):
+        mu_local = stress * np.diff(centres) / np.diff(u) / nu0
+    return edges, u, mu_local, radius_max
 
 
 REFERENCE_COLUMNS = ["phi", "seed", "phi_actual", "n_discs", "mu_local_einstein", "mu_uniform_einstein"]
@@ -646,6 +710,35 @@ def solid_fractions(with_zero):
     return parse
 
 
+def command_layers(args):
+    """Prints each run's band velocities and local viscosities side by side, then where its centre speed is gained:
+    from the plates to two radii of the largest disc, and from there to the centre."""
+    runs = []
+    for folder in args.run_dir:
+        try:
+            runs.append(velocity_layers(folder, args.band_m))
+        except (OSError, ValueError) as e:
+            fail(str(e))
+    if any(r[0].size != runs[0][0].size for r in runs):
+        fail("the runs' channels differ in height: their bands do not line up")
+    edges = runs[0][0]
+    print("distance from the plates (mm) | per run: u (m/s), then mu_local/mu0 to the next band")
+    for k in range(edges.size - 1):
+        cells = []
+        for _, u, mu, _ in runs:
+            cells.append("%.6f %8s" % (u[k], "%.3f" % mu[k] if k < mu.size else ""))
+        print("%5.1f-%5.1f  %s" % (edges[k] * 1e3, edges[k + 1] * 1e3, "   ".join(cells)))
+    for folder, (edges, u, _, radius) in zip(args.run_dir, runs):
+        centres = 0.5 * (edges[1:] + edges[:-1])
+        if radius > 0 and 2 * radius < centres[-1]:
+            at = float(np.interp(2 * radius, centres, u))
+            print("%s: %.6f m/s gained from the plates to 2 r (%.0f mm, %.0f %%), %.6f m/s from there to the centre"
+                  % (folder, at, 2e3 * radius, 100 * at / u[-1], u[-1] - at))
+        else:
+            print("%s: no disc, or two radii reach the centre: %.6f m/s at the centre" % (folder, u[-1]))
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -681,6 +774,10 @@ def main():
     meas.add_argument("run_dir")
     sub.add_parser("discs").add_argument("run_dir")
     sub.add_parser("shells").add_argument("run_dir")
+    layers = sub.add_parser("layers")
+    layers.add_argument("run_dir", nargs="+")
+    layers.add_argument("--band-m", type=cli_checks.positive, default=LAYER_BAND_M,
+                        help="the bands' width in m (default %g)" % LAYER_BAND_M)
     ref = sub.add_parser("reference")
     ref.add_argument("--phi", default="0.05,0.1,0.2,0.3,0.4,0.5", type=solid_fractions(with_zero=False))
     ref.add_argument("--seed", type=int, default=1)
@@ -759,6 +856,8 @@ def main():
         for lo, hi, n in zip(edges[:-1], edges[1:], density):
             print("%.1f-%.1f %.3f" % (lo, hi, n))
         return 0
+    if args.command == "layers":
+        return command_layers(args)
     return command_report(args)
 
 

@@ -47,6 +47,11 @@ typedef enum surge_lubrication_resolved {
     SURGE_LUBRICATION_MEASURED = 1 /* the measured share of the exact resistance at each gap over the kernel's h */
 } surge_lubrication_resolved;
 
+typedef enum surge_lubrication_tangential {
+    SURGE_TANGENTIAL_SLIDING = 0, /* torques from the surfaces' relative sliding speed, the cut-off's part below it */
+    SURGE_TANGENTIAL_REYNOLDS = 1 /* Reynolds' equation with the gap's shape moving with the discs, measured share */
+} surge_lubrication_tangential;
+
 typedef enum surge_color_field {
     SURGE_FIELD_SPEED = 0,    /* |v| */
     SURGE_FIELD_VX_REL = 1,   /* vx - belt speed: velocity relative to the belt */
@@ -184,6 +189,7 @@ typedef struct surge_params {
         double lubrication_cutoff_dp;  /* gaps below this (dp) take the unresolved part of the lubrication force */
         double lubrication_min_gap_dp; /* the force's gap is at least this (dp): surface roughness */
         surge_lubrication_resolved lubrication_resolved; /* what the SPH is taken to resolve of a squeeze film */
+        surge_lubrication_tangential lubrication_tangential; /* the tangential film's form (lubrication.h) */
     } contacts;
     struct {
         int form;                    /* surge_shifting_form */

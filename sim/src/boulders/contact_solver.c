@@ -340,6 +340,15 @@ static void measured_squeeze_film(contact *c, const contact_settings *set)
                                                   set->lubrication_min_gap_m);
 }
 
+/* The tangential film's S in place of the sliding film's damping (contacts.lubrication_tangential = reynolds) */
+static void tangential_film(contact *c, const contact_settings *set)
+{
+    const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
+    c->lubrication_t = lubrication_tangential_damping(set->lubrication_viscosity_pa_s,
+                                                      c->a >= 0 ? ra * rb / (ra + rb) : rb, c->gap_m + set->gap_offset_m,
+                                                      set->lubrication_kernel_h_m, set->lubrication_min_gap_m);
+}
+
 static void prepare(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
 {
     for (int k = 0; k < s->now_count; k++) {
@@ -471,6 +480,9 @@ int contact_solver_films(contact_solver *s, const contact_discs *d, const contac
         film_dampings(c, set);
         if (set->lubrication_kernel_h_m > 0)
             measured_squeeze_film(c, set);
+        const int reynolds = set->lubrication_tangential_reynolds && set->lubrication_kernel_h_m > 0;
+        if (reynolds)
+            tangential_film(c, set);
         if (!(c->lubrication > 0) && !(c->lubrication_t > 0))
             continue;
         if (*count == *capacity) {
@@ -482,7 +494,7 @@ int contact_solver_films(contact_solver *s, const contact_discs *d, const contac
         }
         (*films)[(*count)++] = (contact_film){.a = c->a, .b = c->b, .nx = c->nx, .ny = c->ny, .ra = c->ra, .rb = c->rb,
                                               .normal_damping = c->lubrication, .sliding_damping = c->lubrication_t,
-                                              .wall_vx = c->wall_vx, .wall_vy = c->wall_vy};
+                                              .wall_vx = c->wall_vx, .wall_vy = c->wall_vy, .reynolds = reynolds};
     }
     s->now_count = 0;
     return 0;

@@ -45,6 +45,9 @@ typedef struct contact_settings {
     /* > 0: the squeeze film's unresolved part is the measured one (lubrication_measured_damping) for this kernel
      * smoothing length, out to LUBRICATION_RESOLVED_END of it; 0: the film's less its value at the cut-off */
     double lubrication_kernel_h_m;
+    /* 1: the films' tangential part is Reynolds' (lubrication_tangential_damping, for lubrication_kernel_h_m > 0) in
+     * place of the sliding film's; only the films handed out (contact_solver_films) carry it */
+    int lubrication_tangential_reynolds;
 } contact_settings;
 
 typedef struct contact_stats {
@@ -66,12 +69,14 @@ int contact_solver_advance(contact_solver *solver, contact_discs *discs, const c
 /* A lubrication film (lubrication.h) between disc b and disc a, or a wall -1 - a where a < 0: the normal n from a to
  * b, the lever arms (a wall's 0), and the unresolved parts of the squeeze film's force per unit approach speed and of
  * the sliding film's per unit sliding speed (N s m^-2); the sliding film acts through torques alone, r_a f and r_b f
- * for f = sliding_damping v_t, v_t the speed of b's surface past a's along t = (-n_y, n_x) */
+ * for f = sliding_damping v_t, v_t the speed of b's surface past a's along t = (-n_y, n_x). With reynolds set,
+ * sliding_damping is the tangential film's S instead (lubrication_tangential_matrix, b the disc T, a the disc B) */
 typedef struct contact_film {
     int a, b;
     double nx, ny, ra, rb;
     double normal_damping, sliding_damping;
     double wall_vx, wall_vy;
+    int reynolds;
 } contact_film;
 
 /* The films of the discs' gaps narrower than settings' lubrication cut-off, at their present positions, into films

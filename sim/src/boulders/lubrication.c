@@ -29,6 +29,16 @@ double lubrication_resolved_share(double gap_over_h)
     return share[k] + (at - k) * (share[k + 1] - share[k]);
 }
 
+double lubrication_tangential_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
+                                      double min_gap_m)
+{
+    if (!(viscosity_pa_s > 0) || !(radius_m > 0) || !(gap_m < LUBRICATION_RESOLVED_END * kernel_h_m))
+        return 0.0;
+    const double gap = fmax(gap_m, min_gap_m), e = gap / radius_m, alpha = log1p(e + sqrt(e * (2.0 + e)));
+    return (1.0 - lubrication_resolved_share(gap / kernel_h_m)) * 2.0 * 3.14159265358979323846 * viscosity_pa_s *
+           (1.0 / tanh(alpha) - 1.0);
+}
+
 double lubrication_measured_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
                                     double min_gap_m)
 {

@@ -62,6 +62,46 @@ double lubrication_resolved_share(double gap_over_h);
 double lubrication_measured_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
                                     double min_gap_m);
 
+/* The tangential film (contacts.lubrication_tangential = reynolds). Reynolds' equation in a gap h(x) = h0 + x^2/(2R)
+ * whose shape moves with the discs, d/dx (h^3 p'/(12 mu)) = dh/dt + d/dx (h (u_T + u_B)/2), for discs T and B on
+ * either side (centres' velocities U_T, U_B along the gap's tangent t, spins Omega_T, Omega_B, surface speeds at the
+ * gap u_T = U_T + r_T Omega_T, u_B = U_B - r_B Omega_B, t and the normal from B to T right-handed) gives, with
+ * S = pi mu (2 R / h0)^(1/2) and V = R (U_T/r_T + U_B/r_B) - (u_T + u_B)/2 (the pressure p' = 12 mu V (4 h0/3 - h)/h^3
+ * and the shear of the Couette and Poiseuille parts, integrated; docs/boulders.md, "The tangential film"):
+ *   F_T = S [2V - (u_T - u_B) - 4 V R/r_T],  T_T = r_T S [2V - (u_T - u_B)],
+ *   F_B = S [2V + (u_T - u_B) - 4 V R/r_B],  T_B = -r_B S [2V + (u_T - u_B)].
+ * -dF/d(U, Omega) is symmetric and positive semidefinite, zero for a common translation and for the pair turning as
+ * one body; by a wall at rest (r_B -> infinity) it is diagonal: F = -2 S U, T = -2 S r^2 Omega (2 S = 2 sqrt(2) pi mu
+ * (R/h0)^(1/2)). This writes it into K (rows and columns U_T, Omega_T, U_B, Omega_B; wall: r_B <= 0, the last two
+ * zero). */
+static inline void lubrication_tangential_matrix(double S, double r_T, double r_B, double K[4][4])
+{
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            K[i][j] = 0;
+    if (!(r_B > 0)) {
+        K[0][0] = 2 * S, K[1][1] = 2 * S * r_T * r_T;
+        return;
+    }
+    const double sum = r_T + r_B, sum2 = sum * sum;
+    K[0][0] = K[2][2] = 2 * S * (r_B * r_B + r_T * r_T) / sum2;
+    K[0][1] = K[1][0] = 2 * S * r_T * r_T / sum;
+    K[0][2] = K[2][0] = -2 * S * (r_B * (r_B - r_T) + r_T * (r_B + r_T)) / sum2;
+    K[0][3] = K[3][0] = 2 * S * r_B * r_B / sum;
+    K[1][1] = 2 * S * r_T * r_T;
+    K[1][2] = K[2][1] = -2 * S * r_T * r_T / sum;
+    K[2][3] = K[3][2] = -2 * S * r_B * r_B / sum;
+    K[3][3] = 2 * S * r_B * r_B;
+}
+
+/* The tangential film's S (N s m^-2 per metre of width) less the share the implicit scheme resolves: the exact
+ * excess torque of a cylinder turning by a plane, 4 pi mu R^2 (coth alpha - 1) with cosh alpha = 1 + h0/R (Jeffery
+ * 1922), over 2 R^2, which near contact is pi mu (2 R/h0)^(1/2), times 1 - s(h0/h), s the squeeze film's measured
+ * share (lubrication_resolved_share; the tangential film's own share is not measured); 0 from
+ * LUBRICATION_RESOLVED_END kernel lengths on, the gap taken at least min_gap_m. (lubrication.c) */
+double lubrication_tangential_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
+                                      double min_gap_m);
+
 /* The sliding film's unresolved part */
 static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,
                                                  double min_gap_m)

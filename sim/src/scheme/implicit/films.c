@@ -11,13 +11,18 @@
  * blocks; each block's rows are solved directly (LAPACK's LU): the viscous solve's preconditioner on the disc rows
  * (its diagonal without the films, plus dt M^-1 K), and the pressure correction's (M + dt K) dU = dt F_p. Blocks hold
  * at most FILM_BLOCK_DISCS discs, in disc order; a larger cluster is cut into such blocks, the films between them
- * left to the iterations (the viscous solve) or out of the correction's change (the pressure's). */
+ * left to the iterations (the viscous solve) or out of the correction's change (the pressure's).
+ * A film with reynolds set (contacts.lubrication_tangential) takes the tangential film's symmetric K_t = J^T K J in
+ * place of c_t g_r g_t^T, K lubrication_tangential_matrix's, J the map from the unknowns to (U_T, Omega_T, U_B,
+ * Omega_B) along t' = (n_y, -n_x), T the film's disc b; a moving wall adds the constant 2 S (u_wall . t') t' to b's
+ * force. */
 #include <lapacke.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scheme/implicit/implicit.h"
 #include "boulders/boulders.h"
+#include "boulders/lubrication.h"
 
 #define FILM_BLOCK_DISCS 256
 
@@ -36,6 +41,31 @@ static void film_gradients(const boulder_set *b, const contact_film *f, double g
     } else {
         memset(g_n + 3, 0, 3 * sizeof *g_n), memset(g_t + 3, 0, 3 * sizeof *g_t);
         *wall_vn = -(f->wall_vx * f->nx + f->wall_vy * f->ny), *wall_vt = -(f->wall_vx * tx + f->wall_vy * ty);
+    }
+}
+
+/* A Reynolds film's K_t (6 x 6 over the entries of film_unknown) and the generalised force of its wall's motion */
+static void tangential_rows(const boulder_set *b, const contact_film *f, double k6[6][6], double wall6[6])
+{
+    const double tx = f->ny, ty = -f->nx;
+    double J[4][6] = {{0}}, K[4][4];
+    J[0][0] = tx, J[0][1] = ty, J[1][2] = 1.0 / b->radius[f->b];
+    if (f->a >= 0)
+        J[2][3] = tx, J[2][4] = ty, J[3][5] = 1.0 / b->radius[f->a];
+    lubrication_tangential_matrix(f->sliding_damping, f->rb, f->a >= 0 ? f->ra : 0, K);
+    for (int i = 0; i < 6; i++) {
+        for (int j = 0; j < 6; j++) {
+            double sum = 0;
+            for (int p = 0; p < 4; p++)
+                for (int q = 0; q < 4; q++)
+                    sum += J[p][i] * K[p][q] * J[q][j];
+            k6[i][j] = sum;
+        }
+        wall6[i] = 0;
+    }
+    if (f->a < 0) { /* F_T = -2 S (U_T - u_wall . t') */
+        const double wall_t = f->wall_vx * tx + f->wall_vy * ty;
+        wall6[0] = 2 * f->sliding_damping * wall_t * tx, wall6[1] = 2 * f->sliding_damping * wall_t * ty;
     }
 }
 
@@ -163,6 +193,17 @@ void implicit_film_forces(const surge_sim *sim, const double *disc_x, double *fo
             const double u = disc_x[film_unknown(f, j)];
             vn += g_n[j] * u, vt += g_t[j] * u;
         }
+        if (f->reynolds) {
+            double k6[6][6], wall6[6];
+            tangential_rows(b, f, k6, wall6);
+            for (int i = 0; i < sides; i++) {
+                double tangential = -wall6[i];
+                for (int j = 0; j < sides; j++)
+                    tangential += k6[i][j] * disc_x[film_unknown(f, j)];
+                force[film_unknown(f, i)] -= f->normal_damping * vn * g_n[i] + tangential;
+            }
+            continue;
+        }
         for (int j = 0; j < sides; j++)
             force[film_unknown(f, j)] -= f->normal_damping * vn * g_n[j] + (j % 3 == 2 ? f->sliding_damping * vt * g_t[j] : 0);
     }
@@ -193,8 +234,10 @@ static int factor_block(surge_sim *sim, int which, int k, size_t at, const doubl
         }
         if (!inside)
             continue;
-        double g_n[6], g_t[6], wall_vn, wall_vt;
+        double g_n[6], g_t[6], wall_vn, wall_vt, k6[6][6], wall6[6];
         film_gradients(b, film, g_n, g_t, &wall_vn, &wall_vt);
+        if (film->reynolds)
+            tangential_rows(b, film, k6, wall6);
         for (int i = 0; i < sides; i++) {
             if (local[i] < 0)
                 continue;
@@ -203,7 +246,7 @@ static int factor_block(surge_sim *sim, int which, int k, size_t at, const doubl
             for (int j = 0; j < sides; j++)
                 if (local[j] >= 0)
                     a[(size_t)local[j] * rows + local[i]] +=
-                        scale * (film->normal_damping * g_n[i] * g_n[j] + spin * g_t[j]);
+                        scale * (film->normal_damping * g_n[i] * g_n[j] + (film->reynolds ? k6[i][j] : spin * g_t[j]));
         }
     }
     return LAPACKE_dgetrf(LAPACK_COL_MAJOR, rows, rows, a, rows, fb->pivots[which] + 3 * first) == 0 ? 0 : -1;
@@ -228,11 +271,13 @@ void implicit_films_factor(surge_sim *sim, double dt, double *diag)
     fb->factored = fb->count > 0 && !fb->singular;
     for (int f = 0; f < w->film_count; f++) {
         const contact_film *film = &w->films[f];
-        double g_n[6], g_t[6], wall_vn, wall_vt;
+        double g_n[6], g_t[6], wall_vn, wall_vt, k6[6][6], wall6[6];
         film_gradients(b, film, g_n, g_t, &wall_vn, &wall_vt);
+        if (film->reynolds)
+            tangential_rows(b, film, k6, wall6);
         for (int j = 0; j < (film->a >= 0 ? 6 : 3); j++) {
             const int q = film_unknown(film, j);
-            const double spin = j % 3 == 2 ? film->sliding_damping * g_t[j] * g_t[j] : 0;
+            const double spin = film->reynolds ? k6[j][j] : j % 3 == 2 ? film->sliding_damping * g_t[j] * g_t[j] : 0;
             diag[q] += step_over_mass(b, q, dt) * (film->normal_damping * g_n[j] * g_n[j] + spin);
         }
     }
