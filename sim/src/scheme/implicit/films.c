@@ -173,8 +173,13 @@ int implicit_discs_films(surge_sim *sim)
         grow((void **)&fb->lu[1], &fb->lu_capacity[1], entries, sizeof *fb->lu[1]) != 0 ||
         grow((void **)&fb->pivots[0], &fb->pivot_capacity[0], 3 * (size_t)discs, sizeof *fb->pivots[0]) != 0 ||
         grow((void **)&fb->pivots[1], &fb->pivot_capacity[1], 3 * (size_t)discs, sizeof *fb->pivots[1]) != 0 ||
-        grow((void **)&fb->scratch, &fb->scratch_capacity, 3 * (size_t)discs, sizeof *fb->scratch) != 0)
+        grow((void **)&fb->scratch, &fb->scratch_capacity, 3 * (size_t)discs, sizeof *fb->scratch) != 0 ||
+        grow((void **)&fb->tangential, &fb->tangential_capacity, 42 * (size_t)w->film_count, sizeof *fb->tangential) != 0)
         return -1;
+    for (int k = 0; k < w->film_count; k++) /* the films are the step's: their tangential rows once */
+        if (w->films[k].reynolds)
+            tangential_rows(&sim->boulders, &w->films[k], (double(*)[6])(fb->tangential + 42 * (size_t)k),
+                            fb->tangential + 42 * (size_t)k + 36);
     return 0;
 }
 
@@ -194,8 +199,7 @@ void implicit_film_forces(const surge_sim *sim, const double *disc_x, double *fo
             vn += g_n[j] * u, vt += g_t[j] * u;
         }
         if (f->reynolds) {
-            double k6[6][6], wall6[6];
-            tangential_rows(b, f, k6, wall6);
+            const double(*k6)[6] = (const double(*)[6])(w->film_blocks.tangential + 42 * (size_t)k), *wall6 = k6[6];
             for (int i = 0; i < sides; i++) {
                 double tangential = -wall6[i];
                 for (int j = 0; j < sides; j++)
@@ -234,10 +238,9 @@ static int factor_block(surge_sim *sim, int which, int k, size_t at, const doubl
         }
         if (!inside)
             continue;
-        double g_n[6], g_t[6], wall_vn, wall_vt, k6[6][6], wall6[6];
+        double g_n[6], g_t[6], wall_vn, wall_vt;
         film_gradients(b, film, g_n, g_t, &wall_vn, &wall_vt);
-        if (film->reynolds)
-            tangential_rows(b, film, k6, wall6);
+        const double(*k6)[6] = (const double(*)[6])(fb->tangential + 42 * (size_t)f);
         for (int i = 0; i < sides; i++) {
             if (local[i] < 0)
                 continue;
@@ -271,10 +274,9 @@ void implicit_films_factor(surge_sim *sim, double dt, double *diag)
     fb->factored = fb->count > 0 && !fb->singular;
     for (int f = 0; f < w->film_count; f++) {
         const contact_film *film = &w->films[f];
-        double g_n[6], g_t[6], wall_vn, wall_vt, k6[6][6], wall6[6];
+        double g_n[6], g_t[6], wall_vn, wall_vt;
         film_gradients(b, film, g_n, g_t, &wall_vn, &wall_vt);
-        if (film->reynolds)
-            tangential_rows(b, film, k6, wall6);
+        const double(*k6)[6] = (const double(*)[6])(fb->tangential + 42 * (size_t)f);
         for (int j = 0; j < (film->a >= 0 ? 6 : 3); j++) {
             const int q = film_unknown(film, j);
             const double spin = film->reynolds ? k6[j][j] : j % 3 == 2 ? film->sliding_damping * g_t[j] * g_t[j] : 0;
@@ -315,4 +317,5 @@ void implicit_films_free(film_blocks *fb)
     free(fb->pivots[0]);
     free(fb->pivots[1]);
     free(fb->scratch);
+    free(fb->tangential);
 }

@@ -46,10 +46,12 @@ typedef struct film_blocks {
                                           * FILMS_PRESSURE), column-major */
     int *pivots[2];                      /* 3 per member */
     double *scratch;
+    double *tangential;                  /* per film with reynolds set: its K_t (36) and its wall's force (6), this step's
+                                          * (films.c, tangential_rows) */
     int factored;                        /* this step's blocks are factored (implicit_films_factor) */
     int singular;                        /* and one of them was found singular */
     size_t disc_capacity, place_capacity, first_capacity, members_capacity, start_capacity, lu_capacity[2],
-        pivot_capacity[2], scratch_capacity;
+        pivot_capacity[2], scratch_capacity, tangential_capacity;
 } film_blocks;
 
 typedef struct implicit_work {
