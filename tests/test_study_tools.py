@@ -163,6 +163,43 @@ r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubricat
 rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
 check("poiseuille_loaded seeds --cutoff-dp 2 --pack-fluid: the one run with that cut-off (9.9000)",
       r.returncode == 0 and rows.get(("0.5", "4"), [])[2:4] == ["1", "9.9000"], (r.stdout + r.stderr).strip()[-600:])
+# the tangential film apart: a packed run with the measured squeeze film and the tangential film from Reynolds (7.7)
+study.append_row(seeds_csv, poiseuille_loaded.COLUMNS, {
+    "phi": 0.5, "phi_actual": 0.5, "mu_eq_over_mu0": 7.7, "status": "ok", "dp_m": 0.005, "ch": 1.8, "seed": 1,
+    "c0_mps": 15, "wall_s": 1, "density_diffusion": 0, "scheme": "implicit", "lubrication": 1,
+    "lubrication_cutoff_dp": 1, "lubrication_resolved": "measured", "pack_fluid": 1,
+    "lubrication_tangential": "reynolds"})
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubrication", "--resolved", "measured",
+                    "--pack-fluid", "--tangential", "reynolds"], capture_output=True, text=True, timeout=60)
+rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
+check("poiseuille_loaded seeds --tangential reynolds: the one run with the tangential film (7.7000), named",
+      r.returncode == 0 and rows.get(("0.5", "4"), [])[2:4] == ["1", "7.7000"] and
+      "tangential film from Reynolds" in r.stdout, (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "seeds", "--csv", seeds_csv, "--lubrication", "--resolved", "measured",
+                    "--pack-fluid"], capture_output=True, text=True, timeout=60)
+rows = {tuple(line.split()[:2]): line.split() for line in r.stdout.splitlines() if line.startswith("  0.5")}
+check("poiseuille_loaded seeds without --tangential: the sliding film's runs, not the tangential film's (2.1000)",
+      r.returncode == 0 and rows.get(("0.5", "4"), [])[2:4] == ["2", "2.1000"], (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv, "--models", "reynolds"],
+                   capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded convergence --models reynolds: the tangential film's runs alone (7.7000)",
+      r.returncode == 0 and "7.7000" in r.stdout and "1.4000" not in r.stdout and "2.0000" not in r.stdout and
+      "tangential film from Reynolds" in r.stdout, (r.stdout + r.stderr).strip()[-600:])
+r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv, "--models", "none,measured",
+                    "--placement", "packed"], capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded convergence --models none,measured --placement packed: the packed measured-film runs "
+      "(seed 1: 2.0000), neither the tangential film's nor the default placement's nor the runs without the model",
+      r.returncode == 0 and "2.0000" in r.stdout and "7.7000" not in r.stdout and "8.8000" not in r.stdout and
+      "1.4000" not in r.stdout, (r.stdout + r.stderr).strip()[-600:])
+for bad in (["--models", "reynolds,gap"], ["--models", ""], ["--placement", "loose"]):
+    r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv] + bad, capture_output=True, text=True,
+                       timeout=60)
+    check("poiseuille_loaded convergence %s refused, named" % " ".join(bad),
+          r.returncode == 2 and bad[0] in r.stderr, r.stderr.strip()[-300:])
+r = subprocess.run([sys.executable, PL, "run", "--tangential", "reynolds", "--lubrication", "--resolved", "measured"],
+                   capture_output=True, text=True, timeout=60)
+check("poiseuille_loaded run --tangential reynolds with the explicit scheme refused, naming what it needs",
+      r.returncode == 2 and "--scheme implicit" in r.stderr, r.stderr.strip())
 r = subprocess.run([sys.executable, PL, "convergence", "--csv", seeds_csv], capture_output=True, text=True, timeout=60)
 check("poiseuille_loaded convergence takes seed 1 at every r/dp: 1.4000 then 1.6500 (+17.9 %)",
       r.returncode == 0 and "1.4000" in r.stdout and "1.6500 (+17.9 %)" in r.stdout, (r.stdout + r.stderr)[-600:])
@@ -281,7 +318,8 @@ with open(os.path.join(added, "params.ini"), "w") as f:
             "[domain]\nlength_m = 1\nheight_m = 0.6\n[fluid]\ndensity_kgpm3 = 1000\nviscosity_m2ps = 0.25\n"
             "[body]\nforce_x_mps2 = 0.5\n[numerics]\nscheme = implicit\ndp_m = 0.005\nch = 1.8\n"
             "density_diffusion = 0\n[boulders]\nplacement = random\nsolid_fraction = 0.3\nseed = 2\n"
-            "pack_fluid = true\n[contacts]\nlubrication = true\nlubrication_cutoff_dp = 2\n[time]\nend_s = 1\n")
+            "pack_fluid = true\n[contacts]\nlubrication = true\nlubrication_cutoff_dp = 2\n"
+            "lubrication_resolved = measured\nlubrication_tangential = reynolds\n[time]\nend_s = 1\n")
 with open(os.path.join(added, "diagnostics.csv"), "w") as f:
     f.write("time_s,step\n0,0\n1.0,40\n")
 with open(os.path.join(added, "checkpoint.bin"), "wb") as f:
@@ -295,14 +333,15 @@ added_rows = study.read_rows("test", added_csv, {}) if os.path.exists(added_csv)
 expected = {"phi": "0.3", "dp_m": "0.005", "ch": "1.8", "seed": "2", "wall_s": "12.5", "particle_steps": "40000",
             "sim_time_s": "1.000", "mu_eq_over_mu0": "1.125", "n_discs": "1", "status": "ok", "c0_mps": "15",
             "density_diffusion": "0", "scheme": "implicit", "lubrication": "1", "lubrication_cutoff_dp": "2",
-            "pack_fluid": "1"}
+            "pack_fluid": "1", "lubrication_resolved": "measured", "lubrication_tangential": "reynolds"}
 check("poiseuille_loaded add: one row with the run's settings, measured (mu_eq/mu0 1.125)",
       r.returncode == 0 and len(added_rows) == 1 and all(added_rows[0][k] == v for k, v in expected.items()),
       "%s %s" % (added_rows, r.stderr.strip()))
 r = subprocess.run([sys.executable, PL, "convergence", "--csv", added_csv, "--seed", "2"], capture_output=True,
                    text=True, timeout=60)
 check("poiseuille_loaded convergence names the run's model and placement",
-      r.returncode == 0 and "lubrication model, cut-off 2 dp, fluid packed around the discs" in r.stdout,
+      r.returncode == 0 and "lubrication model, measured share, tangential film from Reynolds, fluid packed around "
+      "the discs" in r.stdout,
       (r.stdout + r.stderr).strip()[-400:])
 with open(os.path.join(added, "diagnostics.csv"), "w") as f:
     f.write("time_s,step\n0,0\n0.5,20\n")

@@ -5,8 +5,8 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
 
   studies/poiseuille_loaded/poiseuille_loaded.py run [--phi 0,0.05,0.1,0.2,0.3,0.4,0.5] [--dp 0.0066667] [--ch 1.8]
         [--seed 1] [--c0 M_PER_S (0: derived)] [--diffusion DELTA (default: the case's)] [--threads 2]
-        [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid]
-        [--budget-s SECONDS]
+        [--scheme explicit|implicit] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]
+        [--tangential sliding|reynolds]] [--pack-fluid] [--budget-s SECONDS]
         [--runs-dir runs/poiseuille_loaded] [--csv studies/poiseuille_loaded/data/poiseuille_loaded.csv]
   studies/poiseuille_loaded/poiseuille_loaded.py add RUN_DIR [--wall-s S] [--threads N] [--csv ...]
         # a finished run made by hand (surge run cases/poiseuille_loaded.ini ...) measured into the table
@@ -18,13 +18,14 @@ run; `report` fits Krieger-Dougherty to mu_eq/mu0(phi) and plots it with the Ein
   studies/poiseuille_loaded/poiseuille_loaded.py reference [--phi ...] [--seed 1]   # dilute theory for the placed discs
   studies/poiseuille_loaded/poiseuille_loaded.py report [--csv ...] [--png docs/validation/poiseuille_loaded.png]
         [--dp DP] [--c0 C0] [--diffusion DELTA] [--scheme explicit|implicit]
-        [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid] [--seed 1]
+        [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured] [--tangential sliding|reynolds]] [--pack-fluid]
+        [--seed 1]
   studies/poiseuille_loaded/poiseuille_loaded.py convergence [--csv ...] [--png PNG] [--scheme implicit|explicit]
-        [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8]   # mu_eq/mu0 per phi and r/dp, per lubrication model
-        # and placement of the fluid
+        [--c0 C0] [--diffusion DELTA] [--seed 1] [--ch 1.8] [--models none,cutoff,measured,reynolds]
+        [--placement both|packed|default]   # mu_eq/mu0 per phi and r/dp, per lubrication model and placement
   studies/poiseuille_loaded/poiseuille_loaded.py seeds [--csv ...] [--scheme implicit|explicit] [--c0 C0]
-        [--diffusion DELTA] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured]] [--pack-fluid]
-        # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
+        [--diffusion DELTA] [--lubrication [--cutoff-dp 1] [--resolved cutoff|measured] [--tangential sliding|reynolds]]
+        [--pack-fluid]   # mu_eq/mu0 per phi and r/dp over the placements (seeds) run
 
 Measurement (docs/references.md section 4, eq. 19): u_max is the mean x velocity of the fluid particles within 1 cm of
 the centre line, over every snapshot with 0.8 <= t <= 1 s; mu_eq = B^2 rho |dP/dx| / (8 u_max) with the driving
@@ -46,7 +47,8 @@ centre speed differs from another's.
 The fit minimises the squared error of mu_eq/mu0 over (phi_m, p) of (1 - phi/phi_m)^(-p phi_m) (coarse grid,
 then finer grids around the best point); RMSE = sqrt(mean((mu_eq/mu0 - fit)^2)) as in the paper's eq. 20.
 --scheme sets numerics.scheme, --lubrication contacts.lubrication (with --cutoff-dp its cut-off,
-contacts.lubrication_cutoff_dp, and --resolved contacts.lubrication_resolved) and --pack-fluid boulders.pack_fluid for
+contacts.lubrication_cutoff_dp, --resolved contacts.lubrication_resolved and --tangential
+contacts.lubrication_tangential) and --pack-fluid boulders.pack_fluid for
 the runs; `add` reads them, and every other
 setting the table records, from the run folder's params.ini. `report` takes the rows of one scheme, with or without
 the lubrication model (default: explicit, without; --cutoff-dp its cut-off), at the default placement of the fluid
@@ -81,7 +83,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 TOOL = "poiseuille_loaded"
 COLUMNS = ["phi", "phi_actual", "n_discs", "dp_m", "ch", "seed", "threads", "wall_s", "particle_steps", "sim_time_s",
            "u_max_mps", "mu_eq_over_mu0", "status", "c0_mps", "density_diffusion", "scheme", "lubrication",
-           "lubrication_cutoff_dp", "pack_fluid", "lubrication_resolved"]
+           "lubrication_cutoff_dp", "pack_fluid", "lubrication_resolved", "lubrication_tangential"]
 WINDOW_S = (0.8, 1.0)
 PHI_M_MAX = 1.0  # a packing fraction above 1 means the data do not diverge: the fit says so instead
 HALF_BAND_M = 0.01
@@ -304,6 +306,7 @@ def run_one(args, phi, deadline):
                                               "_implicit" if args.scheme == "implicit" else "",
                                               "_lubrication%g" % args.cutoff_dp if args.lubrication else "") + \
         ("_measured" if args.lubrication and args.resolved == "measured" else "") + \
+        ("_reynolds" if args.lubrication and args.tangential == "reynolds" else "") + \
         ("_packed" if args.pack_fluid else "")
     folder = os.path.join(args.runs_dir, name)
     common = ["-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
@@ -315,6 +318,7 @@ def run_one(args, phi, deadline):
     fresh += ["-s", "numerics.scheme=%s" % args.scheme, "-s", "contacts.lubrication=%s" % str(args.lubrication).lower(),
               "-s", "contacts.lubrication_cutoff_dp=%g" % args.cutoff_dp,
               "-s", "contacts.lubrication_resolved=%s" % args.resolved,
+              "-s", "contacts.lubrication_tangential=%s" % args.tangential,
               "-s", "boulders.pack_fluid=%s" % str(args.pack_fluid).lower()]
     rc, progress = study.run_resumable("%s: %s" % (TOOL, name), folder, fresh, args.surge, common, deadline)
     if rc == 4:
@@ -348,7 +352,8 @@ def table_row(folder, threads, wall_s, finished):
            "scheme": params.word("numerics", "scheme", "explicit"), "lubrication": int(lubrication),
            "lubrication_cutoff_dp": "%g" % params.real("contacts", "lubrication_cutoff_dp") if lubrication else "",
            "pack_fluid": int(params.flag("boulders", "pack_fluid", False)),
-           "lubrication_resolved": params.word("contacts", "lubrication_resolved", "cutoff") if lubrication else ""}
+           "lubrication_resolved": params.word("contacts", "lubrication_resolved", "cutoff") if lubrication else "",
+           "lubrication_tangential": params.word("contacts", "lubrication_tangential", "sliding") if lubrication else ""}
     if finished:
         u_max, mu_ratio, phi_actual, n_discs = measure(folder)
         row.update({"u_max_mps": "%.6g" % u_max, "mu_eq_over_mu0": "%.5g" % mu_ratio,
@@ -376,16 +381,17 @@ def command_add(args):
 def command_run(args):
     rows = study.existing_rows(TOOL, args.csv, COLUMNS, dict(
         phi=float, dp_m=float, ch=float, seed=int, c0_mps=str, density_diffusion=float, scheme=str, lubrication=int,
-        lubrication_cutoff_dp=str, pack_fluid=int, lubrication_resolved=str))
+        lubrication_cutoff_dp=str, pack_fluid=int, lubrication_resolved=str, lubrication_tangential=str))
     deadline = time.time() + args.budget_s if args.budget_s else None
     diffusion = args.diffusion if args.diffusion >= 0 else case_diffusion()
     done = {(float(r["phi"]), float(r["dp_m"]), float(r["ch"]), int(r["seed"]), r["c0_mps"] if args.c0 else "",
              float(r["density_diffusion"]), r["scheme"], int(r["lubrication"]), r["lubrication_cutoff_dp"],
-             int(r["pack_fluid"]), r["lubrication_resolved"]) for r in rows}
+             int(r["pack_fluid"]), r["lubrication_resolved"], r["lubrication_tangential"]) for r in rows}
     for phi in args.phi:
         if (phi, float("%.6g" % args.dp), args.ch, args.seed, "%.4g" % args.c0 if args.c0 else "", diffusion,
                 args.scheme, int(args.lubrication), "%g" % args.cutoff_dp if args.lubrication else "",
-                int(args.pack_fluid), args.resolved if args.lubrication else "") in done:
+                int(args.pack_fluid), args.resolved if args.lubrication else "",
+                args.tangential if args.lubrication else "") in done:
             continue
         if deadline and time.time() > deadline:
             print("%s: budget spent; run again to continue" % TOOL, flush=True)
@@ -440,9 +446,11 @@ def read_reference(path):
 
 
 def same_model(row, args):
-    """Whether a row with the lubrication model ran it with the cut-off and resolved share asked for."""
+    """Whether a row with the lubrication model ran it with the cut-off, resolved share and tangential film asked
+    for."""
     return float(row["lubrication_cutoff_dp"] or 1) == args.cutoff_dp and \
-        (row["lubrication_resolved"] or "cutoff") == args.resolved
+        (row["lubrication_resolved"] or "cutoff") == args.resolved and \
+        (row["lubrication_tangential"] or "sliding") == args.tangential
 
 
 def command_report(args):
@@ -451,7 +459,7 @@ def command_report(args):
         status=str, phi=float, phi_actual=float, dp_m=float, mu_eq_over_mu0=float, wall_s=float if args.png else str,
         c0_mps=float if args.c0 or args.png else str,
         density_diffusion=float if args.diffusion is not None or args.png else str, scheme=str, lubrication=str,
-        seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str))
+        seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str, lubrication_tangential=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         (float(r["phi"]) == 0 or (r["lubrication"] == str(int(args.lubrication)) and
                                    (r["pack_fluid"] == "1") == args.pack_fluid and
@@ -585,21 +593,28 @@ def command_convergence(args):
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
         lubrication=str, lubrication_cutoff_dp=str, pack_fluid=str, wall_s=float, seed=int, ch=float,
-        lubrication_resolved=str))
+        lubrication_resolved=str, lubrication_tangential=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and int(r["seed"]) == args.seed and
         abs(float(r["ch"]) - args.ch) < 1e-9 and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
-        (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion)]
+        (args.diffusion is None or float(r["density_diffusion"]) == args.diffusion) and
+        (float(r["phi"]) == 0 or (model_key(r) in args.models and
+                                  args.placement in ("both", "packed" if r["pack_fluid"] == "1" else "default")))]
     if not rows:
         fail("%s: no finished %s run with the settings asked" % (args.csv, args.scheme))
     series = {}
+    clear = {}
     for r in rows:  # the last row of a (setting, phi, dp) counts: a rerun replaces its run
-        setting = model_setting(r)
-        series.setdefault(setting, {}).setdefault(float(r["phi"]), {})[
-            round(RADIUS_M / float(r["dp_m"]), 2)] = (float(r["mu_eq_over_mu0"]), float(r["wall_s"]))
-    clear = {rd: v for s in series.values() for rd, v in s.get(0.0, {}).items()}
-    for setting in series:  # the clear fluid has no discs: its runs count for every setting
-        if 0.0 not in series[setting] and clear:
+        cell = (float(r["mu_eq_over_mu0"]), float(r["wall_s"]))
+        if float(r["phi"]) == 0:  # the clear fluid has no discs: its runs count for every setting
+            clear[round(RADIUS_M / float(r["dp_m"]), 2)] = cell
+        else:
+            series.setdefault(model_setting(r), {}).setdefault(float(r["phi"]), {})[
+                round(RADIUS_M / float(r["dp_m"]), 2)] = cell
+    if not series:
+        fail("%s: no finished %s run with discs with the settings asked" % (args.csv, args.scheme))
+    for setting in series:
+        if clear:
             series[setting][0.0] = clear
     for setting in sorted(series):
         by_phi = series[setting]
@@ -643,12 +658,26 @@ def command_convergence(args):
     return 0
 
 
+MODELS = ("none", "cutoff", "measured", "reynolds")
+
+
+def model_key(row):
+    """The lubrication model of a table row in one word: none, cutoff (the cut-off share), measured (the measured
+    squeeze film with the sliding film) or reynolds (the measured squeeze film with the tangential film)."""
+    if row["lubrication"] != "1":
+        return "none"
+    if row["lubrication_resolved"] != "measured":
+        return "cutoff"
+    return "reynolds" if row["lubrication_tangential"] == "reynolds" else "measured"
+
+
 def model_setting(row):
     """The lubrication model and the fluid's placement of a table row, in words."""
     if row["lubrication"] != "1":
         model = "no lubrication model"
     elif row["lubrication_resolved"] == "measured":
-        model = "lubrication model, measured share"
+        model = "lubrication model, measured share" + \
+            (", tangential film from Reynolds" if row.get("lubrication_tangential") == "reynolds" else "")
     else:
         model = "lubrication model, cut-off %s dp" % (row["lubrication_cutoff_dp"] or "1")
     return model + (", fluid packed around the discs" if row["pack_fluid"] == "1" else ", default placement")
@@ -660,7 +689,8 @@ def command_seeds(args):
     lubrication = "1" if args.lubrication else "0"
     rows = [r for r in study.read_rows(TOOL, args.csv, dict(
         status=str, phi=float, dp_m=float, mu_eq_over_mu0=float, c0_mps=float, density_diffusion=float, scheme=str,
-        lubrication=str, seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str))
+        lubrication=str, seed=int, pack_fluid=str, lubrication_cutoff_dp=str, lubrication_resolved=str,
+        lubrication_tangential=str))
         if r["status"] == "ok" and r["scheme"] == args.scheme and r["lubrication"] == lubrication and
         (r["pack_fluid"] == "1") == args.pack_fluid and (not args.lubrication or same_model(r, args)) and
         (args.c0 is None or abs(float(r["c0_mps"]) / args.c0 - 1) < 1e-3) and
@@ -673,6 +703,7 @@ def command_seeds(args):
             float(r["mu_eq_over_mu0"])
     print("%s scheme, %s: mu_eq/mu0 over the seeds (placements) run"
           % (args.scheme, model_setting({"lubrication": lubrication, "lubrication_resolved": args.resolved,
+                                         "lubrication_tangential": args.tangential,
                                          "lubrication_cutoff_dp": "%g" % args.cutoff_dp,
                                          "pack_fluid": "1" if args.pack_fluid else "0"})))
     print("  %-6s %-6s %-6s %-8s %-8s %-28s %s" % ("phi", "r/dp", "seeds", "mean", "sd (%)", "change of the mean",
@@ -694,6 +725,15 @@ def command_seeds(args):
             if v.size > 1:
                 before = (mean, sd, v.size)
     return 0
+
+
+def model_list(text):
+    """An argparse type: a comma-separated list of lubrication models (MODELS)."""
+    names = [t.strip() for t in text.split(",") if t.strip()]
+    wrong = [n for n in names if n not in MODELS]
+    if not names or wrong:
+        raise argparse.ArgumentTypeError("%r: expected a comma-separated list of %s" % (text, ", ".join(MODELS)))
+    return tuple(names)
 
 
 def solid_fractions(with_zero):
@@ -759,6 +799,9 @@ def main():
                      help="contacts.lubrication_cutoff_dp, the lubrication model's cut-off gap in dp (default 1)")
     run.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
                      help="contacts.lubrication_resolved, what the SPH is taken to resolve of a squeeze film")
+    run.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
+                     help="contacts.lubrication_tangential, the film's resistance to tangential motion (reynolds "
+                     "needs --scheme implicit and --resolved measured)")
     run.add_argument("--pack-fluid", action="store_true", help="boulders.pack_fluid = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
@@ -794,6 +837,8 @@ def main():
                      help="with --lubrication: the runs with this cut-off (default 1 dp)")
     rep.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
                      help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
+    rep.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
+                     help="with --lubrication: the runs with this contacts.lubrication_tangential (default sliding)")
     rep.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
     rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
     rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
@@ -808,6 +853,12 @@ def main():
     conv.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
     conv.add_argument("--seed", type=int, default=1, help="the placement (boulders.seed) taken at every resolution")
     conv.add_argument("--ch", type=cli_checks.positive, default=1.8, help="only the runs with this C_h (default 1.8)")
+    conv.add_argument("--models", type=model_list, default=MODELS,
+                      help="comma-separated lubrication models of the runs taken, of none (the model off), cutoff, "
+                      "measured (the measured squeeze film, sliding film) and reynolds (the measured squeeze film, "
+                      "tangential film from Reynolds); default all")
+    conv.add_argument("--placement", choices=("both", "packed", "default"), default="both",
+                      help="the runs with the fluid packed around the discs, at the default placement, or both")
     seeds = sub.add_parser("seeds")
     seeds.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
     seeds.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
@@ -816,6 +867,8 @@ def main():
                        help="with --lubrication: the runs with this cut-off (default 1 dp)")
     seeds.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
                        help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
+    seeds.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
+                       help="with --lubrication: the runs with this contacts.lubrication_tangential (default sliding)")
     seeds.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
     seeds.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
     seeds.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
@@ -827,6 +880,10 @@ def main():
     if args.command == "run":
         if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
             fail("--diffusion must be in [0, 1]")
+        if args.tangential == "reynolds" and not (args.lubrication and args.scheme == "implicit" and
+                                                  args.resolved == "measured"):
+            fail("--tangential reynolds needs --lubrication, --scheme implicit and --resolved measured "
+                 "(contacts.lubrication_tangential = reynolds is the implicit scheme's, with the measured share)")
         return command_run(args)
     if args.command == "add":
         return command_add(args)
