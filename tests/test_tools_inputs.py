@@ -418,6 +418,38 @@ expect("disc_on_bed sheared: a channel that is not sheared", tool(DB, "sheared",
 expect("disc_on_bed sheared: a run without discs", tool(DB, "sheared", folder("sheared_no_discs", RUN_FILES)),
        "boulders.pvd")
 
+# a heavy disc (density ratio 1e4) a quarter radius over the bed, its spin decaying as exp(-2 t): from 0.3 to 1 s
+# four files, R = I k over 4 pi mu a^2 and the exact coth alpha = 5/3 (cosh alpha = 1.25); files outside the window
+# (a spin of 7 rad/s at 0.2 and 1.2 s) are left out
+def spinning(name, spin_of_t, times=(0.2, 0.3, 0.5, 0.7, 1.0, 1.2), ratio=10000):
+    d = folder(name, RUN_FILES)
+    write(os.path.join(d, "params.ini"), params_with(density_ratio=ratio))
+    entries = []
+    for k, t in enumerate(times):
+        f = "boulders_%09d.vtp" % k
+        omega = spin_of_t(t) if 0.3 <= t <= 1.0 else 7.0
+        vtp.write_vtp(os.path.join(d, f), np.array([[0.1, 0.015625]]), {"radius_m": np.array([0.0125]),
+                      "velocity_mps": np.array([[1e-6, 0.0]]), "omega_radps": np.array([omega])}, t, k)
+        entries.append((t, f))
+    vtp.write_pvd(os.path.join(d, "boulders.pvd"), entries)
+    return d
+
+
+d = spinning("spin", lambda t: np.exp(-2 * t))
+rp = RunParams(d)
+resistance = 0.5 * 1e4 * 0.0125 ** 2 * 2 / (4 * rp.positive("fluid", "viscosity_m2ps"))  # I k / (4 pi rho nu a^2)
+r = tool(DB, "spin", d)
+check("disc_on_bed spin: 4 files from 0.3 to 1 s, gap/a 0.25, R = I k over 4 pi mu a^2 (%.4f), coth alpha 5/3"
+      % resistance, r.returncode == 0 and "4 disc files" in r.stdout and "gap/a 0.2500" in r.stdout and
+      "R/(4 pi mu a^2) %.4f" % resistance in r.stdout and "coth alpha 1.6667" in r.stdout and
+      "R/exact %.4f" % (resistance / (5 / 3)) in r.stdout, r.stdout + r.stderr)
+expect("disc_on_bed spin: a spin that grows", tool(DB, "spin", spinning("spin_grows", lambda t: np.exp(t))), "grows")
+expect("disc_on_bed spin: a disc that does not turn", tool(DB, "spin", spinning("spin_none", lambda t: 0.0)),
+       "zero or changes sign")
+expect("disc_on_bed spin: two files in the window",
+       tool(DB, "spin", spinning("spin_short", lambda t: np.exp(-t), times=(0.1, 0.4, 0.9, 1.5))), "the fit needs 3")
+expect("disc_on_bed spin: a run without discs", tool(DB, "spin", folder("spin_no_discs", RUN_FILES)), "boulders.pvd")
+
 # ---- 9. surge_watch ----
 SW = "surge_watch.py"
 expect("surge_watch -e foo", tool(SW, "-e", "foo", "--record", path("rec")), "endpoint", "foo")

@@ -289,8 +289,9 @@ static const surge_param_info registry[] = {
      OFF(boulders.min_gap_m)},
     {"boulders", "seed", SURGE_PARAM_INT, "-", 1, 0, 2147483647, false, NULL,
      "Random and graded placement: seed of the random sequence (same seed, same discs).", OFF(boulders.seed)},
-    {"boulders", "density_ratio", SURGE_PARAM_REAL, "-", 1, 0.01, 100, false, NULL,
-     "Disc density over the fluid's rho0 (1: neutrally buoyant).", OFF(boulders.density_ratio)},
+    {"boulders", "density_ratio", SURGE_PARAM_REAL, "-", 1, 0.01, 1e4, false, NULL,
+     "Disc density over the fluid's rho0 (1: neutrally buoyant; a heavy disc, up to 1e4, keeps its motion while "
+     "the fluid's resistance to it is measured from its slow decay, docs/boulders.md).", OFF(boulders.density_ratio)},
     {"boulders", "grading_file", SURGE_PARAM_TEXT, "-", 0, 0, 0, false, NULL,
      "Graded placement: grading curve, a CSV of diameter_m,fraction_passing rows (empty: the built-in stand-in "
      "curve of docs/boulders.md; a relative path is from the working folder).", OFF(boulders.grading_file)},

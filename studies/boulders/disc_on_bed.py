@@ -34,6 +34,19 @@ A free disc a gap g above the moving bed of the Couette channel (bed and lid at 
 fast it moves over the bed and turns, over the snapshots from 1.5 s on, as (V - u_bed)/(shear a) and omega/shear,
 with its gap over a; the tangential films between a disc and a wall set them (docs/validation/poiseuille_loaded.md,
 "The wall layer and the tangential film").
+
+  build/surge run cases/boulder_couette.ini -o RUN_DIR -s numerics.dp_m=a/K -s walls.bottom_speed_mps=0 \
+      -s walls.top_speed_mps=0 -s boulders.placement=file -s boulders.file=SPIN_CSV -s boulders.density_ratio=10000 \
+      -s numerics.scheme=implicit -s numerics.ch=1.8 -s contacts.lubrication=false -s time.end_s=1 \
+      -s output.snapshot_interval_s=0.05 -s implicit.viscous_tolerance=1e-10 --threads 1
+  studies/boulders/disc_on_bed.py spin RUN_DIR
+
+A heavy disc given a spin (SPIN_CSV: the header x_m,y_m,r_m,vx_mps,vy_mps,omega_radps and one row, e.g.
+0.1,a+g,0.0125,0,0,1) a gap g above the bed of the channel with its walls at rest: the fluid's resistance to its
+turning, R = I k with I = m a^2 / 2 and k = -d ln omega / dt fitted over the snapshots from 0.3 to 1 s (heavy enough
+that the flow around it is steady as it slows, and that it barely moves: its largest speed over a omega is
+printed), as R / (4 pi mu a^2) and over the exact resistance of a cylinder turning beside a plane in unbounded Stokes
+flow, 4 pi mu a^2 coth alpha with cosh alpha = 1 + g/a (Jeffery 1922), with the gap over the kernel's h.
 """
 import argparse
 import os
@@ -181,6 +194,46 @@ def sheared_disc(folder):
     return len(gaps), float(np.mean(gaps)), float(np.mean(speeds)), float(np.mean(spins))
 
 
+SPIN_WINDOW_S = (0.3, 1.0)
+
+
+def spin_resistance(folder):
+    """(samples, gap over a, gap over the kernel's h, R / (4 pi mu a^2), coth alpha, largest |V| / (a omega_0)) of the
+    run's first disc, its spin's decay fitted over SPIN_WINDOW_S; ValueError naming the folder where the disc does
+    not turn, turns the other way, or has fewer than 3 files in the window."""
+    params = RunParams(folder)
+    mu = params.positive("fluid", "density_kgpm3") * params.positive("fluid", "viscosity_m2ps")
+    ratio, h_kernel = params.positive("boulders", "density_ratio"), params.derived("h_m")
+    times, spins, speeds, gaps, radius = [], [], [], [], None
+    for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd")):
+        d = vtp.read_vtp(os.path.join(folder, name), ("velocity_mps", "omega_radps", "radius_m"), finite=True)
+        if not len(d["radius_m"]):
+            raise ValueError("%s: %s holds no disc" % (folder, name))
+        radius = float(d["radius_m"][0])
+        speeds.append(float(np.hypot(*d["velocity_mps"][0, :2])))
+        if SPIN_WINDOW_S[0] - 1e-9 <= t <= SPIN_WINDOW_S[1] + 1e-6:
+            times.append(t)
+            spins.append(float(d["omega_radps"][0]))
+            gaps.append(float(d["points"][0, 1]) - radius)
+    if len(times) < 3:
+        raise ValueError("%s: %d disc files between %g and %g s; the fit needs 3" % (folder, len(times), *SPIN_WINDOW_S))
+    spins = np.array(spins)
+    if not (np.all(spins > 0) or np.all(spins < 0)):
+        raise ValueError("%s: the disc's spin is zero or changes sign between %g and %g s: no decay to measure"
+                         % (folder, *SPIN_WINDOW_S))
+    decay = -np.polyfit(times, np.log(np.abs(spins)), 1)[0]
+    if decay <= 0:
+        raise ValueError("%s: the disc's spin grows between %g and %g s (d ln omega/dt = %.3g 1/s): not a decay"
+                         % (folder, *SPIN_WINDOW_S, -decay))
+    inertia = 0.5 * ratio * params.positive("fluid", "density_kgpm3") * np.pi * radius ** 4
+    gap = float(np.mean(gaps))
+    if gap <= 0:
+        raise ValueError("%s: the disc's surface is at or below the bed (gap %.3g m)" % (folder, gap))
+    unbounded = 4 * np.pi * mu * radius ** 2
+    return (len(times), gap / radius, gap / h_kernel, inertia * decay / unbounded,
+            1 / np.tanh(np.arccosh(1 + gap / radius)), max(speeds) / (radius * abs(spins[0])))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -189,7 +242,17 @@ def main():
     row_parser = sub.add_parser("row")
     row_parser.add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("sheared").add_argument("run_dir", type=cli_checks.folder)
+    sub.add_parser("spin").add_argument("run_dir", type=cli_checks.folder)
     args = parser.parse_args()
+    if args.command == "spin":
+        try:
+            samples, gap, gap_h, resistance, coth, drift = spin_resistance(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu a^2) %.4f, exact coth alpha %.4f, "
+              "R/exact %.4f; largest speed/(a omega) %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance, coth,
+                                                             resistance / coth, drift))
+        return 0
     if args.command == "sheared":
         try:
             samples, gap, speed, spin = sheared_disc(args.run_dir)
