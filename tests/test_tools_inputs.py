@@ -443,7 +443,26 @@ check("disc_on_bed spin: 4 files from 0.3 to 1 s, gap/a 0.25, R = I k over 4 pi 
       % resistance, r.returncode == 0 and "4 disc files" in r.stdout and "gap/a 0.2500" in r.stdout and
       "R/(4 pi mu a^2) %.4f" % resistance in r.stdout and "coth alpha 1.6667" in r.stdout and
       "R/exact %.4f" % (resistance / (5 / 3)) in r.stdout, r.stdout + r.stderr)
-expect("disc_on_bed spin: a spin that grows", tool(DB, "spin", spinning("spin_grows", lambda t: np.exp(t))), "grows")
+def sliding(name, speed_of_t):
+    d = spinning(name, lambda t: 0.0)
+    entries = []
+    for k, (t, f) in enumerate(vtp.read_pvd(os.path.join(d, "boulders.pvd"))):
+        vtp.write_vtp(os.path.join(d, f), np.array([[0.1, 0.015625]]), {"radius_m": np.array([0.0125]),
+                      "velocity_mps": np.array([[speed_of_t(t), 0.0]]), "omega_radps": np.array([1e-6])}, t, k)
+        entries.append((t, f))
+    return d
+
+
+# the same disc sliding at 0.01 exp(-3 t) m/s: R = m k over 4 pi mu, coth alpha - 1 = 2/3
+resistance = 1e4 * 0.0125 ** 2 * 3 / (4 * rp.positive("fluid", "viscosity_m2ps"))  # m k / (4 pi rho nu)
+r = tool(DB, "slide", sliding("slide", lambda t: 0.01 * np.exp(-3 * t) if 0.3 <= t <= 1.0 else 0.5))
+check("disc_on_bed slide: 4 files from 0.3 to 1 s, R = m k over 4 pi mu (%.4f), coth alpha - 1 2/3" % resistance,
+      r.returncode == 0 and "4 disc files" in r.stdout and "R/(4 pi mu) %.4f" % resistance in r.stdout and
+      "coth alpha - 1 0.6667" in r.stdout, r.stdout + r.stderr)
+expect("disc_on_bed slide: a disc given no speed", tool(DB, "slide", spinning("slide_none", lambda t: 1.0)),
+       "x speed does not decay")
+expect("disc_on_bed spin: a spin that grows", tool(DB, "spin", spinning("spin_grows", lambda t: np.exp(t))),
+       "does not decay")
 expect("disc_on_bed spin: a disc that does not turn", tool(DB, "spin", spinning("spin_none", lambda t: 0.0)),
        "zero or changes sign")
 expect("disc_on_bed spin: two files in the window",

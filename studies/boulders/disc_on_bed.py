@@ -47,6 +47,12 @@ turning, R = I k with I = m a^2 / 2 and k = -d ln omega / dt fitted over the sna
 that the flow around it is steady as it slows, and that it barely moves: its largest speed over a omega is
 printed), as R / (4 pi mu a^2) and over the exact resistance of a cylinder turning beside a plane in unbounded Stokes
 flow, 4 pi mu a^2 coth alpha with cosh alpha = 1 + g/a (Jeffery 1922), with the gap over the kernel's h.
+
+  studies/boulders/disc_on_bed.py slide RUN_DIR
+
+The same for a heavy disc given a speed along the bed (SPIN_CSV's row e.g. 0.1,a+g,0.0125,0.0125,0,0): R = m k over
+4 pi mu, k from its x speed's decay, with coth alpha - 1 (the tangential film's strength over 4 pi mu, its exact
+value at contact; docs/boulders.md) and its largest a omega over its speed.
 """
 import argparse
 import os
@@ -197,41 +203,51 @@ def sheared_disc(folder):
 SPIN_WINDOW_S = (0.3, 1.0)
 
 
-def spin_resistance(folder):
-    """(samples, gap over a, gap over the kernel's h, R / (4 pi mu a^2), coth alpha, largest |V| / (a omega_0)) of the
-    run's first disc, its spin's decay fitted over SPIN_WINDOW_S; ValueError naming the folder where the disc does
-    not turn, turns the other way, or has fewer than 3 files in the window."""
+def heavy_disc_resistance(folder, motion):
+    """A heavy disc's resistance from the decay of its `motion` ("spin": its spin, "slide": its x speed) over
+    SPIN_WINDOW_S: (samples, gap over a, gap over the kernel's h, R, coth alpha, the other motion's largest size over
+    the decaying one's first), R = I k over 4 pi mu a^2 (spin) or m k over 4 pi mu (slide), k = -d ln|.|/dt; the other
+    motion is a V / omega (spin) or a omega / V (slide). ValueError naming the folder where the motion is zero,
+    changes sign or grows, or fewer than 3 files lie in the window."""
     params = RunParams(folder)
-    mu = params.positive("fluid", "density_kgpm3") * params.positive("fluid", "viscosity_m2ps")
+    rho = params.positive("fluid", "density_kgpm3")
+    mu = rho * params.positive("fluid", "viscosity_m2ps")
     ratio, h_kernel = params.positive("boulders", "density_ratio"), params.derived("h_m")
-    times, spins, speeds, gaps, radius = [], [], [], [], None
+    times, values, others, gaps, radius = [], [], [], [], None
     for t, name in vtp.read_pvd(os.path.join(folder, "boulders.pvd")):
         d = vtp.read_vtp(os.path.join(folder, name), ("velocity_mps", "omega_radps", "radius_m"), finite=True)
         if not len(d["radius_m"]):
             raise ValueError("%s: %s holds no disc" % (folder, name))
         radius = float(d["radius_m"][0])
-        speeds.append(float(np.hypot(*d["velocity_mps"][0, :2])))
+        spin, speed = float(d["omega_radps"][0]), float(d["velocity_mps"][0, 0])
+        others.append(abs(radius * spin) if motion == "slide" else float(np.hypot(*d["velocity_mps"][0, :2])))
         if SPIN_WINDOW_S[0] - 1e-9 <= t <= SPIN_WINDOW_S[1] + 1e-6:
             times.append(t)
-            spins.append(float(d["omega_radps"][0]))
+            values.append(spin if motion == "spin" else speed)
             gaps.append(float(d["points"][0, 1]) - radius)
     if len(times) < 3:
         raise ValueError("%s: %d disc files between %g and %g s; the fit needs 3" % (folder, len(times), *SPIN_WINDOW_S))
-    spins = np.array(spins)
-    if not (np.all(spins > 0) or np.all(spins < 0)):
-        raise ValueError("%s: the disc's spin is zero or changes sign between %g and %g s: no decay to measure"
-                         % (folder, *SPIN_WINDOW_S))
-    decay = -np.polyfit(times, np.log(np.abs(spins)), 1)[0]
+    values = np.array(values)
+    what = "spin" if motion == "spin" else "x speed"
+    if not (np.all(values > 0) or np.all(values < 0)):
+        raise ValueError("%s: the disc's %s is zero or changes sign between %g and %g s: no decay to measure"
+                         % (folder, what, *SPIN_WINDOW_S))
+    decay = -np.polyfit(times, np.log(np.abs(values)), 1)[0]
     if decay <= 0:
-        raise ValueError("%s: the disc's spin grows between %g and %g s (d ln omega/dt = %.3g 1/s): not a decay"
-                         % (folder, *SPIN_WINDOW_S, -decay))
-    inertia = 0.5 * ratio * params.positive("fluid", "density_kgpm3") * np.pi * radius ** 4
+        raise ValueError("%s: the disc's %s does not decay between %g and %g s (d ln|.|/dt = %.3g 1/s)"
+                         % (folder, what, *SPIN_WINDOW_S, -decay))
     gap = float(np.mean(gaps))
     if gap <= 0:
         raise ValueError("%s: the disc's surface is at or below the bed (gap %.3g m)" % (folder, gap))
-    unbounded = 4 * np.pi * mu * radius ** 2
-    return (len(times), gap / radius, gap / h_kernel, inertia * decay / unbounded,
-            1 / np.tanh(np.arccosh(1 + gap / radius)), max(speeds) / (radius * abs(spins[0])))
+    mass = ratio * rho * np.pi * radius ** 2
+    if motion == "spin":
+        resistance = 0.5 * mass * radius ** 2 * decay / (4 * np.pi * mu * radius ** 2)
+        first = radius * abs(values[0])
+    else:
+        resistance = mass * decay / (4 * np.pi * mu)
+        first = abs(values[0])
+    return (len(times), gap / radius, gap / h_kernel, resistance, 1 / np.tanh(np.arccosh(1 + gap / radius)),
+            max(others) / first)
 
 
 def main():
@@ -243,15 +259,20 @@ def main():
     row_parser.add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("sheared").add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("spin").add_argument("run_dir", type=cli_checks.folder)
+    sub.add_parser("slide").add_argument("run_dir", type=cli_checks.folder)
     args = parser.parse_args()
-    if args.command == "spin":
+    if args.command in ("spin", "slide"):
         try:
-            samples, gap, gap_h, resistance, coth, drift = spin_resistance(args.run_dir)
+            samples, gap, gap_h, resistance, coth, drift = heavy_disc_resistance(args.run_dir, args.command)
         except (OSError, ValueError) as e:
             fail(str(e))
-        print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu a^2) %.4f, exact coth alpha %.4f, "
-              "R/exact %.4f; largest speed/(a omega) %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance, coth,
-                                                             resistance / coth, drift))
+        if args.command == "spin":
+            print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu a^2) %.4f, exact coth alpha %.4f, "
+                  "R/exact %.4f; largest speed/(a omega) %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance,
+                                                                 coth, resistance / coth, drift))
+        else:
+            print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu) %.4f, coth alpha - 1 %.4f; "
+                  "largest a omega/speed %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance, coth - 1, drift))
         return 0
     if args.command == "sheared":
         try:
