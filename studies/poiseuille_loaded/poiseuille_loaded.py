@@ -636,6 +636,7 @@ def command_convergence(args):
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        from matplotlib.lines import Line2D
         fig, ax = plt.subplots(figsize=(9, 9))
         phis = sorted({phi for by_phi in series.values() for phi in by_phi if phi > 0})
         styles = ("o-", "s--", "^:", "D-.", "v-", "x--")
@@ -646,11 +647,18 @@ def command_convergence(args):
                     continue
                 rds = sorted(values)
                 ax.plot(rds, [values[rd][0] for rd in rds], styles[j % len(styles)], color="C%d" % (k % 10),
-                        mfc="none" if j else None, label="$\phi$ %g, %s" % (phi, setting))
+                        mfc="none" if j else None)
         ax.set_xlabel("disc radius over particle spacing, r/dp")
         ax.set_ylabel("$\mu_{eq}/\mu_0$")
         ax.set_title("Loaded Poiseuille, %s scheme: convergence in dp" % args.scheme)
-        ax.legend(fontsize=7, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.08))
+        # colour names the solid fraction, the line's style the setting: two legends instead of one per line
+        by_phi = ax.legend([Line2D([], [], color="C%d" % (k % 10), lw=2) for k in range(len(phis))],
+                           ["$\\phi$ %g" % phi for phi in phis], fontsize=8, loc="center right", title="colour")
+        ax.add_artist(by_phi)
+        ax.legend([Line2D([], [], color="black", linestyle=styles[j % len(styles)].lstrip("os^Dvx"),
+                          marker=styles[j % len(styles)][0], mfc="none" if j else None)
+                   for j in range(len(series))], sorted(series), fontsize=7, loc="upper center",
+                  bbox_to_anchor=(0.5, -0.08), title="style")
         ax.grid(alpha=0.3)
         fig.tight_layout()
         fig.savefig(args.png, dpi=120)
