@@ -200,12 +200,12 @@ def sheared_disc(folder):
     return len(gaps), float(np.mean(gaps)), float(np.mean(speeds)), float(np.mean(spins))
 
 
-SPIN_WINDOW_S = (0.3, 1.0)
+HEAVY_DISC_WINDOW_S = (0.3, 1.0)
 
 
 def heavy_disc_resistance(folder, motion):
     """A heavy disc's resistance from the decay of its `motion` ("spin": its spin, "slide": its x speed) over
-    SPIN_WINDOW_S: (samples, gap over a, gap over the kernel's h, R, coth alpha, the other motion's largest size over
+    HEAVY_DISC_WINDOW_S: (samples, gap over a, gap over the kernel's h, R, coth alpha, the other motion's largest size over
     the decaying one's first), R = I k over 4 pi mu a^2 (spin) or m k over 4 pi mu (slide), k = -d ln|.|/dt; the other
     motion is a V / omega (spin) or a omega / V (slide). ValueError naming the folder where the motion is zero,
     changes sign or grows, or fewer than 3 files lie in the window."""
@@ -221,21 +221,21 @@ def heavy_disc_resistance(folder, motion):
         radius = float(d["radius_m"][0])
         spin, speed = float(d["omega_radps"][0]), float(d["velocity_mps"][0, 0])
         others.append(abs(radius * spin) if motion == "slide" else float(np.hypot(*d["velocity_mps"][0, :2])))
-        if SPIN_WINDOW_S[0] - 1e-9 <= t <= SPIN_WINDOW_S[1] + 1e-6:
+        if HEAVY_DISC_WINDOW_S[0] - 1e-9 <= t <= HEAVY_DISC_WINDOW_S[1] + 1e-6:
             times.append(t)
             values.append(spin if motion == "spin" else speed)
             gaps.append(float(d["points"][0, 1]) - radius)
     if len(times) < 3:
-        raise ValueError("%s: %d disc files between %g and %g s; the fit needs 3" % (folder, len(times), *SPIN_WINDOW_S))
+        raise ValueError("%s: %d disc files between %g and %g s; the fit needs 3" % (folder, len(times), *HEAVY_DISC_WINDOW_S))
     values = np.array(values)
     what = "spin" if motion == "spin" else "x speed"
     if not (np.all(values > 0) or np.all(values < 0)):
         raise ValueError("%s: the disc's %s is zero or changes sign between %g and %g s: no decay to measure"
-                         % (folder, what, *SPIN_WINDOW_S))
+                         % (folder, what, *HEAVY_DISC_WINDOW_S))
     decay = -np.polyfit(times, np.log(np.abs(values)), 1)[0]
     if decay <= 0:
         raise ValueError("%s: the disc's %s does not decay between %g and %g s (d ln|.|/dt = %.3g 1/s)"
-                         % (folder, what, *SPIN_WINDOW_S, -decay))
+                         % (folder, what, *HEAVY_DISC_WINDOW_S, -decay))
     gap = float(np.mean(gaps))
     if gap <= 0:
         raise ValueError("%s: the disc's surface is at or below the bed (gap %.3g m)" % (folder, gap))
@@ -268,11 +268,11 @@ def main():
             fail(str(e))
         if args.command == "spin":
             print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu a^2) %.4f, exact coth alpha %.4f, "
-                  "R/exact %.4f; largest speed/(a omega) %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance,
+                  "R/exact %.4f; largest speed/(a omega) %.1e" % (samples, *HEAVY_DISC_WINDOW_S, gap, gap_h, resistance,
                                                                  coth, resistance / coth, drift))
         else:
             print("%d disc files from %g to %g s: gap/a %.4f, gap/h %.3f, R/(4 pi mu) %.4f, coth alpha - 1 %.4f; "
-                  "largest a omega/speed %.1e" % (samples, *SPIN_WINDOW_S, gap, gap_h, resistance, coth - 1, drift))
+                  "largest a omega/speed %.1e" % (samples, *HEAVY_DISC_WINDOW_S, gap, gap_h, resistance, coth - 1, drift))
         return 0
     if args.command == "sheared":
         try:

@@ -639,14 +639,15 @@ def command_convergence(args):
         from matplotlib.lines import Line2D
         fig, ax = plt.subplots(figsize=(9, 9))
         phis = sorted({phi for by_phi in series.values() for phi in by_phi if phi > 0})
-        styles = ("o-", "s--", "^:", "D-.", "v-", "x--")
+        styles = (("o", "-"), ("s", "--"), ("^", ":"), ("D", "-."), ("v", "-"), ("x", "--"))  # marker, line
         for k, phi in enumerate(phis):
             for j, setting in enumerate(sorted(series)):
                 values = series[setting].get(phi)
                 if not values:
                     continue
                 rds = sorted(values)
-                ax.plot(rds, [values[rd][0] for rd in rds], styles[j % len(styles)], color="C%d" % (k % 10),
+                marker, line = styles[j % len(styles)]
+                ax.plot(rds, [values[rd][0] for rd in rds], marker=marker, linestyle=line, color="C%d" % (k % 10),
                         mfc="none" if j else None)
         ax.set_xlabel("disc radius over particle spacing, r/dp")
         ax.set_ylabel("$\mu_{eq}/\mu_0$")
@@ -655,8 +656,8 @@ def command_convergence(args):
         by_phi = ax.legend([Line2D([], [], color="C%d" % (k % 10), lw=2) for k in range(len(phis))],
                            ["$\\phi$ %g" % phi for phi in phis], fontsize=8, loc="center right", title="colour")
         ax.add_artist(by_phi)
-        ax.legend([Line2D([], [], color="black", linestyle=styles[j % len(styles)].lstrip("os^Dvx"),
-                          marker=styles[j % len(styles)][0], mfc="none" if j else None)
+        ax.legend([Line2D([], [], color="black", marker=styles[j % len(styles)][0],
+                          linestyle=styles[j % len(styles)][1], mfc="none" if j else None)
                    for j in range(len(series))], sorted(series), fontsize=7, loc="upper center",
                   bbox_to_anchor=(0.5, -0.08), title="style")
         ax.grid(alpha=0.3)
