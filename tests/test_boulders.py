@@ -33,8 +33,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   version 9 (whose scene kept that site) it is refused on its particle counts.
   GROUP implicit_films_tangential  the tangential film (contacts.lubrication_tangential = reynolds): a free disc
                   0.08 a over the moving bed of the Couette channel moves over it at the same speed at a/dp 4 and 8
-                  (within 3 %), where the sliding film's differ by 21 %; the option refused with the explicit scheme
-                  and without the measured squeeze film.
+                  (within 3 %), where the sliding film's differ by 21 %; the explicit scheme's disc at a/dp 8
+                  within 6 % of the implicit one's; the option refused without the measured squeeze film.
   GROUP implicit_passes  the implicit scheme's passes with discs in a 0.3 m cut of the loaded channel at phi 0.5:
                   six passes combined by Anderson's acceleration (the default) bring the fluid's speed after five
                   steps within 4 % of 24 converged passes (+2.8 % measured; six plain passes +6.1 %).
@@ -313,7 +313,8 @@ def group_inputs():
         (["-s", "contacts.lubrication_min_gap_dp=0.5", "-s", "contacts.lubrication_cutoff_dp=0.4"],
          "must be below contacts.lubrication_cutoff_dp"),
         (["-s", "contacts.lubrication_resolved=fitted"], "contacts.lubrication_resolved: 'fitted' is not allowed"),
-        (["-s", "contacts.lubrication_resolved=measured"], "the explicit scheme resolves more of a film"),
+        (["-s", "contacts.lubrication_tangential=reynolds"], "contacts.lubrication_tangential = reynolds needs "
+                                                             "contacts.lubrication_resolved = measured"),
     ]
     for extra, words in bad:
         out, p, cmd = surge("inputs", ["check", "boulder_settling.ini"] + extra, timeout_s=60)
@@ -658,13 +659,15 @@ def group_implicit_films_measured():
               ratio is not None and 0.9 < ratio < 1.1)
 
 
-def sheared_disc_speed(name, a_over_dp, tangential):
+def sheared_disc_speed(name, a_over_dp, tangential, scheme="implicit"):
     """(V - u_bed)/(shear a) over 1.5-3 s of a free disc 1 mm (0.08 a) over the moving bed of the Couette channel at
-    a/dp, implicit, C_h 1.8, the measured squeeze film and the given tangential film; None when the run failed."""
+    a/dp, C_h 1.8, the measured squeeze film and the given tangential film (the explicit scheme at c0 1 m/s, where the
+    case's 0.1 m/s stops it on the density check); None when the run failed."""
+    extra = ["-s", "numerics.c0_mps=1"] if scheme == "explicit" else []
     out, p, cmd = surge(name, [
         "run", "boulder_couette.ini", "-s", "numerics.dp_m=%r" % (0.0125 / a_over_dp), "-s", "boulders.list_m=0.1 0.0135 0.0125",
-        "-s", "numerics.scheme=implicit", "-s", "numerics.ch=1.8", "-s", "contacts.lubrication_resolved=measured",
-        "-s", "contacts.lubrication_tangential=%s" % tangential, "-s", "time.end_s=3"])
+        "-s", "numerics.scheme=%s" % scheme, "-s", "numerics.ch=1.8", "-s", "contacts.lubrication_resolved=measured",
+        "-s", "contacts.lubrication_tangential=%s" % tangential, "-s", "time.end_s=3"] + extra)
     check("tangential film: %s runs" % name, p.returncode == 0, cmd + "\n" + p.stderr[-2000:])
     if p.returncode != 0:
         return None
@@ -680,15 +683,16 @@ def group_implicit_films_tangential():
     (within 3 %; 0.3692 and 0.3657 of shear a measured, -1.0 %). With the sliding film (the default) it moves at 0.9647
     and 0.7635 of it (-21 %, and on to 0.5057 at a/dp 24): what the SPH leaves out of the film against the disc's
     translation along the bed grows as the gap falls below the kernel, and the sliding film's torque does not act on
-    it. Bad combinations of the option are refused, named (group inputs)."""
+    it. The explicit scheme, whose contact solver takes the film in its sub-steps with the share it resolves itself,
+    reads 0.3518 at a/dp 8 (-3.8 % from the implicit scheme; 0.3114 at a/dp 4, -16 %; docs/boulders.md). Bad
+    combinations of the option are refused, named (group inputs)."""
     coarse = sheared_disc_speed("tangential_k4", 4, "reynolds")
     fine = sheared_disc_speed("tangential_k8", 8, "reynolds")
     check("tangential film: the disc's speed over the bed at a/dp 4 and 8 within 3 %% (%s, %s)" % (coarse, fine),
           coarse is not None and fine is not None and abs(coarse / fine - 1) < 0.03)
-    out, p, cmd = surge("tangential_explicit", ["run", "boulder_couette.ini", "-s", "contacts.lubrication_tangential=reynolds",
-                                                "-s", "time.end_s=0.1"])
-    check("tangential film: refused with the explicit scheme, named",
-          p.returncode != 0 and "lubrication_tangential" in p.stderr and "implicit" in p.stderr, p.stderr[-500:])
+    explicit = sheared_disc_speed("tangential_explicit_k8", 8, "reynolds", "explicit")
+    check("tangential film: the explicit scheme's disc at a/dp 8 within 6 %% of the implicit one's (%s, %s)"
+          % (explicit, fine), explicit is not None and fine is not None and abs(explicit / fine - 1) < 0.06)
     out, p, cmd = surge("tangential_cutoff", ["run", "boulder_couette.ini", "-s", "numerics.scheme=implicit",
                                               "-s", "contacts.lubrication_tangential=reynolds", "-s", "time.end_s=0.1"])
     check("tangential film: refused without the measured squeeze film, named",

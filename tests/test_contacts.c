@@ -10,8 +10,10 @@
  * discs spinning the same way, slow at the rate its torques give and do not move.
  * The tangential film's resistance (contacts.lubrication_tangential = reynolds) against Reynolds' equation with the
  * gap's shape moving, for a disc by a plane and two discs, and its null motions.
+ * The tangential film inside the contact solver's sub-steps (the explicit scheme's): a disc by a plane or a belt slows
+ * as implicit Euler on its resistance gives; two discs keep their momentum and a common translation.
  * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured|
- *        lubrication_tangential */
+ *        lubrication_tangential|lubrication_reynolds_solver */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -19,6 +21,7 @@
 
 #include "boulders/contact_solver.h"
 #include "boulders/lubrication.h"
+#include "scheme/scheme.h"
 
 enum { MAX_DISCS = 16 };
 
@@ -437,25 +440,36 @@ static int test_lubrication_measured(void)
     expect_below("exact resistance: the series and tanh meet at alpha 0.1",
                  fabs(lubrication_exact_damping(mu, r, switch_gap * (1 - 1e-9)) /
                           lubrication_exact_damping(mu, r, switch_gap * (1 + 1e-9)) - 1), 1e-8);
-    /* the share: 0 at contact, never falling, 1 from the table's end on */
-    double worst_fall = 0, last = lubrication_resolved_share(0);
-    for (double x = 0; x < LUBRICATION_RESOLVED_END + 0.5; x += 0.01) {
-        worst_fall = fmax(worst_fall, last - lubrication_resolved_share(x));
-        last = lubrication_resolved_share(x);
+    /* each scheme's share: 0 at contact, never falling, 1 from the table's end on */
+    const time_scheme *schemes[] = {&scheme_implicit, &scheme_explicit};
+    for (int k = 0; k < 2; k++) {
+        const lubrication_share *share = schemes[k]->film_share;
+        char what[96];
+        double worst_fall = 0, last = lubrication_resolved_share(share, 0);
+        for (double x = 0; x < LUBRICATION_RESOLVED_END + 0.5; x += 0.01) {
+            worst_fall = fmax(worst_fall, last - lubrication_resolved_share(share, x));
+            last = lubrication_resolved_share(share, x);
+        }
+        snprintf(what, sizeof what, "%s scheme: resolved share at contact", schemes[k]->name);
+        expect_below(what, lubrication_resolved_share(share, 0), 1e-12);
+        snprintf(what, sizeof what, "%s scheme: resolved share, largest fall with the gap", schemes[k]->name);
+        expect_below(what, worst_fall, 0);
+        snprintf(what, sizeof what, "%s scheme: resolved share beyond the table's end, less 1", schemes[k]->name);
+        expect_below(what, fabs(lubrication_resolved_share(share, 4) - 1), 1e-12);
     }
-    expect_below("resolved share at contact", lubrication_resolved_share(0), 1e-12);
-    expect_below("resolved share: largest fall with the gap", worst_fall, 0);
-    expect_below("resolved share beyond the table's end, less 1", fabs(lubrication_resolved_share(4) - 1), 1e-12);
     /* the damping: the exact less the share; none from the end on; the gap taken at least min_gap */
+    const lubrication_share *share = scheme_implicit.film_share;
     const double gap = 0.6 * kernel_h;
     expect_below("measured damping at 0.6 h against (1 - share) exact",
-                 fabs(lubrication_measured_damping(mu, r, gap, kernel_h, 0.01 * dp) /
-                          ((1 - lubrication_resolved_share(0.6)) * lubrication_exact_damping(mu, r, gap)) - 1), 1e-12);
+                 fabs(lubrication_measured_damping(share, mu, r, gap, kernel_h, 0.01 * dp) /
+                          ((1 - lubrication_resolved_share(share, 0.6)) * lubrication_exact_damping(mu, r, gap)) - 1),
+                 1e-12);
     expect_below("measured damping at the table's end",
-                 lubrication_measured_damping(mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h, 0.01 * dp), 0);
+                 lubrication_measured_damping(share, mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h, 0.01 * dp),
+                 0);
     expect_below("measured damping below the smallest gap, against at it",
-                 fabs(lubrication_measured_damping(mu, r, 1e-5 * dp, kernel_h, 0.01 * dp) /
-                          lubrication_measured_damping(mu, r, 0.01 * dp, kernel_h, 0.01 * dp) - 1), 1e-12);
+                 fabs(lubrication_measured_damping(share, mu, r, 1e-5 * dp, kernel_h, 0.01 * dp) /
+                          lubrication_measured_damping(share, mu, r, 0.01 * dp, kernel_h, 0.01 * dp) - 1), 1e-12);
     /* a disc driven onto a plane through the contact solver: free fall beyond the model's reach, then the terminal
      * speed F / c(h) of the measured damping */
     world w;
@@ -464,6 +478,7 @@ static int test_lubrication_measured(void)
     w.settings.lubrication_cutoff_m = dp;
     w.settings.lubrication_min_gap_m = 0.01 * dp;
     w.settings.lubrication_kernel_h_m = kernel_h;
+    w.settings.lubrication_share = share;
     const double a = 100.0, reach = LUBRICATION_RESOLVED_END * kernel_h, start_gap = reach + 0.5 * dp;
     add_plane(&w, 0, 1, 0);
     const int disc = add_disc(&w, 0.5, r + start_gap, r, 0);
@@ -482,7 +497,7 @@ static int test_lubrication_measured(void)
             free_fall = fabs(approach / sqrt(2 * a * (start_gap - gap_before)) - 1);
         else
             worst = fmax(worst, fabs(approach / (mass * a / lubrication_measured_damping(
-                                                    mu, r, 0.5 * (gap_before + gap_after), kernel_h, 0.01 * dp)) -
+                                                    share, mu, r, 0.5 * (gap_before + gap_after), kernel_h, 0.01 * dp)) -
                                      1));
         next++;
     }
@@ -595,11 +610,75 @@ static int test_lubrication_tangential(void)
     /* the damping: pi mu (2R/h)^(1/2) near contact (next order about (2h/R)^(1/2)), times 1 - share; none at reach */
     const double dp = r / 4, kernel_h = 1.8 * sqrt(2.0) * dp;
     const double near = 1e-4 * r, lead = 3.14159265358979323846 * mu * sqrt(2 * r / near);
+    const lubrication_share *share = scheme_implicit.film_share;
     expect_below("tangential damping at h/R 1e-4 over pi mu (2R/h)^1/2 (1 - share), less 1",
-                 fabs(lubrication_tangential_damping(mu, r, near, kernel_h, 1e-6 * dp) /
-                          ((1 - lubrication_resolved_share(near / kernel_h)) * lead) - 1), 0.02);
+                 fabs(lubrication_tangential_damping(share, mu, r, near, kernel_h, 1e-6 * dp) /
+                          ((1 - lubrication_resolved_share(share, near / kernel_h)) * lead) - 1), 0.02);
     expect_below("tangential damping at the model's reach",
-                 lubrication_tangential_damping(mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h, 0.01 * dp), 0);
+                 lubrication_tangential_damping(share, mu, r, LUBRICATION_RESOLVED_END * kernel_h, kernel_h,
+                                                0.01 * dp), 0);
+    return failures;
+}
+
+/* The tangential film inside the contact solver's sub-steps (the explicit scheme's films): a disc held a gap g above a
+ * plane (no gravity, its normal speed zero) that slides and turns slows as implicit Euler on K's diagonal gives,
+ * (1 + 2 S h W)^-n over n sub-steps, its speed and spin each on its own; by a belt moving at u_b the same for U - u_b.
+ * Two equal discs side by side sliding along their gap in opposite directions keep their total momentum and
+ * slow, and a common translation of the pair is not slowed. */
+static int test_lubrication_reynolds_solver(void)
+{
+    const double mu = 4.67, r = 0.02, dp = r / 4, kernel_h = 1.8 * sqrt(2.0) * dp, g = 0.5 * dp;
+    const lubrication_share *share = scheme_explicit.film_share;
+    const double S = lubrication_tangential_damping(share, mu, r, g, kernel_h, 0.01 * dp);
+    for (int belt = 0; belt < 2; belt++) {
+        world w;
+        world_init(&w, 0, 0);
+        w.settings.lubrication_viscosity_pa_s = mu, w.settings.lubrication_cutoff_m = dp;
+        w.settings.lubrication_min_gap_m = 0.01 * dp, w.settings.lubrication_kernel_h_m = kernel_h;
+        w.settings.lubrication_share = share, w.settings.lubrication_tangential_reynolds = 1;
+        add_plane(&w, 0, 1, 0);
+        const double u_b = belt ? -0.3 : 0;
+        w.walls[0].vx_mps = u_b;
+        const int d = add_disc(&w, 0.5, r + g, r, 0);
+        w.vx[d] = 0.1, w.omega[d] = 2.0;
+        const double dt = 1e-3, h = dt / w.settings.substeps;
+        const int steps = 20;
+        run(&w, dt, steps);
+        /* t' = (n_y, -n_x) = (1, 0) for the plane's normal (0, 1): U along x */
+        const double n = steps * w.settings.substeps;
+        const double speed = u_b + (0.1 - u_b) * pow(1 + 2 * S * h * w.inv_mass[d], -n);
+        const double spin = 2.0 * pow(1 + 2 * S * r * r * h * w.inv_inertia[d], -n);
+        char what[112];
+        snprintf(what, sizeof what, "reynolds in the solver, disc by a %s: speed over implicit Euler's, less 1",
+                 belt ? "belt" : "plane");
+        expect_below(what, fabs((w.vx[d] - u_b) / (speed - u_b) - 1), 1e-9);
+        snprintf(what, sizeof what, "reynolds in the solver, disc by a %s: spin over implicit Euler's, less 1",
+                 belt ? "belt" : "plane");
+        expect_below(what, fabs(w.omega[d] / spin - 1), 1e-9);
+        snprintf(what, sizeof what, "reynolds in the solver, disc by a %s: the speed fell by at least a tenth",
+                 belt ? "belt" : "plane");
+        expect_below(what, (w.vx[d] - u_b) / (0.1 - u_b), 0.9);
+        expect_below("reynolds in the solver: no normal speed", fabs(w.vy[d]), 1e-15);
+        contact_solver_destroy(w.solver);
+    }
+    for (int common = 0; common < 2; common++) {
+        world w;
+        world_init(&w, 0, 0);
+        w.settings.lubrication_viscosity_pa_s = mu, w.settings.lubrication_cutoff_m = dp;
+        w.settings.lubrication_min_gap_m = 0.01 * dp, w.settings.lubrication_kernel_h_m = kernel_h;
+        w.settings.lubrication_share = share, w.settings.lubrication_tangential_reynolds = 1;
+        const int a = add_disc(&w, 0.5, 0.5, r, 0), b = add_disc(&w, 0.5 + 2 * r + g, 0.5, r, 0);
+        w.vy[a] = common ? 0.1 : -0.1, w.vy[b] = 0.1;
+        run(&w, 1e-3, 20);
+        const double momentum = w.vy[a] + w.vy[b], before = common ? 0.2 : 0;
+        expect_below(common ? "reynolds in the solver, two discs in a common translation: change of speed"
+                            : "reynolds in the solver, two discs sliding past each other: total momentum",
+                     common ? fmax(fabs(w.vy[a] - 0.1), fabs(w.vy[b] - 0.1)) : fabs(momentum - before), 1e-12);
+        if (!common)
+            expect_below("reynolds in the solver, two discs sliding past each other: sliding speed kept",
+                         (w.vy[b] - w.vy[a]) / 0.2, 0.9);
+        contact_solver_destroy(w.solver);
+    }
     return failures;
 }
 
@@ -626,7 +705,9 @@ int main(int argc, char **argv)
         return test_lubrication_measured() != 0;
     if (!strcmp(which, "lubrication_tangential"))
         return test_lubrication_tangential() != 0;
+    if (!strcmp(which, "lubrication_reynolds_solver"))
+        return test_lubrication_reynolds_solver() != 0;
     fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|"
-                    "lubrication_measured|lubrication_tangential\n");
+                    "lubrication_measured|lubrication_tangential|lubrication_reynolds_solver\n");
     return 2;
 }

@@ -351,14 +351,14 @@ static const surge_param_info registry[] = {
      "force finite at contact).", OFF(contacts.lubrication_min_gap_dp)},
     {"contacts", "lubrication_resolved", SURGE_PARAM_ENUM, "-", SURGE_LUBRICATION_CUTOFF, 0, 1, true, "cutoff|measured",
      "What the SPH resolves of a squeeze film, which the lubrication force leaves out: cutoff, the film's force at "
-     "lubrication_cutoff_dp below it; measured, the share of the exact resistance the implicit scheme resolves at "
-     "each gap, measured against the kernel's h (docs/boulders.md).", OFF(contacts.lubrication_resolved)},
+     "lubrication_cutoff_dp below it; measured, the share of the exact resistance the scheme in use resolves at "
+     "each gap, measured for each scheme against the kernel's h (docs/boulders.md).", OFF(contacts.lubrication_resolved)},
     {"contacts", "lubrication_tangential", SURGE_PARAM_ENUM, "-", SURGE_TANGENTIAL_SLIDING, 0, 1, true,
      "sliding|reynolds",
      "The film's resistance to tangential motion: sliding, torques from the surfaces' relative sliding speed (its part "
      "below lubrication_cutoff_dp); reynolds, from Reynolds' equation with the gap's shape moving with the discs, a "
-     "force against a disc's translation along the gap and a torque against its spin, less the share the implicit "
-     "scheme resolves (needs lubrication_resolved = measured; docs/boulders.md).", OFF(contacts.lubrication_tangential)},
+     "force against a disc's translation along the gap and a torque against its spin, less the share the scheme "
+     "resolves (needs lubrication_resolved = measured; docs/boulders.md).", OFF(contacts.lubrication_tangential)},
 
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",
@@ -1016,20 +1016,11 @@ static int validate_contacts(const surge_params *p, char *err, size_t err_len)
                            "(docs/method.md, \"Quadratic no-slip walls\")");
         return -1;
     }
-    /* the measured share is the implicit scheme's: the explicit one resolves more of a film (docs/boulders.md) */
-    if (p->contacts.lubrication_resolved == SURGE_LUBRICATION_MEASURED && p->numerics.scheme != SURGE_SCHEME_IMPLICIT) {
-        fail(err, err_len, "contacts.lubrication_resolved = measured holds the share the implicit scheme resolves; the "
-             "explicit scheme resolves more of a film and takes cutoff");
-        return -1;
-    }
-    /* the tangential film takes the measured share, and lives in the implicit scheme's solves (films.c) */
+    /* the tangential film leaves out the share of the film the scheme resolves, which the measured model holds */
     if (p->contacts.lubrication_tangential == SURGE_TANGENTIAL_REYNOLDS &&
-        (p->numerics.scheme != SURGE_SCHEME_IMPLICIT || p->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED)) {
-        fail(err, err_len, "contacts.lubrication_tangential = reynolds needs numerics.scheme = implicit and "
-             "contacts.lubrication_resolved = measured (here %s and %s): it leaves out the share of the film the "
-             "implicit scheme resolves",
-             p->numerics.scheme == SURGE_SCHEME_IMPLICIT ? "implicit" : "explicit",
-             p->contacts.lubrication_resolved == SURGE_LUBRICATION_MEASURED ? "measured" : "cutoff");
+        p->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED) {
+        fail(err, err_len, "contacts.lubrication_tangential = reynolds needs contacts.lubrication_resolved = measured "
+             "(here cutoff): it leaves out the share of the film the scheme resolves, which the measured model holds");
         return -1;
     }
     return 0;

@@ -14,6 +14,17 @@ and the same sum over the bed's particles within reach: the support the bed take
 pressure acts on the disc with contacts.solid_pressure (on by default; "acts: no" where the run had it off). The run's
 first disc is the one measured; the bed is y = 0.
 
+  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=a/K -s "boulders.list_m=0.05 0.0375 0.0125" \\
+      -s numerics.ch=1.8 -s contacts.lubrication=0 -s time.end_s=8 -s output.snapshot_interval_s=0.02 \\
+      [-s numerics.scheme=implicit] --threads 1
+  studies/boulders/disc_on_bed.py share RUN_DIR
+
+The share of the exact resistance the scheme resolves with the films off (contacts.lubrication_resolved = measured
+adds the rest, docs/boulders.md): the disc's buoyant weight over its approach speed, interpolated at gaps 0.125 h
+apart, over the resistance of a cylinder approaching a plane in Stokes flow, 4 pi mu / (alpha - tanh alpha) with
+cosh alpha = 1 + h/a (Jeffrey & Onishi 1981). The disc starts 2a above the bed; at gaps above about 0.7 a the box's
+walls add their drag.
+
   build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s numerics.scheme=implicit -s numerics.ch=1.8 \\
       -s contacts.lubrication=0 -s domain.periodic_x=true -s walls.left=false -s walls.right=false \\
       -s domain.length_m=2L -s fluid.x1_m=2L -s domain.height_m=0.1 -s fluid.depth_m=0.1 \\
@@ -146,6 +157,45 @@ def measure(folder):
     return weight, rows
 
 
+SHARE_STEP_H = 0.125  # the gaps over the kernel's h at which `share` reads the resistance (lubrication.c's table)
+
+
+def exact_resistance(mu, radius, gap):
+    """A cylinder approaching a plane in Stokes flow, per unit speed and width: 4 pi mu / (alpha - tanh alpha),
+    cosh alpha = 1 + gap/radius (Jeffrey & Onishi 1981)"""
+    alpha = np.arccosh(1.0 + gap / radius)
+    return 4.0 * np.pi * mu / (alpha - np.tanh(alpha))
+
+
+def resolved_share(folder):
+    """The share of the exact resistance the scheme resolves at each gap the settling disc passed: (h, rows of
+    (gap/h, gap/dp, share, t)) at the gaps SHARE_STEP_H apart, share = (W/U)/exact, U the disc's approach speed
+    (centred differences of its heights) interpolated linearly in the gap. ValueError naming the folder where the
+    disc never approaches the bed."""
+    params = RunParams(folder)
+    dp, h = params.positive("numerics", "dp_m"), params.derived("h_m")
+    mu = params.positive("fluid", "density_kgpm3") * params.positive("fluid", "viscosity_m2ps")
+    ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
+    times, points, radii = disc_track(folder, "the resolved share", 1)
+    radius = float(radii[-1][0])
+    gaps, speeds = points[:, 0, 1] - radius, -np.gradient(points[:, 0, 1], times)
+    weight = (ratio - 1.0) * params.positive("fluid", "density_kgpm3") * g * np.pi * radius * radius
+    closing = speeds > 0
+    if not closing.any():
+        raise ValueError("%s: the disc never approaches the bed" % folder)
+    rows = []
+    for k in range(1, 1 + int(gaps[0] / h / SHARE_STEP_H)):
+        target = k * SHARE_STEP_H * h
+        crossed = np.nonzero((gaps[:-1] >= target) & (gaps[1:] < target) & closing[:-1] & closing[1:])[0]
+        if not len(crossed):
+            continue
+        j = int(crossed[0])
+        w = (gaps[j] - target) / (gaps[j] - gaps[j + 1])
+        speed, t = (1 - w) * speeds[j] + w * speeds[j + 1], (1 - w) * times[j] + w * times[j + 1]
+        rows.append((target / h, target / dp, weight / speed / exact_resistance(mu, radius, target), t))
+    return h, rows
+
+
 ROW_WINDOWS_S = ((0.5, 1.0), (1.0, 2.0), (2.0, 3.0), (3.0, 4.0))
 
 
@@ -260,7 +310,18 @@ def main():
     sub.add_parser("sheared").add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("spin").add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("slide").add_argument("run_dir", type=cli_checks.folder)
+    sub.add_parser("share").add_argument("run_dir", type=cli_checks.folder)
     args = parser.parse_args()
+    if args.command == "share":
+        try:
+            h, rows = resolved_share(args.run_dir)
+        except (OSError, ValueError) as e:
+            fail(str(e))
+        print("kernel h = %.4g m; the resistance resolved (W/U) over the exact 4 pi mu/(alpha - tanh alpha)" % h)
+        print("gap/h   gap/dp   share    t (s)")
+        for gap_h, gap_dp, share, t in rows:
+            print("%-6.3f  %-6.3f  %6.3f  %7.3f" % (gap_h, gap_dp, share, t))
+        return 0
     if args.command in ("spin", "slide"):
         try:
             samples, gap, gap_h, resistance, coth, drift = heavy_disc_resistance(args.run_dir, args.command)

@@ -810,7 +810,7 @@ def main():
                      help="contacts.lubrication_resolved, what the SPH is taken to resolve of a squeeze film")
     run.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
                      help="contacts.lubrication_tangential, the film's resistance to tangential motion (reynolds "
-                     "needs --scheme implicit and --resolved measured)")
+                     "needs --resolved measured)")
     run.add_argument("--pack-fluid", action="store_true", help="boulders.pack_fluid = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
@@ -889,10 +889,9 @@ def main():
     if args.command == "run":
         if not (args.diffusion == -1 or 0 <= args.diffusion <= 1):
             fail("--diffusion must be in [0, 1]")
-        if args.tangential == "reynolds" and not (args.lubrication and args.scheme == "implicit" and
-                                                  args.resolved == "measured"):
-            fail("--tangential reynolds needs --lubrication, --scheme implicit and --resolved measured "
-                 "(contacts.lubrication_tangential = reynolds is the implicit scheme's, with the measured share)")
+        if args.tangential == "reynolds" and not (args.lubrication and args.resolved == "measured"):
+            fail("--tangential reynolds needs --lubrication and --resolved measured "
+                 "(contacts.lubrication_tangential = reynolds leaves out the share of the film the scheme resolves)")
         return command_run(args)
     if args.command == "add":
         return command_add(args)

@@ -22,6 +22,8 @@ typedef struct contact {
     double lubrication;   /* the film's force per unit approach speed (lubrication.h); 0: none */
     double lubrication_t; /* and per unit sliding speed of the surfaces */
     double lambda_l, lambda_lt; /* their impulses in this sub-step */
+    int reynolds;               /* lubrication_t is the tangential film's S (lubrication_tangential_matrix) */
+    double lambda_r[4];         /* and its generalised impulse in this sub-step (reynolds_film) */
     double wall_vx, wall_vy;
 } contact;
 
@@ -335,7 +337,8 @@ static void film_dampings(contact *c, const contact_settings *set)
 static void measured_squeeze_film(contact *c, const contact_settings *set)
 {
     const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
-    c->lubrication = lubrication_measured_damping(set->lubrication_viscosity_pa_s, c->a >= 0 ? ra * rb / (ra + rb) : rb,
+    c->lubrication = lubrication_measured_damping(set->lubrication_share, set->lubrication_viscosity_pa_s,
+                                                  c->a >= 0 ? ra * rb / (ra + rb) : rb,
                                                   c->gap_m + set->gap_offset_m, set->lubrication_kernel_h_m,
                                                   set->lubrication_min_gap_m);
 }
@@ -344,7 +347,7 @@ static void measured_squeeze_film(contact *c, const contact_settings *set)
 static void tangential_film(contact *c, const contact_settings *set)
 {
     const double rb = c->rb - 0.5 * set->gap_offset_m, ra = c->a >= 0 ? c->ra - 0.5 * set->gap_offset_m : 0;
-    c->lubrication_t = lubrication_tangential_damping(set->lubrication_viscosity_pa_s,
+    c->lubrication_t = lubrication_tangential_damping(set->lubrication_share, set->lubrication_viscosity_pa_s,
                                                       c->a >= 0 ? ra * rb / (ra + rb) : rb, c->gap_m + set->gap_offset_m,
                                                       set->lubrication_kernel_h_m, set->lubrication_min_gap_m);
 }
@@ -364,7 +367,7 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         if (vn0 < -set->restitution_min_mps && -vn0 * h > c->gap_m)
             c->target_vn = fmax(c->target_vn, -set->restitution * vn0);
         film_dampings(c, set);
-        c->lambda_l = 0, c->lambda_lt = 0;
+        c->lambda_l = 0, c->lambda_lt = 0, c->reynolds = 0;
         const contact *old = find_before(s, c->key);
         c->lambda_n = old ? old->lambda_n : 0;
         c->lambda_t = old ? old->lambda_t : 0;
@@ -373,6 +376,74 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
     if (set->lubrication_kernel_h_m > 0)
         for (int k = 0; k < s->now_count; k++)
             measured_squeeze_film(&s->now[k], set);
+    if (set->lubrication_kernel_h_m > 0 && set->lubrication_tangential_reynolds)
+        for (int k = 0; k < s->now_count; k++) {
+            contact *c = &s->now[k];
+            tangential_film(c, set);
+            c->reynolds = c->lubrication_t > 0;
+            memset(c->lambda_r, 0, sizeof c->lambda_r);
+        }
+}
+
+/* Solves A x = b in place (b in column 4) by Gaussian elimination with partial pivoting; A = I + h K W is
+ * nonsingular (K symmetric positive semidefinite, W >= 0 diagonal) */
+static void solve4(double A[4][5], double x[4])
+{
+    for (int col = 0; col < 4; col++) {
+        int pivot = col;
+        for (int row = col + 1; row < 4; row++)
+            if (fabs(A[row][col]) > fabs(A[pivot][col]))
+                pivot = row;
+        for (int j = 0; j < 5; j++) {
+            const double swap = A[col][j];
+            A[col][j] = A[pivot][j], A[pivot][j] = swap;
+        }
+        for (int row = col + 1; row < 4; row++) {
+            const double factor = A[row][col] / A[col][col];
+            for (int j = col; j < 5; j++)
+                A[row][j] -= factor * A[col][j];
+        }
+    }
+    for (int row = 3; row >= 0; row--) {
+        double sum = A[row][4];
+        for (int j = row + 1; j < 4; j++)
+            sum -= A[row][j] * x[j];
+        x[row] = sum / A[row][row];
+    }
+}
+
+/* The tangential film (Reynolds'; lubrication_tangential_matrix) between disc b (T) and disc a or a wall (B), implicit
+ * in the sub-step: its generalised impulse L = -h K q at the end velocities q = (U_T, Omega_T, U_B, Omega_B) along
+ * t' = (n_y, -n_x) (a wall's q relative to its surface), so one Gauss-Seidel pass changes L by the d that solves
+ * (I + h K W) d = -h K q - L, W the inverse masses and inertias of q */
+static void reynolds_film(contact *c, contact_discs *d, double h)
+{
+    const double tx = c->ny, ty = -c->nx;
+    double K[4][4], q[4] = {0}, w[4] = {0}, A[4][5], change[4];
+    lubrication_tangential_matrix(c->lubrication_t, c->rb, c->a >= 0 ? c->ra : 0, K);
+    q[0] = d->vx[c->b] * tx + d->vy[c->b] * ty, q[1] = d->omega[c->b];
+    w[0] = d->inv_mass[c->b], w[1] = d->inv_inertia[c->b];
+    if (c->a >= 0) {
+        q[2] = d->vx[c->a] * tx + d->vy[c->a] * ty, q[3] = d->omega[c->a];
+        w[2] = d->inv_mass[c->a], w[3] = d->inv_inertia[c->a];
+    } else {
+        q[0] -= c->wall_vx * tx + c->wall_vy * ty;
+    }
+    for (int i = 0; i < 4; i++) {
+        A[i][4] = -c->lambda_r[i];
+        for (int j = 0; j < 4; j++) {
+            A[i][j] = (i == j) + h * K[i][j] * w[j];
+            A[i][4] -= h * K[i][j] * q[j];
+        }
+    }
+    solve4(A, change);
+    d->vx[c->b] += w[0] * change[0] * tx, d->vy[c->b] += w[0] * change[0] * ty, d->omega[c->b] += w[1] * change[1];
+    if (c->a >= 0) {
+        d->vx[c->a] += w[2] * change[2] * tx, d->vy[c->a] += w[2] * change[2] * ty;
+        d->omega[c->a] += w[3] * change[3];
+    }
+    for (int i = 0; i < 4; i++)
+        c->lambda_r[i] += change[i];
 }
 
 static void solve(contact_solver *s, contact_discs *d, const contact_settings *set, double h)
@@ -392,7 +463,10 @@ static void solve(contact_solver *s, contact_discs *d, const contact_settings *s
                 c->lambda_l += delta;
                 relative_velocity(c, d, &vn, &vt);
             }
-            if (c->lubrication_t > 0 && c->k_turn > 0) { /* the sliding film's torques, the same way */
+            if (c->reynolds) {
+                reynolds_film(c, d, h);
+                relative_velocity(c, d, &vn, &vt);
+            } else if (c->lubrication_t > 0 && c->k_turn > 0) { /* the sliding film's torques, the same way */
                 const double compliance = 1.0 / (c->lubrication_t * h);
                 const double delta = -(vt + c->lambda_lt * compliance) / (c->k_turn + compliance);
                 apply_torques(c, d, delta);

@@ -45,8 +45,9 @@ typedef struct contact_settings {
     /* > 0: the squeeze film's unresolved part is the measured one (lubrication_measured_damping) for this kernel
      * smoothing length, out to LUBRICATION_RESOLVED_END of it; 0: the film's less its value at the cut-off */
     double lubrication_kernel_h_m;
+    const struct lubrication_share *lubrication_share; /* the share the scheme resolves, for the measured film */
     /* 1: the films' tangential part is Reynolds' (lubrication_tangential_damping, for lubrication_kernel_h_m > 0) in
-     * place of the sliding film's; only the films handed out (contact_solver_films) carry it */
+     * place of the sliding film's */
     int lubrication_tangential_reynolds;
 } contact_settings;
 

@@ -15,36 +15,31 @@ double lubrication_exact_damping(double viscosity_pa_s, double radius_m, double 
     return 4.0 * 3.14159265358979323846 * viscosity_pa_s / denominator;
 }
 
-/* Linear between the table's points, LUBRICATION_RESOLVED_STEP apart: implicit scheme, C_h 1.8, a/dp 4 below x = 1
- * and a/dp 8 above (docs/boulders.md) */
-double lubrication_resolved_share(double gap_over_h)
+double lubrication_resolved_share(const lubrication_share *share, double gap_over_h)
 {
-    static const double share[LUBRICATION_RESOLVED_POINTS] = {
-        0.000, 0.051, 0.141, 0.230, 0.321, 0.407, 0.487, 0.551, 0.609, 0.655, 0.696, 0.730, 0.762,
-        0.790, 0.817, 0.842, 0.865, 0.888, 0.909, 0.929, 0.948, 0.966, 0.983, 1.000, 1.000};
     if (!(gap_over_h < LUBRICATION_RESOLVED_END))
         return 1.0;
     const double at = fmax(gap_over_h, 0.0) / LUBRICATION_RESOLVED_STEP;
     const int k = (int)at;
-    return share[k] + (at - k) * (share[k + 1] - share[k]);
+    return share->at[k] + (at - k) * (share->at[k + 1] - share->at[k]);
 }
 
-double lubrication_tangential_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
-                                      double min_gap_m)
+double lubrication_tangential_damping(const lubrication_share *share, double viscosity_pa_s, double radius_m,
+                                      double gap_m, double kernel_h_m, double min_gap_m)
 {
     if (!(viscosity_pa_s > 0) || !(radius_m > 0) || !(gap_m < LUBRICATION_RESOLVED_END * kernel_h_m))
         return 0.0;
     const double gap = fmax(gap_m, min_gap_m), e = gap / radius_m, alpha = log1p(e + sqrt(e * (2.0 + e)));
-    return (1.0 - lubrication_resolved_share(gap / kernel_h_m)) * 2.0 * 3.14159265358979323846 * viscosity_pa_s *
+    return (1.0 - lubrication_resolved_share(share, gap / kernel_h_m)) * 2.0 * 3.14159265358979323846 * viscosity_pa_s *
            (1.0 / tanh(alpha) - 1.0);
 }
 
-double lubrication_measured_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
-                                    double min_gap_m)
+double lubrication_measured_damping(const lubrication_share *share, double viscosity_pa_s, double radius_m,
+                                    double gap_m, double kernel_h_m, double min_gap_m)
 {
     if (!(viscosity_pa_s > 0) || !(radius_m > 0) || !(gap_m < LUBRICATION_RESOLVED_END * kernel_h_m))
         return 0.0;
     const double gap = fmax(gap_m, min_gap_m);
-    return (1.0 - lubrication_resolved_share(gap / kernel_h_m)) *
+    return (1.0 - lubrication_resolved_share(share, gap / kernel_h_m)) *
            lubrication_exact_damping(viscosity_pa_s, radius_m, gap);
 }

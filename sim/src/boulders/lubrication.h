@@ -49,18 +49,22 @@ static inline double lubrication_damping(double viscosity_pa_s, double radius_m,
  * the squeeze film's 3 sqrt(2) pi mu (R / h0)^(3/2). A pair of discs takes its reduced radius R. (lubrication.c) */
 double lubrication_exact_damping(double viscosity_pa_s, double radius_m, double gap_m);
 
-/* The share of the exact resistance the implicit scheme resolves at gap h0 = x h (h the kernel's smoothing length),
- * measured with a disc settling onto the bed (docs/boulders.md, "What the SPH resolves of a squeeze film"): 1 from
- * x = LUBRICATION_RESOLVED_END on */
+/* The share of the exact resistance a scheme resolves at gap h0 = x h (h the kernel's smoothing length), measured
+ * with a disc settling onto the bed (docs/boulders.md, "What the SPH resolves of a squeeze film"): a table at x = 0,
+ * LUBRICATION_RESOLVED_STEP, ..., LUBRICATION_RESOLVED_END that each scheme holds (time_scheme's film_share),
+ * linear between its points and 1 from x = LUBRICATION_RESOLVED_END on */
 #define LUBRICATION_RESOLVED_STEP 0.125
 #define LUBRICATION_RESOLVED_POINTS 25
 #define LUBRICATION_RESOLVED_END (LUBRICATION_RESOLVED_STEP * (LUBRICATION_RESOLVED_POINTS - 1))
-double lubrication_resolved_share(double gap_over_h);
+typedef struct lubrication_share {
+    double at[LUBRICATION_RESOLVED_POINTS];
+} lubrication_share;
+double lubrication_resolved_share(const lubrication_share *share, double gap_over_h);
 
 /* The squeeze film's unresolved part, measured: the exact resistance less the share the scheme resolves, at the gap
  * taken at least min_gap_m; 0 from LUBRICATION_RESOLVED_END kernel lengths on */
-double lubrication_measured_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
-                                    double min_gap_m);
+double lubrication_measured_damping(const lubrication_share *share, double viscosity_pa_s, double radius_m,
+                                    double gap_m, double kernel_h_m, double min_gap_m);
 
 /* The tangential film (contacts.lubrication_tangential = reynolds). Reynolds' equation in a gap h(x) = h0 + x^2/(2R)
  * whose shape moves with the discs, d/dx (h^3 p'/(12 mu)) = dh/dt + d/dx (h (u_T + u_B)/2), for discs T and B on
@@ -94,13 +98,13 @@ static inline void lubrication_tangential_matrix(double S, double r_T, double r_
     K[3][3] = 2 * S * r_B * r_B;
 }
 
-/* The tangential film's S (N s m^-2 per metre of width) less the share the implicit scheme resolves: the exact
+/* The tangential film's S (N s m^-2 per metre of width) less the share the scheme resolves: the exact
  * excess torque of a cylinder turning by a plane, 4 pi mu R^2 (coth alpha - 1) with cosh alpha = 1 + h0/R (Jeffery
  * 1922), over 2 R^2, which near contact is pi mu (2 R/h0)^(1/2), times 1 - s(h0/h), s the squeeze film's measured
  * share (lubrication_resolved_share; the tangential film's own share is not measured); 0 from
  * LUBRICATION_RESOLVED_END kernel lengths on, the gap taken at least min_gap_m. (lubrication.c) */
-double lubrication_tangential_damping(double viscosity_pa_s, double radius_m, double gap_m, double kernel_h_m,
-                                      double min_gap_m);
+double lubrication_tangential_damping(const lubrication_share *share, double viscosity_pa_s, double radius_m,
+                                      double gap_m, double kernel_h_m, double min_gap_m);
 
 /* The sliding film's unresolved part */
 static inline double lubrication_sliding_damping(double viscosity_pa_s, double radius_m, double gap_m, double cutoff_m,

@@ -21,6 +21,9 @@ typedef struct time_scheme {
     bool reports_solves;
     /* The distance from a wall face within which a fluid particle's approach is stopped (in dp) */
     double (*contact_reach_dp)(const surge_params *p);
+    /* The share of a squeeze film's exact resistance the scheme resolves by itself, by gap over the kernel's h
+     * (boulders/lubrication.h): the films of contacts.lubrication_resolved = measured add the rest */
+    const struct lubrication_share *film_share;
     /* The neighbour lists' skin (in h): pairs kept beyond the kernel's support so lists last several steps */
     double (*neighbour_skin_h)(const surge_params *p);
     /* How far ahead of a step's start its force evaluations reach (s), for the neighbour lists' rebuild test */
