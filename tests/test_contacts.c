@@ -625,6 +625,14 @@ static int test_lubrication_tangential(void)
  * (1 + 2 S h W)^-n over n sub-steps, its speed and spin each on its own; by a belt moving at u_b the same for U - u_b.
  * Two equal discs side by side sliding along their gap in opposite directions keep their total momentum and
  * slow, and a common translation of the pair is not slowed. */
+static void reynolds_world(world *w, double mu, double dp, double kernel_h, const lubrication_share *share)
+{
+    world_init(w, 0, 0);
+    w->settings.lubrication_viscosity_pa_s = mu, w->settings.lubrication_cutoff_m = dp;
+    w->settings.lubrication_min_gap_m = 0.01 * dp, w->settings.lubrication_kernel_h_m = kernel_h;
+    w->settings.lubrication_share = share, w->settings.lubrication_tangential_reynolds = 1;
+}
+
 static int test_lubrication_reynolds_solver(void)
 {
     const double mu = 4.67, r = 0.02, dp = r / 4, kernel_h = 1.8 * sqrt(2.0) * dp, g = 0.5 * dp;
@@ -632,10 +640,7 @@ static int test_lubrication_reynolds_solver(void)
     const double S = lubrication_tangential_damping(share, mu, r, g, kernel_h, 0.01 * dp);
     for (int belt = 0; belt < 2; belt++) {
         world w;
-        world_init(&w, 0, 0);
-        w.settings.lubrication_viscosity_pa_s = mu, w.settings.lubrication_cutoff_m = dp;
-        w.settings.lubrication_min_gap_m = 0.01 * dp, w.settings.lubrication_kernel_h_m = kernel_h;
-        w.settings.lubrication_share = share, w.settings.lubrication_tangential_reynolds = 1;
+        reynolds_world(&w, mu, dp, kernel_h, share);
         add_plane(&w, 0, 1, 0);
         const double u_b = belt ? -0.3 : 0;
         w.walls[0].vx_mps = u_b;
@@ -663,10 +668,7 @@ static int test_lubrication_reynolds_solver(void)
     }
     for (int common = 0; common < 2; common++) {
         world w;
-        world_init(&w, 0, 0);
-        w.settings.lubrication_viscosity_pa_s = mu, w.settings.lubrication_cutoff_m = dp;
-        w.settings.lubrication_min_gap_m = 0.01 * dp, w.settings.lubrication_kernel_h_m = kernel_h;
-        w.settings.lubrication_share = share, w.settings.lubrication_tangential_reynolds = 1;
+        reynolds_world(&w, mu, dp, kernel_h, share);
         const int a = add_disc(&w, 0.5, 0.5, r, 0), b = add_disc(&w, 0.5 + 2 * r + g, 0.5, r, 0);
         w.vy[a] = common ? 0.1 : -0.1, w.vy[b] = 0.1;
         run(&w, 1e-3, 20);

@@ -16,7 +16,7 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - the discs ride in the flow: the 6-disc run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
     disc ahead of the front;
-  - `collect` writes one table row per member and the box plots, and the fluid-alone member's Fr is within 10 % of
+  - `collect` writes one table row per member (with its largest density deviation) and the box plots, and the fluid-alone member's Fr is within 10 % of
     the uniform flow's (0.977) over its second half; drift_conservation holds the same surge to 5 % over 8 s; a
     flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
     without its boulders.csv is refused, named;
@@ -208,6 +208,14 @@ check("the fluid alone's front runs at least 1 m down the belt by 1.5 s (%s m fr
       len(front) >= 2 and front[-1] - front[0] >= 1.0, str(fluid_rows)[-500:])
 check("collect: each row carries the uniform flow's Froude number, from its params.ini (0.977)",
       len(rows) == 3 and all(abs(float(r["uniform_froude"]) - 0.9774) < 1e-3 for r in rows), str(rows)[-500:])
+largest = []
+for r in rows:
+    folder = os.path.join(RUNS, "%s_s%s_dp0.066" % (r["asked"], r["seed"]))
+    with open(os.path.join(folder, "diagnostics.csv")) as f:
+        largest.append(max(float(d["max_density_deviation"]) for d in csv.DictReader(f)))
+check("collect: each row carries the largest density deviation of its member's diagnostics.csv (%s)" % largest,
+      len(rows) == 3 and all(float(r["max_density_deviation"]) == value > 0 for r, value in zip(rows, largest)),
+      str(rows)[-500:])
 # plot: the box plots again from collect's table and a hand-made one (members whose folders are gone); tables that
 # cannot be plotted are refused, naming the file, the line and the column
 by_hand = os.path.join(WORK, "by_hand.csv")

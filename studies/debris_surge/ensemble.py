@@ -41,7 +41,8 @@ count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a ru
 25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
-whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png).
+whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png); the table's
+max_density_deviation is the largest |rho/rho0 - 1| of the fluid over the run, as diagnostics.csv sampled it.
 plot: the same box plots from one or more tables that collect wrote (--csv), or that were written by hand with its
 columns asked, seed, dp_m, phi, window_start_s, window_end_s, froude, mu_eq_over_mu0 and uniform_froude (members
 whose folders are gone; other columns may be empty), one box per dp and asked; a member given twice, a value out of
@@ -70,7 +71,7 @@ PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
-           "wall_s", "status", "uniform_froude"]
+           "wall_s", "status", "uniform_froude", "max_density_deviation"]
 PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
            "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
@@ -272,6 +273,16 @@ def most_boulders_ahead(flow_csv):
                for r in study.read_rows(TOOL, flow_csv, {"boulders_ahead_of_front": int}))
 
 
+def largest_density_deviation(folder):
+    """The largest |rho/rho0 - 1| of the fluid over the run, as diagnostics.csv sampled it (its rows, every
+    output.diagnostics_interval_s); nan without the file."""
+    path = os.path.join(folder, "diagnostics.csv")
+    if not os.path.isfile(path):
+        return float("nan")
+    return max((r["max_density_deviation"] for r in study.read_rows(TOOL, path, {"max_density_deviation": float})),
+               default=float("nan"))
+
+
 def solid_fraction(folder):
     """(disc area (boulders.csv) over the initial fluid block's area (params.ini), discs); (0, 0) without discs."""
     path = os.path.join(folder, "boulders.csv")
@@ -335,16 +346,17 @@ def command_collect(args):
                       "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
                       "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
-                      "status": progress["status"], "uniform_froude": uniform_froude(folder)})
+                      "status": progress["status"], "uniform_froude": uniform_froude(folder),
+                      "max_density_deviation": largest_density_deviation(folder)})
     if not table:
         fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
     table.sort(key=lambda r: (r["dp_m"], r["asked"][0] == "p", asked_value(r["asked"]), r["seed"]))
-    print("%8s %6s %5s %7s %6s %13s %7s %7s %7s %7s" % ("asked", "count", "seed", "dp (m)", "phi", "window (s)", "Fr",
-                                                       "mu/mu0", "end (s)", "status"))
+    print("%8s %6s %5s %7s %6s %13s %7s %7s %7s %7s %9s" % ("asked", "count", "seed", "dp (m)", "phi", "window (s)",
+                                                           "Fr", "mu/mu0", "end (s)", "status", "max drho"))
     for r in table:
-        print("%8s %6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s" % (
+        print("%8s %6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s %9.4f" % (
             r["asked"], r["count"], r["seed"], r["dp_m"], r["phi"], r["window_start_s"], r["window_end_s"], r["froude"],
-            r["mu_eq_over_mu0"], r["end_s"], r["status"][:7]))
+            r["mu_eq_over_mu0"], r["end_s"], r["status"][:7], r["max_density_deviation"]))
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=COLUMNS)
