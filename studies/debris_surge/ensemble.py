@@ -279,8 +279,8 @@ def largest_density_deviation(folder):
     path = os.path.join(folder, "diagnostics.csv")
     if not os.path.isfile(path):
         return float("nan")
-    return max((r["max_density_deviation"] for r in study.read_rows(TOOL, path, {"max_density_deviation": float})),
-               default=float("nan"))
+    return max(float(r["max_density_deviation"])
+               for r in study.read_rows(TOOL, path, {"max_density_deviation": float}))
 
 
 def solid_fraction(folder):
