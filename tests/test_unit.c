@@ -380,12 +380,14 @@ static int test_set_param(void)
                  (rc == 0) + fabs(surge_sim_params(sim)->body.slope_deg - 30), 0);
     rc = surge_sim_set_param(sim, "fluid.nosuch", "1", err, sizeof err);
     expect_below("set_param: unknown key refused", rc == 0, 0);
-    /* the measured squeeze film is the implicit scheme's: refused live on an explicit run, the setting kept */
-    rc = surge_sim_set_param(sim, "contacts.lubrication_resolved", "measured", err, sizeof err);
-    printf("set_param: lubrication_resolved = measured on an explicit run refused with: %s\n", err);
-    expect_below("set_param: measured film on the explicit scheme refused and the setting kept",
-                 (rc == 0) + (surge_sim_params(sim)->contacts.lubrication_resolved != SURGE_LUBRICATION_CUTOFF), 0);
-    expect_below("set_param: ... and the message names the scheme", strstr(err, "explicit scheme") == NULL, 0);
+    /* the tangential film takes the measured share: refused live while the squeeze film is the cut-off model's, the
+     * setting kept */
+    rc = surge_sim_set_param(sim, "contacts.lubrication_tangential", "reynolds", err, sizeof err);
+    printf("set_param: lubrication_tangential = reynolds with the cut-off model refused with: %s\n", err);
+    expect_below("set_param: tangential film without the measured share refused and the setting kept",
+                 (rc == 0) + (surge_sim_params(sim)->contacts.lubrication_tangential != SURGE_TANGENTIAL_SLIDING), 0);
+    expect_below("set_param: ... and the message names what it needs",
+                 strstr(err, "lubrication_resolved = measured") == NULL, 0);
     /* a viscosity inside its range that would hold the step under the collapse limit (h^2 / nu) is refused before
      * it applies, naming why; one that keeps the step above it is taken */
     surge_sim_set_param(sim, "body.slope_deg", "0", err, sizeof err);
