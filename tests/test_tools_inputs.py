@@ -397,6 +397,28 @@ check("disc_on_bed row: W/U and the slot's resistance of a row falling at 1 mm/s
       r.returncode == 0 and r.stdout.count("W/U = %.4g " % (weight / 0.001)) == 4 and ("%.4g" % slot) in r.stdout
       and "s/a 0.250" in r.stdout, r.stdout + r.stderr)
 
+# share: a disc falling at 1 mm/s from 20 to 16 mm over the bed, W/U over the exact resistance at each gap it passes
+expect("disc_on_bed share: a missing folder", tool(DB, "share", path("no_such_run")), "no_such_run")
+expect("disc_on_bed share: a run without discs", tool(DB, "share", folder("share_no_discs", RUN_FILES)), "boulders.pvd")
+expect("disc_on_bed share: a disc at rest",
+       tool(DB, "share", disc_files("share_still", lambda t: [(0.05, 0.0325)], ROW_TIMES)), "never approaches")
+d = disc_files("share_falling", lambda t: [(0.05, 0.0325 - 0.001 * t)], ROW_TIMES)
+write(os.path.join(d, "params.ini"), params_with(density_ratio=2))
+r = tool(DB, "share", d)
+rp = RunParams(d)
+mu, h_kernel = rp.positive("fluid", "density_kgpm3") * rp.positive("fluid", "viscosity_m2ps"), rp.derived("h_m")
+weight = (2 - 1) * rp.positive("fluid", "density_kgpm3") * rp.positive("body", "gravity_mps2") * np.pi * 0.0125 ** 2
+rows = [line.split() for line in r.stdout.splitlines()[2:]]
+worst = 0.0
+for gap_h, gap_dp, share, t in rows:
+    alpha = np.arccosh(1 + float(gap_h) * h_kernel / 0.0125)
+    exact = 4 * np.pi * mu / (alpha - np.tanh(alpha))
+    worst = max(worst, abs(float(share) / (weight / 0.001 / exact) - 1))
+gaps_passed = len([k for k in range(1, 1000) if 0.016 < k * 0.125 * h_kernel < 0.02])  # 4 s at 1 mm/s
+check("disc_on_bed share: W/U over the exact resistance at each gap 0.125 h apart that a disc falling at 1 mm/s "
+      "passes (%d rows, worst %.2g)" % (len(rows), worst),
+      r.returncode == 0 and len(rows) == gaps_passed and worst < 2e-3, r.stdout + r.stderr)
+
 # a disc 1 mm over the bed of a sheared channel (bed -5 mm/s, lid +5 mm/s, 0.1 m: shear 0.1 /s), moving at 1 mm/s
 # over the bed and turning at -0.02 rad/s from 1.5 s on (earlier files at other speeds are left out)
 d = folder("sheared", RUN_FILES)

@@ -4,6 +4,7 @@
 #include "boulders/contact_solver.h"
 #include "boulders/lubrication.h"
 
+#include <lapacke.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -385,33 +386,6 @@ static void prepare(contact_solver *s, contact_discs *d, const contact_settings 
         }
 }
 
-/* Solves A x = b in place (b in column 4) by Gaussian elimination with partial pivoting; A = I + h K W is
- * nonsingular (K symmetric positive semidefinite, W >= 0 diagonal) */
-static void solve4(double A[4][5], double x[4])
-{
-    for (int col = 0; col < 4; col++) {
-        int pivot = col;
-        for (int row = col + 1; row < 4; row++)
-            if (fabs(A[row][col]) > fabs(A[pivot][col]))
-                pivot = row;
-        for (int j = 0; j < 5; j++) {
-            const double swap = A[col][j];
-            A[col][j] = A[pivot][j], A[pivot][j] = swap;
-        }
-        for (int row = col + 1; row < 4; row++) {
-            const double factor = A[row][col] / A[col][col];
-            for (int j = col; j < 5; j++)
-                A[row][j] -= factor * A[col][j];
-        }
-    }
-    for (int row = 3; row >= 0; row--) {
-        double sum = A[row][4];
-        for (int j = row + 1; j < 4; j++)
-            sum -= A[row][j] * x[j];
-        x[row] = sum / A[row][row];
-    }
-}
-
 /* The tangential film (Reynolds'; lubrication_tangential_matrix) between disc b (T) and disc a or a wall (B), implicit
  * in the sub-step: its generalised impulse L = -h K q at the end velocities q = (U_T, Omega_T, U_B, Omega_B) along
  * t' = (n_y, -n_x) (a wall's q relative to its surface), so one Gauss-Seidel pass changes L by the d that solves
@@ -419,7 +393,8 @@ static void solve4(double A[4][5], double x[4])
 static void reynolds_film(contact *c, contact_discs *d, double h)
 {
     const double tx = c->ny, ty = -c->nx;
-    double K[4][4], q[4] = {0}, w[4] = {0}, A[4][5], change[4];
+    double K[4][4], q[4] = {0}, w[4] = {0}, A[4][4], change[4];
+    lapack_int pivots[4];
     lubrication_tangential_matrix(c->lubrication_t, c->rb, c->a >= 0 ? c->ra : 0, K);
     q[0] = d->vx[c->b] * tx + d->vy[c->b] * ty, q[1] = d->omega[c->b];
     w[0] = d->inv_mass[c->b], w[1] = d->inv_inertia[c->b];
@@ -429,14 +404,14 @@ static void reynolds_film(contact *c, contact_discs *d, double h)
     } else {
         q[0] -= c->wall_vx * tx + c->wall_vy * ty;
     }
-    for (int i = 0; i < 4; i++) {
-        A[i][4] = -c->lambda_r[i];
+    for (int i = 0; i < 4; i++) { /* I + h K W is nonsingular: K symmetric positive semidefinite, W >= 0 diagonal */
+        change[i] = -c->lambda_r[i];
         for (int j = 0; j < 4; j++) {
             A[i][j] = (i == j) + h * K[i][j] * w[j];
-            A[i][4] -= h * K[i][j] * q[j];
+            change[i] -= h * K[i][j] * q[j];
         }
     }
-    solve4(A, change);
+    LAPACKE_dgesv(LAPACK_ROW_MAJOR, 4, 1, &A[0][0], 4, pivots, change, 1);
     d->vx[c->b] += w[0] * change[0] * tx, d->vy[c->b] += w[0] * change[0] * ty, d->omega[c->b] += w[1] * change[1];
     if (c->a >= 0) {
         d->vx[c->a] += w[2] * change[2] * tx, d->vy[c->a] += w[2] * change[2] * ty;
