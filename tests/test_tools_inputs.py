@@ -418,6 +418,34 @@ gaps_passed = len([k for k in range(1, 1000) if 0.016 < k * 0.125 * h_kernel < 0
 check("disc_on_bed share: W/U over the exact resistance at each gap 0.125 h apart that a disc falling at 1 mm/s "
       "passes (%d rows, worst %.2g)" % (len(rows), worst),
       r.returncode == 0 and len(rows) == gaps_passed and worst < 2e-3, r.stdout + r.stderr)
+# --onto disc: a disc of radius a falling at 1 mm/s onto a disc of radius 2a at rest, its gap 20 to 16 mm at an angle;
+# the exact resistance with the reduced radius 2a/3
+expect("disc_on_bed share --onto disc: one disc", tool(DB, "share", d, "--onto", "disc"), "needs 2")
+expect("disc_on_bed share --onto: a word it does not know", tool(DB, "share", d, "--onto", "wall"), "invalid choice")
+reach = 0.0125 + 0.025 + 0.02  # centre to centre at the start
+
+
+def pair_centres(t):
+    along = reach - 0.001 * t
+    return [(0.05 + 0.6 * along, 0.0375 + 0.8 * along), (0.05, 0.0375)]
+
+
+d = disc_files("share_pair", pair_centres, ROW_TIMES)
+for k, t in enumerate(ROW_TIMES):  # the second disc twice the first's radius
+    f = os.path.join(d, "boulders_%09d.vtp" % k)
+    vtp.write_vtp(f, np.array(pair_centres(t)), {"radius_m": np.array([0.0125, 0.025])}, t, k)
+write(os.path.join(d, "params.ini"), params_with(density_ratio=2))
+r = tool(DB, "share", d, "--onto", "disc")
+rows = [line.split() for line in r.stdout.splitlines()[2:]]
+worst = 0.0
+for gap_h, gap_dp, share, t in rows:
+    alpha = np.arccosh(1 + float(gap_h) * h_kernel / (0.0125 * 0.025 / 0.0375))
+    exact = 4 * np.pi * mu / (alpha - np.tanh(alpha))
+    worst = max(worst, abs(float(share) / (weight / 0.001 / exact) - 1))
+check("disc_on_bed share --onto disc: W/U over the exact resistance with the reduced radius, a disc closing on a disc "
+      "twice its size at 1 mm/s along a slanted line (%d rows, worst %.2g)" % (len(rows), worst),
+      r.returncode == 0 and len(rows) == gaps_passed and worst < 2e-3 and "reduced radius" in r.stdout,
+      r.stdout + r.stderr)
 
 # a disc 1 mm over the bed of a sheared channel (bed -5 mm/s, lid +5 mm/s, 0.1 m: shear 0.1 /s), moving at 1 mm/s
 # over the bed and turning at -0.02 rad/s from 1.5 s on (earlier files at other speeds are left out)

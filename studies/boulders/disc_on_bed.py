@@ -25,6 +25,16 @@ apart, over the resistance of a cylinder approaching a plane in Stokes flow, 4 p
 cosh alpha = 1 + h/a (Jeffrey & Onishi 1981). The disc starts 2a above the bed; at gaps above about 0.7 a the box's
 walls add their drag.
 
+  build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=a/K \\
+      -s "boulders.list_m=0.05 0.0628 0.0125, 0.05 0.0128 0.0125" -s numerics.ch=1.8 -s contacts.lubrication=0 \\
+      -s time.end_s=30 -s output.snapshot_interval_s=0.05 [-s numerics.scheme=implicit] --threads 1
+  studies/boulders/disc_on_bed.py share RUN_DIR --onto disc
+
+The same between two discs: the first disc settles onto the second, which rests on the bed. The gap is the one
+between their surfaces along the line of centres, U the speed at which it closes, and the exact resistance the
+plane's with the reduced radius R = r1 r2 / (r1 + r2) for a, as the films take it (exact at small gaps, where the
+film's force is that of the plane's with R; at gaps near R it is the films' model, not Stokes' two-disc solution).
+
   build/surge run cases/boulder_settling.ini -o RUN_DIR -s numerics.dp_m=DP -s numerics.scheme=implicit -s numerics.ch=1.8 \\
       -s contacts.lubrication=0 -s domain.periodic_x=true -s walls.left=false -s walls.right=false \\
       -s domain.length_m=2L -s fluid.x1_m=2L -s domain.height_m=0.1 -s fluid.depth_m=0.1 \\
@@ -110,7 +120,7 @@ def disc_track(folder, what, least):
         d = vtp.read_vtp(os.path.join(folder, name), ("radius_m",), finite=True)
         if len(d["radius_m"]) < least:
             raise ValueError("%s: %s holds %d disc(s); %s" % (folder, name, len(d["radius_m"]),
-                             "a row needs two a period" if least > 1 else "no disc to measure"))
+                             "no disc to measure" if least == 1 else "%s needs %d" % (what, least)))
         times.append(t)
         points.append(d["points"][:least, :2].astype(float))
         radii.append(d["radius_m"])
@@ -167,22 +177,30 @@ def exact_resistance(mu, radius, gap):
     return 4.0 * np.pi * mu / (alpha - np.tanh(alpha))
 
 
-def resolved_share(folder):
+def resolved_share(folder, onto="bed"):
     """The share of the exact resistance the scheme resolves at each gap the settling disc passed: (h, rows of
-    (gap/h, gap/dp, share, t)) at the gaps SHARE_STEP_H apart, share = (W/U)/exact, U the disc's approach speed
-    (centred differences of its heights) interpolated linearly in the gap. ValueError naming the folder where the
-    disc never approaches the bed."""
+    (gap/h, gap/dp, share, t)) at the gaps SHARE_STEP_H apart, share = (W/U)/exact, U the speed at which the gap
+    closes (centred differences) interpolated linearly in the gap. onto "bed": the first disc's gap to y = 0 and the
+    exact resistance with its radius; "disc": its gap to the second disc along the line of centres and the reduced
+    radius. ValueError naming the folder where the disc never approaches, or where onto is "disc" and the run has one
+    disc."""
     params = RunParams(folder)
     dp, h = params.positive("numerics", "dp_m"), params.derived("h_m")
     mu = params.positive("fluid", "density_kgpm3") * params.positive("fluid", "viscosity_m2ps")
     ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
-    times, points, radii = disc_track(folder, "the resolved share", 1)
+    times, points, radii = disc_track(folder, "the resolved share", 2 if onto == "disc" else 1)
     radius = float(radii[-1][0])
-    gaps, speeds = points[:, 0, 1] - radius, -np.gradient(points[:, 0, 1], times)
+    if onto == "disc":
+        other = float(radii[-1][1])
+        centres = np.hypot(points[:, 0, 0] - points[:, 1, 0], points[:, 0, 1] - points[:, 1, 1])
+        gaps, film_radius = centres - radius - other, radius * other / (radius + other)
+    else:
+        gaps, film_radius = points[:, 0, 1] - radius, radius
+    speeds = -np.gradient(gaps, times)
     weight = (ratio - 1.0) * params.positive("fluid", "density_kgpm3") * g * np.pi * radius * radius
     closing = speeds > 0
     if not closing.any():
-        raise ValueError("%s: the disc never approaches the bed" % folder)
+        raise ValueError("%s: the disc never approaches the %s" % (folder, "second disc" if onto == "disc" else "bed"))
     rows = []
     for k in range(1, 1 + int(gaps[0] / h / SHARE_STEP_H)):
         target = k * SHARE_STEP_H * h
@@ -192,7 +210,7 @@ def resolved_share(folder):
         j = int(crossed[0])
         w = (gaps[j] - target) / (gaps[j] - gaps[j + 1])
         speed, t = (1 - w) * speeds[j] + w * speeds[j + 1], (1 - w) * times[j] + w * times[j + 1]
-        rows.append((target / h, target / dp, weight / speed / exact_resistance(mu, radius, target), t))
+        rows.append((target / h, target / dp, weight / speed / exact_resistance(mu, film_radius, target), t))
     return h, rows
 
 
@@ -204,7 +222,7 @@ def settling_row(folder):
     params = RunParams(folder)
     rho0, nu = params.positive("fluid", "density_kgpm3"), params.positive("fluid", "viscosity_m2ps")
     ratio, g = params.positive("boulders", "density_ratio"), params.positive("body", "gravity_mps2")
-    times, points, radii = disc_track(folder, "the settling speed", 2)
+    times, points, radii = disc_track(folder, "a row (two a period)", 2)
     heights, spacing, radius = points[:, 0, 1], abs(float(points[0, 1, 0] - points[0, 0, 0])), float(radii[0][0])
     gap = spacing - 2.0 * radius
     if not gap > 0:
@@ -310,14 +328,18 @@ def main():
     sub.add_parser("sheared").add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("spin").add_argument("run_dir", type=cli_checks.folder)
     sub.add_parser("slide").add_argument("run_dir", type=cli_checks.folder)
-    sub.add_parser("share").add_argument("run_dir", type=cli_checks.folder)
+    share_parser = sub.add_parser("share")
+    share_parser.add_argument("run_dir", type=cli_checks.folder)
+    share_parser.add_argument("--onto", choices=("bed", "disc"), default="bed",
+                              help="the gap measured: the first disc's to the bed (y = 0) or to the second disc")
     args = parser.parse_args()
     if args.command == "share":
         try:
-            h, rows = resolved_share(args.run_dir)
+            h, rows = resolved_share(args.run_dir, args.onto)
         except (OSError, ValueError) as e:
             fail(str(e))
-        print("kernel h = %.4g m; the resistance resolved (W/U) over the exact 4 pi mu/(alpha - tanh alpha)" % h)
+        print("kernel h = %.4g m; the resistance resolved (W/U) over the exact 4 pi mu/(alpha - tanh alpha)%s"
+              % (h, ", the reduced radius for a" if args.onto == "disc" else ""))
         print("gap/h   gap/dp   share    t (s)")
         for gap_h, gap_dp, share, t in rows:
             print("%-6.3f  %-6.3f  %6.3f  %7.3f" % (gap_h, gap_dp, share, t))
