@@ -422,6 +422,9 @@ check("disc_on_bed share: W/U over the exact resistance at each gap 0.125 h apar
 # the exact resistance with the reduced radius 2a/3
 expect("disc_on_bed share --onto disc: one disc", tool(DB, "share", d, "--onto", "disc"), "needs 2")
 expect("disc_on_bed share --onto: a word it does not know", tool(DB, "share", d, "--onto", "wall"), "invalid choice")
+expect("disc_on_bed share --onto disc: two discs at rest",
+       tool(DB, "share", disc_files("share_pair_still", lambda t: [(0.05, 0.07), (0.05, 0.0375)], ROW_TIMES),
+            "--onto", "disc"), "never approaches the second disc")
 reach = 0.0125 + 0.025 + 0.02  # centre to centre at the start
 
 
