@@ -316,8 +316,8 @@ static const surge_param_info registry[] = {
      "that it fills the room the discs leave at its rest spacing. Off: the sites within a quarter spacing of a "
      "disc's surface are left out, and the fluid is 0.5 phi / ((r/dp) (1 - phi)) of its room short. Packed, the "
      "implicit scheme's rest-density correction counts a deficit next to a disc too. Off by default until the "
-     "validation studies are run with it; the explicit scheme stops on the packed loaded channel (docs/boulders.md, "
-     "\"Placement\").", OFF(boulders.pack_fluid)},
+     "validation studies are run with it; the explicit scheme runs the packed loaded channel at r/dp 4, at r/dp 3 "
+     "only with numerics.cfl = 0.18 (docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
 
     {"contacts", "friction", SURGE_PARAM_REAL, "-", 0.5, 0, 10, true, NULL,
      "Coulomb friction coefficient mu between discs and between discs and walls.", OFF(contacts.friction)},
