@@ -359,6 +359,12 @@ static const surge_param_info registry[] = {
      "below lubrication_cutoff_dp); reynolds, from Reynolds' equation with the gap's shape moving with the discs, a "
      "force against a disc's translation along the gap and a torque against its spin, less the share the scheme "
      "resolves (needs lubrication_resolved = measured; docs/boulders.md).", OFF(contacts.lubrication_tangential)},
+    {"contacts", "lubrication_share", SURGE_PARAM_ENUM, "-", SURGE_SHARE_SCHEME, 0, 2, true, "scheme|explicit|implicit",
+     "Whose share of a film the measured films leave out as resolved: scheme, the share the scheme in use resolves "
+     "of a lone disc's film (each scheme measured its own); explicit or implicit, that scheme's share whatever the "
+     "scheme, to run both schemes with one share (needs lubrication_resolved = measured; in a crowd of discs the two "
+     "schemes resolve alike, docs/validation/poiseuille_loaded.md, \"Both schemes with the measured films\").",
+     OFF(contacts.lubrication_share)},
 
     {"shifting", "form", SURGE_PARAM_ENUM, "-", SURGE_SHIFT_LIND, 0, 2, true, "none|velocity|lind",
      "Particle shifting: none, velocity-proportional (Skillen) or Lind (no shift in the free-surface layer).",
@@ -1021,6 +1027,14 @@ static int validate_contacts(const surge_params *p, char *err, size_t err_len)
         p->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED) {
         fail(err, err_len, "contacts.lubrication_tangential = reynolds needs contacts.lubrication_resolved = measured "
              "(here cutoff): it leaves out the share of the film the scheme resolves, which the measured model holds");
+        return -1;
+    }
+    /* the share table is the measured model's */
+    if (p->contacts.lubrication_share != SURGE_SHARE_SCHEME &&
+        p->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED) {
+        fail(err, err_len, "contacts.lubrication_share = %s needs contacts.lubrication_resolved = measured (here "
+             "cutoff): the cut-off model takes no share", p->contacts.lubrication_share == SURGE_SHARE_EXPLICIT
+                                                               ? "explicit" : "implicit");
         return -1;
     }
     return 0;

@@ -52,6 +52,12 @@ typedef enum surge_lubrication_tangential {
     SURGE_TANGENTIAL_REYNOLDS = 1 /* Reynolds' equation with the gap's shape moving with the discs, measured share */
 } surge_lubrication_tangential;
 
+typedef enum surge_lubrication_share {
+    SURGE_SHARE_SCHEME = 0,   /* the share the scheme in use resolves of a lone disc's film */
+    SURGE_SHARE_EXPLICIT = 1, /* the explicit scheme's, whatever the scheme */
+    SURGE_SHARE_IMPLICIT = 2  /* the implicit scheme's, whatever the scheme */
+} surge_lubrication_share;
+
 typedef enum surge_color_field {
     SURGE_FIELD_SPEED = 0,    /* |v| */
     SURGE_FIELD_VX_REL = 1,   /* vx - belt speed: velocity relative to the belt */
@@ -190,6 +196,7 @@ typedef struct surge_params {
         double lubrication_min_gap_dp; /* the force's gap is at least this (dp): surface roughness */
         surge_lubrication_resolved lubrication_resolved; /* what the SPH is taken to resolve of a squeeze film */
         surge_lubrication_tangential lubrication_tangential; /* the tangential film's form (lubrication.h) */
+        surge_lubrication_share lubrication_share; /* whose measured share the films leave out */
     } contacts;
     struct {
         int form;                    /* surge_shifting_form */

@@ -10,3 +10,12 @@ const time_scheme *scheme_of(const surge_params *p)
 {
     return schemes[p->numerics.scheme];
 }
+
+const struct lubrication_share *film_share_of(const surge_params *p)
+{
+    switch (p->contacts.lubrication_share) {
+    case SURGE_SHARE_EXPLICIT: return scheme_explicit.film_share;
+    case SURGE_SHARE_IMPLICIT: return scheme_implicit.film_share;
+    default: return scheme_of(p)->film_share;
+    }
+}

@@ -54,4 +54,8 @@ extern const time_scheme scheme_implicit;
 /* The scheme numerics.scheme names */
 const time_scheme *scheme_of(const surge_params *p);
 
+/* The share of a film the measured films leave out as resolved: the scheme's own, or the one
+ * contacts.lubrication_share names */
+const struct lubrication_share *film_share_of(const surge_params *p);
+
 #endif
