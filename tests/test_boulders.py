@@ -315,6 +315,9 @@ def group_inputs():
         (["-s", "contacts.lubrication_resolved=fitted"], "contacts.lubrication_resolved: 'fitted' is not allowed"),
         (["-s", "contacts.lubrication_tangential=reynolds"], "contacts.lubrication_tangential = reynolds needs "
                                                              "contacts.lubrication_resolved = measured"),
+        (["-s", "contacts.lubrication_share=explicit"], "contacts.lubrication_share = explicit needs "
+                                                        "contacts.lubrication_resolved = measured"),
+        (["-s", "contacts.lubrication_share=both"], "contacts.lubrication_share: 'both' is not allowed"),
     ]
     for extra, words in bad:
         out, p, cmd = surge("inputs", ["check", "boulder_settling.ini"] + extra, timeout_s=60)
