@@ -59,6 +59,7 @@ surge_sim *sim_create_checked(const surge_params *params,
     sim->params.walls.layers = surge_params_wall_layers(params); /* resolve the automatic value */
     const surge_params *p = &sim->params;
     sim->scheme = scheme_of(p);
+    sim->film_share = film_share_of(p);
     const double dp = p->numerics.dp_m;
     sim->derived.h_m = p->numerics.ch * sqrt(2.0) * dp;
     sim->rho0 = p->fluid.density_kgpm3;
@@ -195,6 +196,7 @@ int surge_sim_set_param(surge_sim *sim, const char *name, const char *value, cha
         return -1;
     }
     sim->params = candidate;
+    sim->film_share = film_share_of(&sim->params);
     update_body_force(sim);
     return 0;
 }

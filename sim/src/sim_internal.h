@@ -56,6 +56,7 @@ struct surge_sim {
 
     double list_lookahead_s;       /* how far ahead of a step's start its force evaluations reach (neighbours.c) */
     const time_scheme *scheme;    /* the time-stepping scheme (scheme/scheme.h) */
+    const struct lubrication_share *film_share; /* the share the measured films leave out (film_share_of) */
     void *scheme_data;             /* and its own state */
 
     /* while the scene is built (sim_create_checked): its particle counts, known before anything is allocated for

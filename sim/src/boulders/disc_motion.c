@@ -156,7 +156,7 @@ static contact_settings contact_settings_of(const surge_sim *sim, int with_lubri
         .lubrication_min_gap_m = p->contacts.lubrication_min_gap_dp * dp, .gap_offset_m = p->contacts.margin_dp * dp,
         .lubrication_kernel_h_m =
             p->contacts.lubrication_resolved == SURGE_LUBRICATION_MEASURED ? sim->derived.h_m : 0,
-        .lubrication_share = film_share_of(p),
+        .lubrication_share = sim->film_share,
         .lubrication_tangential_reynolds = p->contacts.lubrication_tangential == SURGE_TANGENTIAL_REYNOLDS};
 }
 
