@@ -388,6 +388,19 @@ static int test_set_param(void)
                  (rc == 0) + (surge_sim_params(sim)->contacts.lubrication_tangential != SURGE_TANGENTIAL_SLIDING), 0);
     expect_below("set_param: ... and the message names what it needs",
                  strstr(err, "lubrication_resolved = measured") == NULL, 0);
+    /* the films' share: the scheme's own, and live the other scheme's, which the contact settings then read */
+    expect_below("set_param: the explicit scheme starts with its own film share",
+                 sim->film_share != scheme_explicit.film_share, 0);
+    rc = surge_sim_set_param(sim, "contacts.lubrication_share", "implicit", err, sizeof err);
+    expect_below("set_param: lubrication_share = implicit with the cut-off model refused", rc == 0, 0);
+    rc = surge_sim_set_param(sim, "contacts.lubrication_resolved", "measured", err, sizeof err) +
+         surge_sim_set_param(sim, "contacts.lubrication_share", "implicit", err, sizeof err);
+    expect_below("set_param: lubrication_share = implicit with the measured film taken, and the share the implicit "
+                 "scheme's", (rc != 0) + (sim->film_share != scheme_implicit.film_share), 0);
+    rc = surge_sim_set_param(sim, "contacts.lubrication_share", "scheme", err, sizeof err);
+    expect_below("set_param: lubrication_share = scheme gives the explicit scheme's own back",
+                 (rc != 0) + (sim->film_share != scheme_explicit.film_share), 0);
+    surge_sim_set_param(sim, "contacts.lubrication_resolved", "cutoff", err, sizeof err);
     /* a viscosity inside its range that would hold the step under the collapse limit (h^2 / nu) is refused before
      * it applies, naming why; one that keeps the step above it is taken */
     surge_sim_set_param(sim, "body.slope_deg", "0", err, sizeof err);
