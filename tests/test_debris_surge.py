@@ -16,8 +16,10 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - the discs ride in the flow: the 6-disc run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
     flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
     disc ahead of the front;
-  - `collect` writes one table row per member (with its largest density deviation) and the box plots, and the fluid-alone member's Fr is within 10 % of
-    the uniform flow's (0.977) over its second half; drift_conservation holds the same surge to 5 % over 8 s; a
+  - `collect` writes one table row per member (with its largest density deviation and the standard errors of its
+    window means, nan under 4 rows) and the box plots, and the fluid-alone member's Fr is within 10 % of the uniform
+    flow's (0.977) over its second half; it counts the discs resting on the belt in synthetic disc snapshots of known
+    gaps, those in the window only; drift_conservation holds the same surge to 5 % over 8 s; a
     flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
     without its boulders.csv is refused, named;
   - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
@@ -38,6 +40,8 @@ import sys
 
 SURGE, SOURCE, WORK = sys.argv[1:4]
 from checks import check, finish  # noqa: E402
+from surgepy import vtp  # noqa: E402
+import numpy as np  # noqa: E402
 
 TOOL = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
 RUNS = os.path.join(WORK, "runs")
@@ -216,6 +220,12 @@ for r in rows:
 check("collect: each row carries the largest density deviation of its member's diagnostics.csv (%s)" % largest,
       len(rows) == 3 and all(float(r["max_density_deviation"]) == value > 0 for r, value in zip(rows, largest)),
       str(rows)[-500:])
+errors = [(r["rows"], r["froude_se"], r["mu_eq_over_mu0_se"]) for r in rows]
+check("collect: each row carries the standard errors of its window means, nan under 4 rows, else finite and "
+      "non-negative (%s)" % errors,
+      len(rows) == 3 and all((math.isnan(float(fe)) and math.isnan(float(me))) if int(n) < 4
+                             else (0 <= float(fe) < math.inf and 0 <= float(me) < math.inf) for n, fe, me in errors),
+      str(rows)[-500:])
 # plot: the box plots again from collect's table and a hand-made one (members whose folders are gone); tables that
 # cannot be plotted are refused, naming the file, the line and the column
 by_hand = os.path.join(WORK, "by_hand.csv")
@@ -270,6 +280,32 @@ check("collect: a member on a flat channel is tabled with uniform_froude nan",
 rc, out, err = tool("collect", "--runs-dir", flat, "--png", flat_png)
 check("collect: box plots without a uniform flow are refused, named", rc == 2 and "no uniform flow" in err and
       not os.path.exists(flat_png), out + err[-1000:])
+# discs resting on the belt: a member's disc snapshots replaced by synthetic ones whose gaps to the belt's face are
+# known (contact margin 2 dp, dp 0.066 m): in the window (the second half of the 1.5 s run) three discs at the margin,
+# at the margin + 0.04 dp and at the margin + 0.1 dp (two resting), before it all three at the margin (not counted)
+belt = os.path.join(WORK, "belt_runs")
+shutil.rmtree(belt, ignore_errors=True)
+belt_member = os.path.join(belt, "n6_s1_dp0.066")
+shutil.copytree(os.path.join(RUNS, "n6_s1_dp0.066"), belt_member)
+for name in os.listdir(belt_member):
+    if name.startswith("boulders_") and name.endswith(".vtp"):
+        os.remove(os.path.join(belt_member, name))
+entries = []
+for k, (time_s, above_margin_dp) in enumerate([(0.5, (0, 0, 0)), (0.8, (0, 0.04, 0.1)), (1.0, (0, 0.04, 0.1)),
+                                               (1.2, (0, 0.04, 0.1)), (1.4, (0, 0.04, 0.1))]):
+    radii = np.array([0.2, 0.25, 0.3])
+    points = np.array([[5.0 + 2 * i, radii[i] + (2 + a) * 0.066] for i, a in enumerate(above_margin_dp)])
+    name = "boulders_%09d.vtp" % k
+    vtp.write_vtp(os.path.join(belt_member, name), points, {"radius_m": radii}, time_s, k)
+    entries.append((time_s, name))
+vtp.write_pvd(os.path.join(belt_member, "boulders.pvd"), entries)
+belt_table = os.path.join(WORK, "belt.csv")
+rc, out, err = tool("collect", "--runs-dir", belt, "--csv", belt_table)
+belt_rows = list(csv.DictReader(open(belt_table))) if os.path.isfile(belt_table) else []
+check("collect: discs resting on the belt, from the window's disc snapshots: 2 of 3 in each of its four (%s)"
+      % [(r["boulders_on_belt"], r["boulders_on_belt_se"]) for r in belt_rows],
+      rc == 0 and [(float(r["boulders_on_belt"]), float(r["boulders_on_belt_se"])) for r in belt_rows] == [(2.0, 0.0)],
+      out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

@@ -1,11 +1,12 @@
 #!/usr/bin/python3
 """The study drivers' shared pieces and charts: append_row writes the header once, a table with other columns is
-refused before a study starts, bad numeric options exit 2
-with the option named, both charts render from the committed tables, wall_contact measures a synthetic run, and
+refused before a study starts, the standard error of a window mean counts the rows' autocorrelation, bad numeric
+options exit 2 with the option named, both charts render from the committed tables, wall_contact measures a synthetic run, and
 park / unpark carry an interrupted run through a fresh checkout.
 usage: test_study_tools.py SOURCE_DIR WORK_DIR"""
 import csv
 import os
+import random
 import shutil
 import subprocess
 import sys
@@ -30,6 +31,26 @@ with open(table) as f:
     rows = list(csv.reader(f))
 check("append_row_header_once", rows == [["a", "b"], ["1", "2"], ["3", "4"]], str(rows))
 check("positive_numbers", study.positive_numbers("t", "1,1.3, 2.2", "ch") == [1.0, 1.3, 2.2])
+
+# the standard error of a window mean: white noise gives sd/sqrt(n) and tau 1; an AR(1) series with coefficient 0.5
+# (the flow rows' lag-1 autocorrelation is 0.6-0.7) has tau (1 + 0.5)/(1 - 0.5) = 3 and sd sqrt(3/n); a constant
+# series has no error; fewer than 4 values, no estimate
+rng = random.Random(7)
+white = [rng.gauss(0.0, 1.0) for _ in range(4000)]
+mean, error, tau = study.mean_with_error(white)
+check("mean_with_error: white noise, the error sd/sqrt(n) within 10 %% (%.4f against %.4f), tau %.2f near 1"
+      % (error, 1 / 4000 ** 0.5, tau), abs(error * 4000 ** 0.5 - 1) < 0.1 and tau < 1.3)
+value, ar1 = rng.gauss(0.0, 1.0) / 0.75 ** 0.5, []
+for _ in range(8000):
+    value = 0.5 * value + rng.gauss(0.0, 1.0)
+    ar1.append(value)
+mean, error, tau = study.mean_with_error(ar1)
+expected = (3.0 / 0.75 / 8000) ** 0.5  # sd of the series 1/sqrt(1 - 0.25), tau 3
+check("mean_with_error: AR(1) at 0.5, tau %.2f within 15 %% of 3 and the error %.4f within 15 %% of %.4f"
+      % (tau, error, expected), abs(tau / 3 - 1) < 0.15 and abs(error / expected - 1) < 0.15)
+check("mean_with_error: a constant series has no error; three values have no estimate",
+      study.mean_with_error([2.0] * 10) == (2.0, 0.0, 1.0) and
+      all(v != v for v in study.mean_with_error([1.0, 2.0, 3.0])[1:]))
 
 # a study refuses, before it runs anything, a table whose columns are not its own (an older header)
 old_table = os.path.join(work, "old_header.csv")

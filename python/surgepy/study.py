@@ -422,3 +422,31 @@ def particle_steps(tool, folder):
         fail(tool, str(e))
     last = read_rows(tool, os.path.join(folder, "diagnostics.csv"), {"time_s": float, "step": int})[-1]
     return fluid * int(last["step"]), float(last["time_s"])
+
+
+def mean_with_error(values, window_factor=5.0):
+    """(mean, standard error of the mean, integrated autocorrelation time in samples) of a time series sampled at a
+    fixed interval, such as a run's flow.csv rows over an averaging window. Successive rows of a flow are not
+    independent: the error is sd sqrt(tau / n), with tau = 1 + 2 sum_{k=1..M} rho_k (rho_k the autocorrelation at lag
+    k) summed to the smallest lag M >= window_factor tau (Sokal's automatic window, as emcee's integrated_time
+    takes it) or to n/2 where no lag is that large, and tau at least 1 (a series anticorrelated from one sample to the
+    next is not taken as better than independent samples). Fewer than 4 values: the error and tau are nan."""
+    n = len(values)
+    if n == 0:
+        return math.nan, math.nan, math.nan
+    mean = sum(values) / n
+    if n < 4:
+        return mean, math.nan, math.nan
+    centred = [v - mean for v in values]
+    variance = sum(c * c for c in centred) / n
+    if variance == 0:
+        return mean, 0.0, 1.0
+    tau = 1.0
+    for lag in range(1, n // 2 + 1):
+        rho = sum(centred[i] * centred[i + lag] for i in range(n - lag)) / (n * variance)
+        tau += 2.0 * rho
+        if lag >= window_factor * tau:
+            break
+    tau = max(tau, 1.0)
+    sd = math.sqrt(variance * n / (n - 1))
+    return mean, sd * math.sqrt(tau / n), tau

@@ -38,7 +38,10 @@ deletes its parked copy. Resume with the surge that started the member: its prog
 ran it (`surge version`: commit, compiler, vector extensions), and a member continued under another says so.
 collect: per member (its folder's n<count> or phi<fraction> in the table's asked column, the discs it placed in
 count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a run that ends before
-25 s is averaged over its second half, and the window used is written) and the most discs that were ever ahead of
+25 s is averaged over its second half, and the window used is written) with their standard errors (froude_se,
+mu_eq_over_mu0_se: one member's window mean, its rows' autocorrelation counted; not the spread over seeds), how
+many discs rest on the belt (boulders_on_belt: at the contact margin from the belt's face, within 0.05 dp; the
+mean over the window's disc snapshots, with its standard error; nan without them) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png); the table's
@@ -59,7 +62,7 @@ import sys
 import threading
 import time
 
-from surgepy import cli_checks, study
+from surgepy import cli_checks, study, vtp
 from surgepy.run_params import ParamsError, RunParams
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -70,13 +73,14 @@ CASE = os.path.join(ROOT, "cases", "debris_surge.ini")
 PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
-           "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m", "most_boulders_ahead", "end_s",
-           "wall_s", "status", "uniform_froude", "max_density_deviation"]
+           "froude_se", "mu_eq_over_mu0", "mu_eq_over_mu0_se", "h_max_m", "u_bar_mps", "boulders_behind_front_m",
+           "boulders_on_belt", "boulders_on_belt_se", "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
 PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
            "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
                   "uniform_froude": (0.0, 100.0), "window_start_s": (0.0, 1e6), "window_end_s": (0.0, 1e6)}
 ZERO_ALLOWED = ("phi", "window_start_s")  # the fluid alone, a window from the start; every other bound is open
+ON_BELT_DP = 0.05  # a disc rests on the belt when its gap to the belt's face is the contact margin to within this
 WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this (plot's default)
 
 
@@ -247,8 +251,9 @@ def command_run(args):
 
 
 def window_means(flow_csv, window):
-    """Means over the window of flow.csv's rows; (start, end, rows, {column: mean}). A run that ends before
-    window start + 5 s is averaged over its second half."""
+    """Means over the window of flow.csv's rows; (start, end, rows, {column: mean}, end of the run, {column: standard
+    error of the mean} for Fr and mu_eq/mu0, the rows' autocorrelation counted: study.mean_with_error). A run that
+    ends before window start + 5 s is averaged over its second half."""
     columns = ("time_s", "froude", "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m")
     rows = [{k: float(r[k]) for k in columns}
             for r in study.read_rows(TOOL, flow_csv, {k: float for k in columns})]
@@ -259,7 +264,8 @@ def window_means(flow_csv, window):
         fail("%s: no rows between %g and %g s" % (flow_csv, start, stop))
     means = {k: sum(r[k] for r in chosen) / len(chosen)
              for k in ("froude", "mu_eq_over_mu0", "h_max_m", "u_bar_mps", "boulders_behind_front_m")}
-    return start, stop, len(chosen), means, end
+    errors = {k: study.mean_with_error([r[k] for r in chosen])[1] for k in ("froude", "mu_eq_over_mu0")}
+    return start, stop, len(chosen), means, end, errors
 
 
 def most_boulders_ahead(flow_csv):
@@ -271,6 +277,27 @@ def most_boulders_ahead(flow_csv):
         return float("nan")
     return max(int(r["boulders_ahead_of_front"])
                for r in study.read_rows(TOOL, flow_csv, {"boulders_ahead_of_front": int}))
+
+
+def boulders_on_belt(folder, start, stop):
+    """(mean, standard error) over the window's disc snapshots (boulders.pvd) of how many discs rest on the belt:
+    a disc whose gap to the belt's face (y = 0, walls.bottom) is the contact margin (contacts.margin_dp), where the
+    contact solver holds it, to within ON_BELT_DP; (nan, nan) without disc snapshots in the window."""
+    pvd = os.path.join(folder, "boulders.pvd")
+    if not os.path.isfile(pvd):
+        return math.nan, math.nan
+    try:
+        p = RunParams(folder)
+        reach_m = (p.real("contacts", "margin_dp") + ON_BELT_DP) * p.positive("numerics", "dp_m")
+        counts = []
+        for time_s, name in vtp.read_pvd(pvd):
+            if start <= time_s <= stop + 1e-9:
+                discs = vtp.read_vtp(os.path.join(folder, name), required=("radius_m",), finite=True)
+                counts.append(int((discs["points"][:, 1] - discs["radius_m"] <= reach_m).sum()))
+    except (ParamsError, vtp.VtpError) as e:
+        fail(str(e))
+    mean, error, _ = study.mean_with_error(counts)
+    return mean, error
 
 
 def largest_density_deviation(folder):
@@ -340,23 +367,28 @@ def command_collect(args):
             progress = study.read_progress(folder)
         except ValueError as e:
             fail(str(e))
-        start, stop, n_rows, means, end = window_means(flow, args.window)
+        start, stop, n_rows, means, end, errors = window_means(flow, args.window)
+        on_belt = boulders_on_belt(folder, start, stop)
         table.append({"asked": asked, "count": count, "seed": seed, "dp_m": dp, "phi": phi,
                       "window_start_s": start, "window_end_s": stop, "rows": n_rows, "froude": means["froude"],
-                      "mu_eq_over_mu0": means["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
+                      "froude_se": errors["froude"], "mu_eq_over_mu0": means["mu_eq_over_mu0"],
+                      "mu_eq_over_mu0_se": errors["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
+                      "boulders_on_belt": on_belt[0], "boulders_on_belt_se": on_belt[1],
                       "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
                       "status": progress["status"], "uniform_froude": uniform_froude(folder),
                       "max_density_deviation": largest_density_deviation(folder)})
     if not table:
         fail("no member with a flow.csv in %s (run the ensemble first)" % args.runs_dir)
     table.sort(key=lambda r: (r["dp_m"], r["asked"][0] == "p", asked_value(r["asked"]), r["seed"]))
-    print("%8s %6s %5s %7s %6s %13s %7s %7s %7s %7s %9s" % ("asked", "count", "seed", "dp (m)", "phi", "window (s)",
-                                                           "Fr", "mu/mu0", "end (s)", "status", "max drho"))
+    print("%8s %6s %5s %7s %6s %13s %15s %15s %13s %7s %7s %9s" % (
+        "asked", "count", "seed", "dp (m)", "phi", "window (s)", "Fr +- se", "mu/mu0 +- se", "on belt", "end (s)",
+        "status", "max drho"))
     for r in table:
-        print("%8s %6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f %7.3f %7.1f %7s %9.4f" % (
+        print("%8s %6d %5d %7g %6.3f %6.1f-%-6.1f %7.3f +-%5.3f %7.3f +-%5.3f %5.2f +-%5.2f %7.1f %7s %9.4f" % (
             r["asked"], r["count"], r["seed"], r["dp_m"], r["phi"], r["window_start_s"], r["window_end_s"], r["froude"],
-            r["mu_eq_over_mu0"], r["end_s"], r["status"][:7], r["max_density_deviation"]))
+            r["froude_se"], r["mu_eq_over_mu0"], r["mu_eq_over_mu0_se"], r["boulders_on_belt"],
+            r["boulders_on_belt_se"], r["end_s"], r["status"][:7], r["max_density_deviation"]))
     if args.csv:
         with open(args.csv, "w", newline="") as f:
             w = csv.DictWriter(f, fieldnames=COLUMNS)
