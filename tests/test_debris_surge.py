@@ -306,6 +306,11 @@ check("collect: discs resting on the belt, from the window's disc snapshots: 2 o
       % [(r["boulders_on_belt"], r["boulders_on_belt_se"]) for r in belt_rows],
       rc == 0 and [(float(r["boulders_on_belt"]), float(r["boulders_on_belt_se"])) for r in belt_rows] == [(2.0, 0.0)],
       out + err[-1000:])
+with open(os.path.join(belt_member, "boulders_000000002.vtp"), "w") as f:
+    f.write("not a snapshot")
+rc, out, err = tool("collect", "--runs-dir", belt)
+check("collect: a disc snapshot in the window that cannot be read is refused, the file named",
+      rc == 2 and "boulders_000000002.vtp" in err and "Traceback" not in err, out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with
