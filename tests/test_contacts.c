@@ -1,5 +1,5 @@
 /* The contact solver alone (sim/src/boulders/contact_solver.c), no fluid: a disc at rest on a plane stays at rest; a
- * stack settles without drift or penetration; a disc on an incline sticks or slides (rotation locked) and rolls
+ * stack settles without drift or penetration; settled discs report the impulses their weights call for; a disc on an incline sticks or slides (rotation locked) and rolls
  * or slips (free) as Coulomb friction says; a disc set on a moving belt ends rolling at a third of its speed; a
  * bouncing disc keeps e^2 of its height; a head-on elastic collision swaps velocities across the periodic
  * boundary; discs blown up to non-finite or huge positions neither crash the broad phase nor disturb a resting
@@ -12,7 +12,7 @@
  * gap's shape moving, for a disc by a plane and two discs, and its null motions.
  * The tangential film inside the contact solver's sub-steps (the explicit scheme's): a disc by a plane or a belt slows
  * as implicit Euler on its resistance gives; two discs keep their momentum and a common translation.
- * usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured|
+ * usage: test_contacts rest|stack|impulses|incline|belt|bounce|collision|blown_up|lubrication|lubrication_measured|
  *        lubrication_tangential|lubrication_reynolds_solver */
 #include <math.h>
 #include <stdio.h>
@@ -96,6 +96,38 @@ static int test_rest(void)
     expect_below("rest: |y - r| after 2 s on the plane (m)", fabs(w.y[0] - 0.05), 1e-9);
     expect_below("rest: |v| after 2 s (m/s)", hypot(w.vx[0], w.vy[0]), 1e-9);
     expect_below("rest: |x - x0| (m)", fabs(w.x[0] - 0.3), 1e-12);
+    contact_solver_destroy(w.solver);
+    return failures;
+}
+
+/* The impulses the solver reports over an advance (contact_stats), once settled: two discs stacked on a plane (rotation
+ * locked) carry m g and 2 m g, a block held by friction on an incline m g sin and m g cos */
+static int test_impulses(void)
+{
+    const double g = 9.81, r = 0.05, dt = 1e-3, mass = 2000 * 3.14159265358979323846 * r * r, theta = atan(0.4);
+    world w;
+    world_init(&w, 0, -g);
+    add_plane(&w, 0, 1, 0);
+    add_disc(&w, 0.3, r, r, 1);
+    add_disc(&w, 0.3, 3 * r + 0.001, r, 1);
+    run(&w, dt, 1000);
+    contact_stats stats = contact_solver_stats(w.solver);
+    expect_below("impulses, stack of two: |wall normal / (2 m g dt) - 1|",
+                 fabs(stats.wall_normal_impulse / (2 * mass * g * dt) - 1), 1e-6);
+    expect_below("impulses, stack of two: |disc normal / (m g dt) - 1|",
+                 fabs(stats.disc_normal_impulse / (mass * g * dt) - 1), 1e-6);
+    expect_below("impulses, stack of two: friction / (m g dt)", stats.friction_impulse / (mass * g * dt), 1e-9);
+    contact_solver_destroy(w.solver);
+    world_init(&w, g * sin(theta), -g * cos(theta));
+    add_plane(&w, 0, 1, 0);
+    add_disc(&w, 1, r, r, 1);
+    run(&w, dt, 1000);
+    stats = contact_solver_stats(w.solver);
+    expect_below("impulses, block on an incline, tan = 0.4: |friction / (m g sin dt) - 1|",
+                 fabs(stats.friction_impulse / (mass * g * sin(theta) * dt) - 1), 1e-6);
+    expect_below("impulses, block on an incline, tan = 0.4: |wall normal / (m g cos dt) - 1|",
+                 fabs(stats.wall_normal_impulse / (mass * g * cos(theta) * dt) - 1), 1e-6);
+    expect_below("impulses, block on an incline: disc normal (N s/m)", fabs(stats.disc_normal_impulse), 0);
     contact_solver_destroy(w.solver);
     return failures;
 }
@@ -691,6 +723,8 @@ int main(int argc, char **argv)
         return test_rest() != 0;
     if (!strcmp(which, "stack"))
         return test_stack() != 0;
+    if (!strcmp(which, "impulses"))
+        return test_impulses() != 0;
     if (!strcmp(which, "incline"))
         return test_incline() != 0;
     if (!strcmp(which, "belt"))
@@ -709,7 +743,7 @@ int main(int argc, char **argv)
         return test_lubrication_tangential() != 0;
     if (!strcmp(which, "lubrication_reynolds_solver"))
         return test_lubrication_reynolds_solver() != 0;
-    fprintf(stderr, "usage: test_contacts rest|stack|incline|belt|bounce|collision|blown_up|lubrication|"
+    fprintf(stderr, "usage: test_contacts rest|stack|impulses|incline|belt|bounce|collision|blown_up|lubrication|"
                     "lubrication_measured|lubrication_tangential|lubrication_reynolds_solver\n");
     return 2;
 }

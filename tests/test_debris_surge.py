@@ -14,13 +14,14 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     (asked phi0.04) with the discs it placed and a realised phi of 0.03-0.05 (the placement takes its last disc when
     that brings the area closer to the fraction, so it may overshoot);
   - the discs ride in the flow: the 6-disc run's boulders.csv lists 6 discs, the health monitor stays quiet, and every
-    flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), and no
-    disc ahead of the front;
+    flow.csv row has finite numbers, the discs' mean place behind the front within the surge (0 to 20 m), no
+    disc ahead of the front, and contact forces nan in the first row, then finite and not negative (0 for the fluid
+    alone), as collect's window means are;
   - `collect` writes one table row per member (with its largest density deviation and the standard errors of its
     window means, nan under 4 rows) and the box plots, and the fluid-alone member's Fr is within 10 % of the uniform
     flow's (0.977) over its second half; it counts the discs resting on the belt in synthetic disc snapshots of known
     gaps, those in the window only; drift_conservation holds the same surge to 5 % over 8 s; a
-    flow.csv of an earlier version (no boulders_ahead_of_front) is collected with that count as nan; a disc member
+    flow.csv of an earlier version (no boulders_ahead_of_front, no contact forces) is collected with those as nan; a disc member
     without its boulders.csv is refused, named;
   - `plot` draws the same box plots from collect's table and a hand-made one; a table without a needed column, with a
     value that is not a finite number or outside its range, with an asked that is neither n<count> nor
@@ -179,6 +180,12 @@ for member in MEMBERS:
               discs == 6 and all(0 < b < 20 for b in behind) and all(a == "0" for a in ahead),
               "%d discs, behind the front %s, ahead of it %s" % (discs, behind, ahead))
     check("%s: every flow.csv row after the start is finite" % member, finite, str(later))
+    forces = [[float(r[k]) for k in ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")]
+              for r in rows]
+    check("%s: flow.csv's contact forces are nan in the first row, then finite and not negative (0 without discs)"
+          % member, all(math.isnan(f) for f in forces[0]) and
+          all(math.isfinite(f) and f >= 0 and (f == 0 or not member.startswith("n0")) for r in forces[1:] for f in r),
+          str(forces))
 
 table, png = os.path.join(WORK, "ensemble.csv"), os.path.join(WORK, "ensemble.png")
 rc, out, err = tool("collect", "--runs-dir", RUNS, "--csv", table, "--png", png)
@@ -188,6 +195,11 @@ froude = float(fluid[0]["froude"]) if fluid else float("nan")
 check("collect: a row per member and the box plots, with the most discs ever ahead of the front (none here)",
       rc == 0 and len(rows) == 3 and os.path.getsize(png) > 10000 and
       [r["most_boulders_ahead"] for r in rows] == ["0", "0", "0"], out + err[-1000:])
+check("collect: each row carries the window's mean contact forces, finite, 0 for the fluid alone (%s)"
+      % [[r[k] for k in ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")] for r in rows],
+      len(rows) == 3 and all(math.isfinite(float(r[k])) and float(r[k]) >= 0 and (r["count"] != "0" or float(r[k]) == 0)
+                             for r in rows for k in ("wall_contact_force_npm", "disc_contact_force_npm",
+                                                     "friction_force_npm")), out + err[-1000:])
 by_fraction = [r for r in rows if r["asked"] == "phi0.04"]
 with open(os.path.join(RUNS, "phi0.04_s1_dp0.066", "boulders.csv")) as f:
     placed = len(f.read().strip().split("\n")) - 1
@@ -321,12 +333,14 @@ older_flow = os.path.join(older, "n6_s1_dp0.067", "flow.csv")
 with open(older_flow) as f:
     lines = f.read().strip().split("\n")
 with open(older_flow, "w") as f:
-    f.write("\n".join(line.rsplit(",", 1)[0] for line in lines) + "\n")
+    f.write("\n".join(line.rsplit(",", 4)[0] for line in lines) + "\n")
 older_table = os.path.join(WORK, "older.csv")
 rc, out, err = tool("collect", "--runs-dir", older, "--csv", older_table, "--png", os.path.join(WORK, "older.png"))
 older_rows = list(csv.DictReader(open(older_table))) if os.path.isfile(older_table) else []
-check("collect: a flow.csv without boulders_ahead_of_front (an earlier version's) gives most_boulders_ahead nan",
-      rc == 0 and [r["most_boulders_ahead"] for r in older_rows] == ["nan"], out + err[-1000:])
+check("collect: a flow.csv without boulders_ahead_of_front and the contact forces (an earlier version's) gives "
+      "most_boulders_ahead and the forces nan",
+      rc == 0 and [[r[k] for k in ("most_boulders_ahead", "wall_contact_force_npm", "disc_contact_force_npm",
+                                   "friction_force_npm")] for r in older_rows] == [["nan"] * 4], out + err[-1000:])
 check("collect: a member is reported at the dp of its params.ini (0.066 m), not its folder's requested 0.067 m (%s)"
       % [r["dp_m"] for r in older_rows], [float(r["dp_m"]) for r in older_rows] == [0.066], out + err[-1000:])
 # a member asked for discs whose boulders.csv is missing is refused, named, not reported as zero discs

@@ -66,6 +66,7 @@ struct surge_sim {
     int narrow_gap_sites; /* the scene keeps fluid sites in gaps too narrow beside a disc (checkpoints up to version 9) */
     uint8_t *pack_interior; /* while the scene is built: by fluid id, 1 where the packing may move it (packing.c) */
 
+    surge_contact_impulses contact_impulses; /* summed over the steps taken (surge_sim_contact_impulses) */
     surge_phase_times phase_times; /* the steps' time by phase (surge_sim_phase_times; other_s stays 0 here) */
     double phase_mark_s;           /* omp_get_wtime() where the running phase began */
 };

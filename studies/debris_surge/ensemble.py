@@ -41,7 +41,9 @@ count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a ru
 25 s is averaged over its second half, and the window used is written) with their standard errors (froude_se,
 mu_eq_over_mu0_se: one member's window mean, its rows' autocorrelation counted; not the spread over seeds), how
 many discs rest on the belt (boulders_on_belt: at the contact margin from the belt's face, within 0.05 dp; the
-mean over the window's disc snapshots, with its standard error; nan without them) and the most discs that were ever ahead of
+mean over the window's disc snapshots, with its standard error; nan without them), the mean contact forces on the
+discs over the window (wall_contact_force_npm, disc_contact_force_npm, friction_force_npm: N per metre of width, normal
+from the walls and the belt, normal between discs, friction; nan in a flow.csv without them) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png); the table's
@@ -74,7 +76,8 @@ PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "froude_se", "mu_eq_over_mu0", "mu_eq_over_mu0_se", "h_max_m", "u_bar_mps", "boulders_behind_front_m",
-           "boulders_on_belt", "boulders_on_belt_se", "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
+           "boulders_on_belt", "boulders_on_belt_se", "wall_contact_force_npm", "disc_contact_force_npm",
+           "friction_force_npm", "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
 PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
            "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
@@ -268,6 +271,21 @@ def window_means(flow_csv, window):
     return start, stop, len(chosen), means, end, errors
 
 
+CONTACT_FORCES = ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")
+
+
+def contact_forces(flow_csv, start, stop):
+    """{column: mean over the window} of flow.csv's contact forces on the discs (N/m; each row is the mean since the
+    row before, so the rows after the window's start are averaged); nan for a flow.csv written before those columns."""
+    with open(flow_csv, newline="") as f:
+        columns = csv.DictReader(f).fieldnames or []
+    if not all(k in columns for k in CONTACT_FORCES):
+        return {k: math.nan for k in CONTACT_FORCES}
+    rows = [r for r in study.read_rows(TOOL, flow_csv, dict({k: float for k in CONTACT_FORCES}, time_s=float))
+            if start < float(r["time_s"]) <= stop + 1e-9]
+    return {k: sum(float(r[k]) for r in rows) / len(rows) if rows else math.nan for k in CONTACT_FORCES}
+
+
 def most_boulders_ahead(flow_csv):
     """The most discs ever downstream of the front over the run (flow.csv's boulders_ahead_of_front: discs that
     left the surge); nan for a flow.csv written before that column existed."""
@@ -375,6 +393,7 @@ def command_collect(args):
                       "mu_eq_over_mu0_se": errors["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
                       "boulders_on_belt": on_belt[0], "boulders_on_belt_se": on_belt[1],
+                      **contact_forces(flow, start, stop),
                       "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
                       "status": progress["status"], "uniform_froude": uniform_froude(folder),
                       "max_density_deviation": largest_density_deviation(folder)})

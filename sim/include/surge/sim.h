@@ -92,6 +92,18 @@ surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
 /* Whether the scheme in use solves linear systems: the diagnostics' iterations and residuals mean something */
 bool surge_sim_reports_solves(const surge_sim *sim);
 
+/* The contact solver's impulses on the discs, summed over the steps taken since the simulation was created or read
+ * from a checkpoint (N s per metre of width): normal impulses of the walls and the belt, normal impulses between discs
+ * (each pair once), and the magnitudes of the friction impulses; the lubrication films' not counted. Their change over
+ * a span of simulated time, divided by it, is the span's mean contact force (flow.csv). All 0 without discs. */
+typedef struct surge_contact_impulses {
+    double wall_normal_nspm;
+    double disc_normal_nspm;
+    double friction_nspm;
+} surge_contact_impulses;
+
+surge_contact_impulses surge_sim_contact_impulses(const surge_sim *sim);
+
 /* What `surge check` says of the scene for the scheme in use, before it runs: its warnings on steps and resolution,
  * its time step, memory and cost estimate (verbose: all of it, else only warnings and an estimate past 4 GB) */
 void surge_sim_check_report(const surge_sim *sim, FILE *out, int verbose);

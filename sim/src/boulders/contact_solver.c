@@ -494,6 +494,11 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
             s->stats.max_overlap_m = fmax(s->stats.max_overlap_m, -s->now[k].gap_m);
         prepare(s, d, set, h);
         solve(s, d, set, h);
+        for (int k = 0; k < s->now_count; k++) {
+            const contact *c = &s->now[k];
+            *(c->a < 0 ? &s->stats.wall_normal_impulse : &s->stats.disc_normal_impulse) += c->lambda_n;
+            s->stats.friction_impulse += fabs(c->lambda_t);
+        }
         for (int i = 0; i < d->count; i++) {
             d->x[i] += h * d->vx[i];
             d->y[i] += h * d->vy[i];

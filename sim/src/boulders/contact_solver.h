@@ -54,6 +54,9 @@ typedef struct contact_settings {
 typedef struct contact_stats {
     int contacts;         /* touching or about to touch in the last sub-step */
     double max_overlap_m; /* largest overlap at the start of any sub-step of the last advance */
+    /* the contacts' impulses over the last advance's sub-steps (N s per metre of width): the normal ones of walls on
+     * discs and of discs on each other (each pair once), and the friction impulses' magnitudes; the films' not counted */
+    double wall_normal_impulse, disc_normal_impulse, friction_impulse;
 } contact_stats;
 
 typedef struct contact_solver contact_solver;

@@ -20,6 +20,8 @@ typedef struct run_outputs {
     surge_pvd *boulder_pvd; /* boulders.pvd, when the scene has boulders */
     FILE *csv;
     FILE *flow_csv;         /* flow.csv, when output.flow_interval_s > 0 */
+    surge_contact_impulses flow_impulses; /* the discs' contact impulses at flow.csv's last row (or the run's start) */
+    double flow_time_s;                   /* and that row's time */
     surge_snapshot snap;
     int64_t last_snapshot_step; /* the step of the last snapshot in the collection */
     int64_t last_checkpoint_step;  /* the step of the checkpoint on disk (-1: none written by this run) */
@@ -125,14 +127,22 @@ static int write_flow(const surge_sim *sim, run_outputs *o, char *err, size_t er
     }
     surge_flow_metrics m;
     surge_flow_metrics_compute(&o->snap, surge_sim_params(sim), &m);
-    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d\n", m.time_s,
+    /* the mean contact forces on the discs since the last row (NaN in a run's first row) */
+    const surge_contact_impulses now = surge_sim_contact_impulses(sim), *then = &o->flow_impulses;
+    const double span_s = surge_sim_time(sim) - o->flow_time_s;
+    const double per_s = span_s > 0 ? 1.0 / span_s : NAN;
+    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%.6g,%.6g,%.6g\n", m.time_s,
                 (long long)surge_sim_step_count(sim), m.h_max_m, m.h_max_with_boulders_m, m.u_bar_mps, m.froude,
                 m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted,
-                m.boulders_ahead_of_front) < 0 ||
+                m.boulders_ahead_of_front, (now.wall_normal_nspm - then->wall_normal_nspm) * per_s,
+                (now.disc_normal_nspm - then->disc_normal_nspm) * per_s,
+                (now.friction_nspm - then->friction_nspm) * per_s) < 0 ||
         fflush(o->flow_csv) != 0) {
         snprintf(err, err_len, "cannot write %s/flow.csv: %s", o->dir, strerror(errno));
         return -1;
     }
+    o->flow_impulses = now;
+    o->flow_time_s = surge_sim_time(sim);
     return 0;
 }
 
@@ -312,8 +322,11 @@ static int open_outputs(surge_sim *sim, const surge_run_options *opt, run_output
     if (p->output.flow_interval_s > 0 &&
         !(o->flow_csv = open_series(o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
                                     "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted,"
-                                    "boulders_ahead_of_front", sim, opt->restarted, err, err_len)))
+                                    "boulders_ahead_of_front,wall_contact_force_npm,disc_contact_force_npm,"
+                                    "friction_force_npm", sim, opt->restarted, err, err_len)))
         return -1;
+    o->flow_impulses = surge_sim_contact_impulses(sim);
+    o->flow_time_s = surge_sim_time(sim);
     if (!opt->restarted &&
         (write_diagnostics(sim, o, err, err_len) != 0 || write_snapshot(sim, o, NULL, 1, err, err_len) != 0 ||
          (o->flow_csv && write_flow(sim, o, err, err_len) != 0) ||
