@@ -35,6 +35,10 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   0.08 a over the moving bed of the Couette channel moves over it at the same speed at a/dp 4 and 8
                   (within 3 %), where the sliding film's differ by 21 %; the explicit scheme's disc at a/dp 8
                   within 6 % of the implicit one's; the option refused without the measured squeeze film.
+  GROUP resting   a disc (a/dp 5, density ratio 2) released just above the bed of the settling tank with the debris
+                  surge's contact settings (margin 1 dp, the measured films) comes to rest on it, and flow.csv's
+                  contact force of the bed carries its buoyant weight (pi a^2 (rho_disc - rho) g) within 5 % (0.98
+                  measured), and nothing else: the other walls' and the discs' forces are 0.
   GROUP implicit_passes  the implicit scheme's passes with discs in a 0.3 m cut of the loaded channel at phi 0.5:
                   six passes combined by Anderson's acceleration (the default) bring the fluid's speed after five
                   steps within 4 % of 24 converged passes (+2.8 % measured; six plain passes +6.1 %).
@@ -42,6 +46,7 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
 Each check prints "name: ok" or "name: FAILED" with details; the script exits 1 if any failed.
 """
 
+import csv
 import os
 import re
 import shutil
@@ -618,6 +623,29 @@ def group_gap_pressure():
           ratio is not None and 0 < ratio < 3.4, "ratio %s" % ratio)
 
 
+def group_resting():
+    """A disc resting on the bed carries its buoyant weight on the contact: flow.csv's contact forces (docs/boulders.md,
+    "What presses a disc on the bed")."""
+    a, g, rho = 0.0125, 1.0, 1000.0
+    weight = np.pi * a * a * (2 * rho - rho) * g
+    out, p, cmd = surge("resting", ["run", "boulder_settling.ini", "-s", "numerics.dp_m=0.0025", "-s",
+                                    "boulders.list_m=0.05 0.0152 0.0125", "-s", "contacts.margin_dp=1", "-s",
+                                    "contacts.lubrication_resolved=measured", "-s",
+                                    "contacts.lubrication_tangential=reynolds", "-s", "time.end_s=1.5", "-s",
+                                    "output.snapshot_interval_s=0", "-s", "output.flow_interval_s=0.25"])
+    check("resting: run finishes", p.returncode == 0, cmd + "\n" + p.stderr[-2000:])
+    with open(os.path.join(out, "flow.csv")) as f:
+        rows = [r for r in csv.DictReader(f) if float(r["time_s"]) > 0.99]
+    bed = np.mean([float(r["bed_normal_force_npm"]) for r in rows]) if rows else float("nan")
+    others = [float(r[k]) for r in rows for k in ("wall_normal_force_npm", "wall_friction_force_npm",
+                                                  "disc_normal_force_npm", "disc_friction_force_npm")]
+    friction = max((float(r["bed_friction_force_npm"]) for r in rows), default=float("nan"))
+    check("resting: the bed carries the disc's buoyant weight within 5 %% (%.4f N/m against %.4f, %d rows)"
+          % (bed, weight, len(rows)), len(rows) >= 2 and abs(bed / weight - 1) < 0.05, str(rows))
+    check("resting: the other walls and discs carry nothing, the bed's friction under 1 %% of the weight (%.3g N/m)"
+          % friction, others == [0.0] * len(others) and friction < 0.01 * weight, str(rows))
+
+
 def group_implicit_films():
     """The lubrication films inside the implicit scheme's solves (docs/method.md, "Boulders in the implicit scheme"):
     the disc of group_gap_pressure settling onto the bed, implicit scheme, the lubrication model on (the default,
@@ -763,7 +791,7 @@ def approach_over_film(out, p, target):
     return ratio
 
 
-{"gap_pressure": group_gap_pressure, "implicit_films": group_implicit_films,
+{"gap_pressure": group_gap_pressure, "resting": group_resting, "implicit_films": group_implicit_films,
  "implicit_films_tangential": group_implicit_films_tangential,
  "implicit_films_measured": group_implicit_films_measured, "implicit_passes": group_implicit_passes, "implicit": group_implicit, "implicit_steps": group_implicit_steps, "scene": group_scene, "settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
 sys.exit(finish())

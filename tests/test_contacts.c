@@ -101,7 +101,8 @@ static int test_rest(void)
 }
 
 /* The impulses the solver reports over an advance (contact_stats), once settled: two discs stacked on a plane (rotation
- * locked) carry m g and 2 m g, a block held by friction on an incline m g sin and m g cos */
+ * locked) carry m g and 2 m g; a block held by friction on an incline m g sin and m g cos, on the incline's plane and
+ * not on a second plane it does not touch */
 static int test_impulses(void)
 {
     const double g = 9.81, r = 0.05, dt = 1e-3, mass = 2000 * 3.14159265358979323846 * r * r, theta = atan(0.4);
@@ -112,22 +113,26 @@ static int test_impulses(void)
     add_disc(&w, 0.3, 3 * r + 0.001, r, 1);
     run(&w, dt, 1000);
     contact_stats stats = contact_solver_stats(w.solver);
-    expect_below("impulses, stack of two: |wall normal / (2 m g dt) - 1|",
-                 fabs(stats.wall_normal_impulse / (2 * mass * g * dt) - 1), 1e-6);
-    expect_below("impulses, stack of two: |disc normal / (m g dt) - 1|",
+    expect_below("impulses, stack of two: |plane's normal / (2 m g dt) - 1|",
+                 fabs(stats.wall_normal_impulse[0] / (2 * mass * g * dt) - 1), 1e-6);
+    expect_below("impulses, stack of two: |between the discs, normal / (m g dt) - 1|",
                  fabs(stats.disc_normal_impulse / (mass * g * dt) - 1), 1e-6);
-    expect_below("impulses, stack of two: friction / (m g dt)", stats.friction_impulse / (mass * g * dt), 1e-9);
+    expect_below("impulses, stack of two: friction, plane's and between the discs, / (m g dt)",
+                 (stats.wall_friction_impulse[0] + stats.disc_friction_impulse) / (mass * g * dt), 1e-9);
     contact_solver_destroy(w.solver);
     world_init(&w, g * sin(theta), -g * cos(theta));
     add_plane(&w, 0, 1, 0);
+    add_plane(&w, -1, 0, -2);
     add_disc(&w, 1, r, r, 1);
     run(&w, dt, 1000);
     stats = contact_solver_stats(w.solver);
     expect_below("impulses, block on an incline, tan = 0.4: |friction / (m g sin dt) - 1|",
-                 fabs(stats.friction_impulse / (mass * g * sin(theta) * dt) - 1), 1e-6);
-    expect_below("impulses, block on an incline, tan = 0.4: |wall normal / (m g cos dt) - 1|",
-                 fabs(stats.wall_normal_impulse / (mass * g * cos(theta) * dt) - 1), 1e-6);
-    expect_below("impulses, block on an incline: disc normal (N s/m)", fabs(stats.disc_normal_impulse), 0);
+                 fabs(stats.wall_friction_impulse[0] / (mass * g * sin(theta) * dt) - 1), 1e-6);
+    expect_below("impulses, block on an incline, tan = 0.4: |normal / (m g cos dt) - 1|",
+                 fabs(stats.wall_normal_impulse[0] / (mass * g * cos(theta) * dt) - 1), 1e-6);
+    expect_below("impulses, block on an incline: the untouched plane's and between discs (N s/m)",
+                 stats.wall_normal_impulse[1] + stats.wall_friction_impulse[1] + stats.disc_normal_impulse +
+                     stats.disc_friction_impulse, 0);
     contact_solver_destroy(w.solver);
     return failures;
 }

@@ -48,6 +48,9 @@ TOOL = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
 RUNS = os.path.join(WORK, "runs")
 COMMON = ["--counts", "0,6", "--phis", "0.04", "--seeds", "1", "--dp", "0.066", "--runs-dir", RUNS]
 ENV = dict(os.environ, OMP_WAIT_POLICY="PASSIVE")
+# flow.csv's contact forces on the discs (N/m), which collect averages over its window
+ensemble_forces = ("bed_normal_force_npm", "bed_friction_force_npm", "wall_normal_force_npm", "wall_friction_force_npm",
+                   "disc_normal_force_npm", "disc_friction_force_npm")
 
 
 def tool(*args, timeout_s=900):
@@ -180,8 +183,7 @@ for member in MEMBERS:
               discs == 6 and all(0 < b < 20 for b in behind) and all(a == "0" for a in ahead),
               "%d discs, behind the front %s, ahead of it %s" % (discs, behind, ahead))
     check("%s: every flow.csv row after the start is finite" % member, finite, str(later))
-    forces = [[float(r[k]) for k in ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")]
-              for r in rows]
+    forces = [[float(r[k]) for k in ensemble_forces] for r in rows]
     check("%s: flow.csv's contact forces are nan in the first row, then finite and not negative (0 without discs)"
           % member, all(math.isnan(f) for f in forces[0]) and
           all(math.isfinite(f) and f >= 0 and (f == 0 or not member.startswith("n0")) for r in forces[1:] for f in r),
@@ -196,10 +198,9 @@ check("collect: a row per member and the box plots, with the most discs ever ahe
       rc == 0 and len(rows) == 3 and os.path.getsize(png) > 10000 and
       [r["most_boulders_ahead"] for r in rows] == ["0", "0", "0"], out + err[-1000:])
 check("collect: each row carries the window's mean contact forces, finite, 0 for the fluid alone (%s)"
-      % [[r[k] for k in ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")] for r in rows],
+      % [[r[k] for k in ensemble_forces] for r in rows],
       len(rows) == 3 and all(math.isfinite(float(r[k])) and float(r[k]) >= 0 and (r["count"] != "0" or float(r[k]) == 0)
-                             for r in rows for k in ("wall_contact_force_npm", "disc_contact_force_npm",
-                                                     "friction_force_npm")), out + err[-1000:])
+                             for r in rows for k in ensemble_forces), out + err[-1000:])
 by_fraction = [r for r in rows if r["asked"] == "phi0.04"]
 with open(os.path.join(RUNS, "phi0.04_s1_dp0.066", "boulders.csv")) as f:
     placed = len(f.read().strip().split("\n")) - 1
@@ -333,14 +334,13 @@ older_flow = os.path.join(older, "n6_s1_dp0.067", "flow.csv")
 with open(older_flow) as f:
     lines = f.read().strip().split("\n")
 with open(older_flow, "w") as f:
-    f.write("\n".join(line.rsplit(",", 4)[0] for line in lines) + "\n")
+    f.write("\n".join(line.rsplit(",", 7)[0] for line in lines) + "\n")
 older_table = os.path.join(WORK, "older.csv")
 rc, out, err = tool("collect", "--runs-dir", older, "--csv", older_table, "--png", os.path.join(WORK, "older.png"))
 older_rows = list(csv.DictReader(open(older_table))) if os.path.isfile(older_table) else []
 check("collect: a flow.csv without boulders_ahead_of_front and the contact forces (an earlier version's) gives "
       "most_boulders_ahead and the forces nan",
-      rc == 0 and [[r[k] for k in ("most_boulders_ahead", "wall_contact_force_npm", "disc_contact_force_npm",
-                                   "friction_force_npm")] for r in older_rows] == [["nan"] * 4], out + err[-1000:])
+      rc == 0 and [[r[k] for k in ("most_boulders_ahead",) + ensemble_forces] for r in older_rows] == [["nan"] * 7], out + err[-1000:])
 check("collect: a member is reported at the dp of its params.ini (0.066 m), not its folder's requested 0.067 m (%s)"
       % [r["dp_m"] for r in older_rows], [float(r["dp_m"]) for r in older_rows] == [0.066], out + err[-1000:])
 # a member asked for discs whose boulders.csv is missing is refused, named, not reported as zero discs

@@ -145,12 +145,8 @@ int surge_sim_step(surge_sim *sim)
     const int rc = sim->scheme->step(sim);
     sim->phase_times.total_s += omp_get_wtime() - start_s;
     sim->phase_times.steps++;
-    if (rc == 0 && sim->boulders.count > 0) { /* a step with discs ends with one advance of the contact solver */
-        const contact_stats last = contact_solver_stats(sim->boulders.contacts);
-        sim->contact_impulses.wall_normal_nspm += last.wall_normal_impulse;
-        sim->contact_impulses.disc_normal_nspm += last.disc_normal_impulse;
-        sim->contact_impulses.friction_nspm += last.friction_impulse;
-    }
+    if (rc == 0 && sim->boulders.count > 0) /* a step with discs ends with one advance of the contact solver */
+        boulders_add_contact_impulses(sim, &sim->contact_impulses);
     return rc;
 }
 

@@ -42,8 +42,8 @@ count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a ru
 mu_eq_over_mu0_se: one member's window mean, its rows' autocorrelation counted; not the spread over seeds), how
 many discs rest on the belt (boulders_on_belt: at the contact margin from the belt's face, within 0.05 dp; the
 mean over the window's disc snapshots, with its standard error; nan without them), the mean contact forces on the
-discs over the window (wall_contact_force_npm, disc_contact_force_npm, friction_force_npm: N per metre of width, normal
-from the walls and the belt, normal between discs, friction; nan in a flow.csv without them) and the most discs that were ever ahead of
+discs over the window (bed_, wall_ and disc_normal_force_npm, and the same _friction_force_npm: N per metre of width,
+of the belt, of the other walls and between discs; nan in a flow.csv without them) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
 mu_eq/mu0 against the realised solid fraction phi (disc area over the initial fluid block's; boxes the quartiles,
 whiskers the extremes, the mean marked), with the uniform-flow values for phi = 0 (--png); the table's
@@ -76,8 +76,9 @@ PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "froude_se", "mu_eq_over_mu0", "mu_eq_over_mu0_se", "h_max_m", "u_bar_mps", "boulders_behind_front_m",
-           "boulders_on_belt", "boulders_on_belt_se", "wall_contact_force_npm", "disc_contact_force_npm",
-           "friction_force_npm", "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
+           "boulders_on_belt", "boulders_on_belt_se", "bed_normal_force_npm", "bed_friction_force_npm",
+           "wall_normal_force_npm", "wall_friction_force_npm", "disc_normal_force_npm", "disc_friction_force_npm",
+           "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
 PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
            "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
@@ -271,7 +272,8 @@ def window_means(flow_csv, window):
     return start, stop, len(chosen), means, end, errors
 
 
-CONTACT_FORCES = ("wall_contact_force_npm", "disc_contact_force_npm", "friction_force_npm")
+CONTACT_FORCES = ("bed_normal_force_npm", "bed_friction_force_npm", "wall_normal_force_npm", "wall_friction_force_npm",
+                  "disc_normal_force_npm", "disc_friction_force_npm")
 
 
 def contact_forces(flow_csv, start, stop):

@@ -93,13 +93,14 @@ surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);
 bool surge_sim_reports_solves(const surge_sim *sim);
 
 /* The contact solver's impulses on the discs, summed over the steps taken since the simulation was created or read
- * from a checkpoint (N s per metre of width): normal impulses of the walls and the belt, normal impulses between discs
- * (each pair once), and the magnitudes of the friction impulses; the lubrication films' not counted. Their change over
- * a span of simulated time, divided by it, is the span's mean contact force (flow.csv). All 0 without discs. */
+ * from a checkpoint (N s per metre of width), normal and the friction impulses' magnitudes: of the bed (the belt, where
+ * it moves), of the other walls (the upstream wall, the lid, the sides, the disc catcher), and between discs (each
+ * pair once); the lubrication films' not counted. Their change over a span of simulated time, divided by it, is the
+ * span's mean contact force (flow.csv). All 0 without discs. */
 typedef struct surge_contact_impulses {
-    double wall_normal_nspm;
-    double disc_normal_nspm;
-    double friction_nspm;
+    double bed_normal_nspm, bed_friction_nspm;
+    double wall_normal_nspm, wall_friction_nspm;
+    double disc_normal_nspm, disc_friction_nspm;
 } surge_contact_impulses;
 
 surge_contact_impulses surge_sim_contact_impulses(const surge_sim *sim);

@@ -9,6 +9,7 @@
 #include "boulders/boulder_set.h"
 #include "precision.h"
 #include "surge/params.h"
+#include "surge/sim.h"
 
 typedef struct surge_sim surge_sim;
 
@@ -43,6 +44,8 @@ void boulders_restore(surge_sim *sim);                        /* back to the ste
  * alpha, with the lubrication films (contacts.lubrication) when with_lubrication; the disc particles follow. -1 when
  * the contact solver runs out of memory. */
 int boulders_advance_with_contacts(surge_sim *sim, double dt_s, int with_lubrication);
+/* Adds the last advance's contact impulses to *sum, the bed's apart from the other walls' */
+void boulders_add_contact_impulses(const surge_sim *sim, surge_contact_impulses *sum);
 /* The lubrication films of the discs' gaps at their present positions (contacts.lubrication; contact_solver_films) */
 int boulders_films(surge_sim *sim, contact_film **films, int *count, int *capacity);
 /* A disc's acceleration without the fluid: gravity on its mass; the driving force of a channel on its volume */

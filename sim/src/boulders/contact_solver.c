@@ -466,6 +466,8 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
 {
     const double h = dt_s / set->substeps, period = set->period_m;
     s->stats = (contact_stats){0};
+    if (wall_count > CONTACT_WALLS_MAX)
+        return -1;
     if (d->count == 0)
         return 0;
     double r_min = INFINITY;
@@ -496,8 +498,9 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         solve(s, d, set, h);
         for (int k = 0; k < s->now_count; k++) {
             const contact *c = &s->now[k];
-            *(c->a < 0 ? &s->stats.wall_normal_impulse : &s->stats.disc_normal_impulse) += c->lambda_n;
-            s->stats.friction_impulse += fabs(c->lambda_t);
+            *(c->a < 0 ? &s->stats.wall_normal_impulse[-1 - c->a] : &s->stats.disc_normal_impulse) += c->lambda_n;
+            *(c->a < 0 ? &s->stats.wall_friction_impulse[-1 - c->a] : &s->stats.disc_friction_impulse) +=
+                fabs(c->lambda_t);
         }
         for (int i = 0; i < d->count; i++) {
             d->x[i] += h * d->vx[i];

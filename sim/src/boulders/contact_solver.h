@@ -24,6 +24,8 @@ typedef enum contact_wall_shape {
     CONTACT_SEGMENT = 1, /* a thin segment from (x0, y0) to (x1, y1), touched from either side and its ends */
 } contact_wall_shape;
 
+#define CONTACT_WALLS_MAX 8 /* the most walls an advance takes */
+
 typedef struct contact_wall {
     contact_wall_shape shape;
     double nx, ny, offset;       /* plane */
@@ -54,9 +56,11 @@ typedef struct contact_settings {
 typedef struct contact_stats {
     int contacts;         /* touching or about to touch in the last sub-step */
     double max_overlap_m; /* largest overlap at the start of any sub-step of the last advance */
-    /* the contacts' impulses over the last advance's sub-steps (N s per metre of width): the normal ones of walls on
-     * discs and of discs on each other (each pair once), and the friction impulses' magnitudes; the films' not counted */
-    double wall_normal_impulse, disc_normal_impulse, friction_impulse;
+    /* the contacts' impulses over the last advance's sub-steps (N s per metre of width), normal and the friction
+     * impulses' magnitudes: of each wall on the discs (by wall index) and of discs on each other (each pair once); the
+     * films' not counted */
+    double wall_normal_impulse[CONTACT_WALLS_MAX], wall_friction_impulse[CONTACT_WALLS_MAX];
+    double disc_normal_impulse, disc_friction_impulse;
 } contact_stats;
 
 typedef struct contact_solver contact_solver;
@@ -65,7 +69,8 @@ contact_solver *contact_solver_create(void);
 void contact_solver_destroy(contact_solver *solver);
 
 /* Advances the discs by dt_s under constant accelerations (ax, ay, alpha per disc; NULL: none) and the
- * contacts with each other and with the walls. Returns 0, or -1 when out of memory. */
+ * contacts with each other and with the walls (at most CONTACT_WALLS_MAX). Returns 0, or -1 when out of memory or given
+ * more walls. */
 int contact_solver_advance(contact_solver *solver, contact_discs *discs, const contact_wall *walls, int wall_count,
                            const contact_settings *settings, double dt_s, const double *ax, const double *ay,
                            const double *alpha);

@@ -111,7 +111,6 @@ void boulders_restore(surge_sim *sim)
  * that went round the periodic channel meets its back face, not its particles (the 60-disc surge of
  * docs/validation/debris_surge.md). The disc catcher is a line at the end of the period, x = length (= 0), from the
  * bed to the domain's top: a disc that rolled off the front stops there, short of the wall's back. */
-#define CONTACT_WALLS_MAX 8
 static int contact_walls(const surge_sim *sim, contact_wall walls[CONTACT_WALLS_MAX])
 {
     const surge_params *p = &sim->params;
@@ -185,6 +184,18 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s, int with_lubrica
     boulders_place_particles(sim);
     phase_end(sim, &sim->phase_times.discs_s);
     return 0;
+}
+
+void boulders_add_contact_impulses(const surge_sim *sim, surge_contact_impulses *sum)
+{
+    const contact_stats last = contact_solver_stats(sim->boulders.contacts);
+    const int bed = sim->params.walls.bottom ? 0 : -1; /* contact_walls puts the bed first */
+    for (int w = 0; w < CONTACT_WALLS_MAX; w++) {
+        *(w == bed ? &sum->bed_normal_nspm : &sum->wall_normal_nspm) += last.wall_normal_impulse[w];
+        *(w == bed ? &sum->bed_friction_nspm : &sum->wall_friction_nspm) += last.wall_friction_impulse[w];
+    }
+    sum->disc_normal_nspm += last.disc_normal_impulse;
+    sum->disc_friction_nspm += last.disc_friction_impulse;
 }
 
 int boulders_films(surge_sim *sim, contact_film **films, int *count, int *capacity)

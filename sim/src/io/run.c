@@ -131,12 +131,15 @@ static int write_flow(const surge_sim *sim, run_outputs *o, char *err, size_t er
     const surge_contact_impulses now = surge_sim_contact_impulses(sim), *then = &o->flow_impulses;
     const double span_s = surge_sim_time(sim) - o->flow_time_s;
     const double per_s = span_s > 0 ? 1.0 / span_s : NAN;
-    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%.6g,%.6g,%.6g\n", m.time_s,
-                (long long)surge_sim_step_count(sim), m.h_max_m, m.h_max_with_boulders_m, m.u_bar_mps, m.froude,
-                m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted,
-                m.boulders_ahead_of_front, (now.wall_normal_nspm - then->wall_normal_nspm) * per_s,
+    if (fprintf(o->flow_csv, "%.9g,%lld,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g,%d,%d,%.6g,%.6g,%.6g,%.6g,%.6g,%.6g\n",
+                m.time_s, (long long)surge_sim_step_count(sim), m.h_max_m, m.h_max_with_boulders_m, m.u_bar_mps,
+                m.froude, m.mu_eq_over_mu0, m.front_from_wall_m, m.boulders_behind_front_m, m.fluid_counted,
+                m.boulders_ahead_of_front, (now.bed_normal_nspm - then->bed_normal_nspm) * per_s,
+                (now.bed_friction_nspm - then->bed_friction_nspm) * per_s,
+                (now.wall_normal_nspm - then->wall_normal_nspm) * per_s,
+                (now.wall_friction_nspm - then->wall_friction_nspm) * per_s,
                 (now.disc_normal_nspm - then->disc_normal_nspm) * per_s,
-                (now.friction_nspm - then->friction_nspm) * per_s) < 0 ||
+                (now.disc_friction_nspm - then->disc_friction_nspm) * per_s) < 0 ||
         fflush(o->flow_csv) != 0) {
         snprintf(err, err_len, "cannot write %s/flow.csv: %s", o->dir, strerror(errno));
         return -1;
@@ -322,8 +325,9 @@ static int open_outputs(surge_sim *sim, const surge_run_options *opt, run_output
     if (p->output.flow_interval_s > 0 &&
         !(o->flow_csv = open_series(o, "flow.csv", "time_s,step,h_max_m,h_max_with_boulders_m,u_bar_mps,froude,"
                                     "mu_eq_over_mu0,front_from_wall_m,boulders_behind_front_m,fluid_counted,"
-                                    "boulders_ahead_of_front,wall_contact_force_npm,disc_contact_force_npm,"
-                                    "friction_force_npm", sim, opt->restarted, err, err_len)))
+                                    "boulders_ahead_of_front,bed_normal_force_npm,bed_friction_force_npm,"
+                                    "wall_normal_force_npm,wall_friction_force_npm,disc_normal_force_npm,"
+                                    "disc_friction_force_npm", sim, opt->restarted, err, err_len)))
         return -1;
     o->flow_impulses = surge_sim_contact_impulses(sim);
     o->flow_time_s = surge_sim_time(sim);
