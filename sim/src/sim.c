@@ -251,6 +251,14 @@ int surge_sim_snapshot(const surge_sim *sim, surge_snapshot *snap)
         snap->boulders.vy_mps[i] = b->vy[i];
         snap->boulders.omega_radps[i] = b->omega[i];
         snap->boulders.radius_m[i] = b->radius[i];
+        snap->boulders.fluid_fx_npm[i] = b->step_fluid_fx[i];
+        snap->boulders.fluid_fy_npm[i] = b->step_fluid_fy[i];
+        snap->boulders.film_fx_npm[i] = b->step_film_fx[i];
+        snap->boulders.film_fy_npm[i] = b->step_film_fy[i];
+        snap->boulders.wall_contact_fx_npm[i] = b->step_wall_contact_fx[i];
+        snap->boulders.wall_contact_fy_npm[i] = b->step_wall_contact_fy[i];
+        snap->boulders.disc_contact_fx_npm[i] = b->step_disc_contact_fx[i];
+        snap->boulders.disc_contact_fy_npm[i] = b->step_disc_contact_fy[i];
     }
     return 0;
 }

@@ -21,6 +21,13 @@ typedef struct surge_boulder_state {
     double *vx_mps, *vy_mps;
     double *omega_radps;  /* counter-clockwise */
     double *radius_m;
+    /* the forces on each disc, means over the last step (N per metre of width): the fluid's (pressure and viscous
+     * stress; the implicit scheme's with the lubrication films its solves carry), the lubrication films' that the
+     * contact solver takes (the explicit scheme's), and the contacts' of the walls and of the other discs. With the
+     * disc's own weight (and a channel's drive) they sum to its mass times its acceleration. NaN where not known:
+     * before the first step of a simulation or of its continuation, in a file written without them. */
+    double *fluid_fx_npm, *fluid_fy_npm, *film_fx_npm, *film_fy_npm;
+    double *wall_contact_fx_npm, *wall_contact_fy_npm, *disc_contact_fx_npm, *disc_contact_fy_npm;
     int32_t capacity;
 } surge_boulder_state;
 

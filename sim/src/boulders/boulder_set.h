@@ -38,7 +38,15 @@
     F(omega_forces, "the omega the last fluid forces were computed with")                                            \
     F(angle_build, "orientation at the last neighbour-list build (where the ghosts' lists were made)")              \
     F(cos_angle, "scratch: cos and sin of angle as of the last boulders_orient (one per disc: its particles share")  \
-    F(sin_angle, "them)")
+    F(sin_angle, "them)")                                                                                            \
+    F(step_fluid_fx, "the last step's mean forces on the disc (N/m; reported, not part of the state): the fluid's")  \
+    F(step_fluid_fy, "(the implicit scheme's with the films its solves carry)")                                       \
+    F(step_film_fx, "the lubrication films' the contact solver takes (the explicit scheme's)")                       \
+    F(step_film_fy, "")                                                                                               \
+    F(step_wall_contact_fx, "the walls' contacts'")                                                                  \
+    F(step_wall_contact_fy, "")                                                                                       \
+    F(step_disc_contact_fx, "the other discs' contacts'")                                                            \
+    F(step_disc_contact_fy, "")
 
 /* The per-wall-particle arrays, F(name, type, meaning) */
 #define SURGE_WALL_DISC_FIELDS(F)                                                                                     \

@@ -29,7 +29,13 @@ static int allocate_discs(boulder_set *b, int n)
     SURGE_DISC_FIELDS(ALLOC_DISC)
 #undef ALLOC_DISC
 #undef ALLOC_DISC_COPY
-    return ok ? 0 : -1;
+    if (!ok)
+        return -1;
+    for (int i = 0; i < n; i++) /* not known before a first step */
+        b->step_fluid_fx[i] = b->step_fluid_fy[i] = b->step_film_fx[i] = b->step_film_fy[i] =
+            b->step_wall_contact_fx[i] = b->step_wall_contact_fy[i] = b->step_disc_contact_fx[i] =
+                b->step_disc_contact_fy[i] = NAN;
+    return 0;
 }
 
 int boulders_allocate_wall_fields(boulder_set *b, int wall_count)

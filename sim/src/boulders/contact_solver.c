@@ -307,6 +307,21 @@ static void apply_impulse(const contact *c, contact_discs *d, double pn, double 
     }
 }
 
+/* A contact's impulse of the sub-step on each disc's sums (contact_discs) */
+static void add_disc_impulses(const contact *c, contact_discs *d)
+{
+    const double px = c->lambda_n * c->nx - c->lambda_t * c->ny, py = c->lambda_n * c->ny + c->lambda_t * c->nx;
+    if (c->a < 0) {
+        d->wall_impulse_x[c->b] += px;
+        d->wall_impulse_y[c->b] += py;
+        return;
+    }
+    d->disc_impulse_x[c->b] += px;
+    d->disc_impulse_y[c->b] += py;
+    d->disc_impulse_x[c->a] -= px;
+    d->disc_impulse_y[c->a] -= py;
+}
+
 /* The torques of a tangential impulse pt at the contact point that the pressure's equal and opposite one at the
  * centres cancels the force of: each disc turned as by pt t on b and -pt t on a, neither moved */
 static void apply_torques(const contact *c, contact_discs *d, double pt)
@@ -470,6 +485,9 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
         return -1;
     if (d->count == 0)
         return 0;
+    if (d->wall_impulse_x)
+        for (int i = 0; i < d->count; i++)
+            d->wall_impulse_x[i] = d->wall_impulse_y[i] = d->disc_impulse_x[i] = d->disc_impulse_y[i] = 0;
     double r_min = INFINITY;
     for (int i = 0; i < d->count; i++)
         r_min = fmin(r_min, d->radius[i]);
@@ -501,6 +519,8 @@ int contact_solver_advance(contact_solver *s, contact_discs *d, const contact_wa
             *(c->a < 0 ? &s->stats.wall_normal_impulse[-1 - c->a] : &s->stats.disc_normal_impulse) += c->lambda_n;
             *(c->a < 0 ? &s->stats.wall_friction_impulse[-1 - c->a] : &s->stats.disc_friction_impulse) +=
                 fabs(c->lambda_t);
+            if (d->wall_impulse_x)
+                add_disc_impulses(c, d);
         }
         for (int i = 0; i < d->count; i++) {
             d->x[i] += h * d->vx[i];

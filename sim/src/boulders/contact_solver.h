@@ -17,6 +17,9 @@ typedef struct contact_discs {
     double *vx, *vy, *omega;
     const double *radius, *inv_mass, *inv_inertia;
     const double *spin_damping;
+    /* NULL, or each disc's contact impulses over an advance (N s per metre of width), x and y, from the walls and from
+     * the other discs; the films' not counted */
+    double *wall_impulse_x, *wall_impulse_y, *disc_impulse_x, *disc_impulse_y;
 } contact_discs;
 
 typedef enum contact_wall_shape {

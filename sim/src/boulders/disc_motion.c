@@ -162,7 +162,36 @@ static contact_settings contact_settings_of(const surge_sim *sim, int with_lubri
 static contact_discs contact_discs_of(boulder_set *b)
 {
     return (contact_discs){b->count, b->x, b->y, b->angle, b->vx, b->vy, b->omega, b->contact_radius, b->inv_mass,
-                           b->inv_inertia, b->spin_damping};
+                           b->inv_inertia, b->spin_damping, b->step_wall_contact_fx, b->step_wall_contact_fy,
+                           b->step_disc_contact_fx, b->step_disc_contact_fy};
+}
+
+/* The step's mean forces on each disc (boulder_set's step_ fields), from its accelerations without contacts (ax, ay),
+ * its velocity at the step's start (the _n copies) and now, and the contact solver's impulses in the contact fields:
+ * m dv/dt = m g' + fluid + films + contacts, g' the disc's own acceleration (gravity, a channel's drive); a locked
+ * disc's are 0 */
+static void step_forces(surge_sim *sim, double dt_s)
+{
+    boulder_set *b = &sim->boulders;
+    double gx, gy;
+    boulders_own_acceleration(sim, &gx, &gy);
+    for (int i = 0; i < b->count; i++) {
+        b->step_wall_contact_fx[i] /= dt_s, b->step_wall_contact_fy[i] /= dt_s;
+        b->step_disc_contact_fx[i] /= dt_s, b->step_disc_contact_fy[i] /= dt_s;
+        if (b->inv_mass[i] == 0) {
+            b->step_fluid_fx[i] = b->step_fluid_fy[i] = b->step_film_fx[i] = b->step_film_fy[i] = 0;
+            b->step_wall_contact_fx[i] = b->step_wall_contact_fy[i] = 0;
+            b->step_disc_contact_fx[i] = b->step_disc_contact_fy[i] = 0;
+            continue;
+        }
+        const double m = b->mass[i];
+        b->step_fluid_fx[i] = m * (b->ax[i] - gx);
+        b->step_fluid_fy[i] = m * (b->ay[i] - gy);
+        b->step_film_fx[i] = m * ((b->vx[i] - b->vx_n[i]) / dt_s - b->ax[i]) - b->step_wall_contact_fx[i] -
+                             b->step_disc_contact_fx[i];
+        b->step_film_fy[i] = m * ((b->vy[i] - b->vy_n[i]) / dt_s - b->ay[i]) - b->step_wall_contact_fy[i] -
+                             b->step_disc_contact_fy[i];
+    }
 }
 
 /* The discs' full step from the start, through the contact solver's sub-steps, from the accelerations in ax, ay,
@@ -181,6 +210,7 @@ int boulders_advance_with_contacts(surge_sim *sim, double dt_s, int with_lubrica
     phase_end(sim, &sim->phase_times.contacts_s);
     if (advanced != 0)
         return -1;
+    step_forces(sim, dt_s);
     boulders_place_particles(sim);
     phase_end(sim, &sim->phase_times.discs_s);
     return 0;

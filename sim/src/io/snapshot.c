@@ -57,6 +57,14 @@ int surge_snapshot_reserve_boulders(surge_snapshot *snap, int32_t count)
         SNAPSHOT_GROW(b, vy_mps, count, ok);
         SNAPSHOT_GROW(b, omega_radps, count, ok);
         SNAPSHOT_GROW(b, radius_m, count, ok);
+        SNAPSHOT_GROW(b, fluid_fx_npm, count, ok);
+        SNAPSHOT_GROW(b, fluid_fy_npm, count, ok);
+        SNAPSHOT_GROW(b, film_fx_npm, count, ok);
+        SNAPSHOT_GROW(b, film_fy_npm, count, ok);
+        SNAPSHOT_GROW(b, wall_contact_fx_npm, count, ok);
+        SNAPSHOT_GROW(b, wall_contact_fy_npm, count, ok);
+        SNAPSHOT_GROW(b, disc_contact_fx_npm, count, ok);
+        SNAPSHOT_GROW(b, disc_contact_fy_npm, count, ok);
         if (!ok) {
             return -1;
         }
@@ -99,5 +107,13 @@ void surge_snapshot_free(surge_snapshot *snap)
     free(b->vy_mps);
     free(b->omega_radps);
     free(b->radius_m);
+    free(b->fluid_fx_npm);
+    free(b->fluid_fy_npm);
+    free(b->film_fx_npm);
+    free(b->film_fy_npm);
+    free(b->wall_contact_fx_npm);
+    free(b->wall_contact_fy_npm);
+    free(b->disc_contact_fx_npm);
+    free(b->disc_contact_fy_npm);
     *b = (surge_boulder_state){0};
 }

@@ -330,6 +330,19 @@ int surge_vtp_write(const char *path, const surge_snapshot *snap, char *err, siz
     return out_commit(&o, err, err_len);
 }
 
+/* The forces on the discs, written as vectors (x, y, 0) under these names */
+enum { BOULDER_FORCES = 4 };
+static const char *const boulder_force_names[BOULDER_FORCES] = {"fluid_force_npm", "film_force_npm",
+                                                                "wall_contact_force_npm", "disc_contact_force_npm"};
+
+static void boulder_forces(const surge_boulder_state *b, double *x[BOULDER_FORCES], double *y[BOULDER_FORCES])
+{
+    x[0] = b->fluid_fx_npm, y[0] = b->fluid_fy_npm;
+    x[1] = b->film_fx_npm, y[1] = b->film_fy_npm;
+    x[2] = b->wall_contact_fx_npm, y[2] = b->wall_contact_fy_npm;
+    x[3] = b->disc_contact_fx_npm, y[3] = b->disc_contact_fy_npm;
+}
+
 int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char *err, size_t err_len)
 {
     const surge_boulder_state *b = snap ? &snap->boulders : NULL;
@@ -350,6 +363,8 @@ int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char 
     array_tag(&o, in4, "Float64", "omega_radps", 1, 8 * n64, &offset);
     array_tag(&o, in4, "Float64", "angle_rad", 1, 8 * n64, &offset);
     array_tag(&o, in4, "Float64", "radius_m", 1, 8 * n64, &offset);
+    for (int f = 0; f < BOULDER_FORCES; f++)
+        array_tag(&o, in4, "Float64", boulder_force_names[f], 3, 3 * 8 * n64, &offset);
     put_points_and_verts_tags(&o, n64, &offset);
     put_time_and_step(&o, snap->time_s, snap->step);
     block_header(&o, 3 * 8 * n64);
@@ -360,6 +375,12 @@ int surge_vtp_write_boulders(const char *path, const surge_snapshot *snap, char 
     put_le(&o, b->angle_rad, sizeof(double), n);
     block_header(&o, 8 * n64);
     put_le(&o, b->radius_m, sizeof(double), n);
+    double *force_x[BOULDER_FORCES], *force_y[BOULDER_FORCES];
+    boulder_forces(b, force_x, force_y);
+    for (int f = 0; f < BOULDER_FORCES; f++) {
+        block_header(&o, 3 * 8 * n64);
+        put_xyz_f64(&o, force_x[f], force_y[f], n);
+    }
     put_points_and_verts(&o, b->x_m, b->y_m, n);
     return out_commit(&o, err, err_len);
 }
@@ -898,6 +919,28 @@ int surge_vtp_read(const char *path, surge_snapshot *snap, char *err, size_t err
     return rc;
 }
 
+/* The forces on the discs into b, NaN where the file has none of them (written before they were); scratch holds 3
+ * doubles a disc */
+static int read_boulder_forces(const vtp_source *v, surge_boulder_state *b, double *scratch, char *err,
+                               size_t err_len)
+{
+    double *force_x[BOULDER_FORCES], *force_y[BOULDER_FORCES];
+    boulder_forces(b, force_x, force_y);
+    for (int f = 0; f < BOULDER_FORCES; f++) {
+        char needle[64];
+        snprintf(needle, sizeof needle, "Name=\"%s\"", boulder_force_names[f]);
+        const int present = strstr((const char *)v->data, needle) != NULL;
+        if (present && vtp_array(v, boulder_force_names[f], "Float64", 3, scratch, 3 * 8 * (size_t)b->count, err,
+                                 err_len) != 0)
+            return -1;
+        for (int32_t i = 0; i < b->count; i++) {
+            force_x[f][i] = present ? scratch[3 * i] : NAN;
+            force_y[f][i] = present ? scratch[3 * i + 1] : NAN;
+        }
+    }
+    return 0;
+}
+
 int surge_vtp_read_boulders(const char *path, surge_snapshot *snap, char *err, size_t err_len)
 {
     vtp_source v;
@@ -921,7 +964,7 @@ int surge_vtp_read_boulders(const char *path, surge_snapshot *snap, char *err, s
             b->vx_mps[i] = velocity[3 * i];
             b->vy_mps[i] = velocity[3 * i + 1];
         }
-        rc = 0;
+        rc = read_boulder_forces(&v, b, velocity, err, err_len);
     }
     free(points);
     free(velocity);
