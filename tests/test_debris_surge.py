@@ -30,6 +30,7 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     a member on a flat channel has uniform_froude nan in collect's table, and collect's box plots are then refused.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
+import configparser
 import csv
 import json
 import math
@@ -303,22 +304,51 @@ shutil.copytree(os.path.join(RUNS, "n6_s1_dp0.066"), belt_member)
 for name in os.listdir(belt_member):
     if name.startswith("boulders_") and name.endswith(".vtp"):
         os.remove(os.path.join(belt_member, name))
-entries = []
-for k, (time_s, above_margin_dp) in enumerate([(0.5, (0, 0, 0)), (0.8, (0, 0.04, 0.1)), (1.0, (0, 0.04, 0.1)),
-                                               (1.2, (0, 0.04, 0.1)), (1.4, (0, 0.04, 0.1))]):
-    radii = np.array([0.2, 0.25, 0.3])
-    points = np.array([[5.0 + 2 * i, radii[i] + (2 + a) * 0.066] for i, a in enumerate(above_margin_dp)])
-    name = "boulders_%09d.vtp" % k
-    vtp.write_vtp(os.path.join(belt_member, name), points, {"radius_m": radii}, time_s, k)
-    entries.append((time_s, name))
-vtp.write_pvd(os.path.join(belt_member, "boulders.pvd"), entries)
+ON_BELT = ("on_belt_weight_npm", "on_belt_fluid_npm", "on_belt_film_npm", "on_belt_disc_contact_npm",
+           "on_belt_bed_contact_npm")
+
+
+def write_belt_snapshots(with_forces):
+    """The synthetic disc snapshots; with_forces: each disc's forces (x, y) = (-1, 1), (-2, 2) and (-4, 4) times 1,
+    10, 100 and 1000 for the fluid, the films, the other discs and the walls."""
+    entries = []
+    for k, (time_s, above_margin_dp) in enumerate([(0.5, (0, 0, 0)), (0.8, (0, 0.04, 0.1)), (1.0, (0, 0.04, 0.1)),
+                                                   (1.2, (0, 0.04, 0.1)), (1.4, (0, 0.04, 0.1))]):
+        radii = np.array([0.2, 0.25, 0.3])
+        points = np.array([[5.0 + 2 * i, radii[i] + (2 + a) * 0.066] for i, a in enumerate(above_margin_dp)])
+        data = {"radius_m": radii}
+        for scale, array in ((1, "fluid_force_npm"), (10, "film_force_npm"), (100, "disc_contact_force_npm"),
+                             (1000, "wall_contact_force_npm")):
+            if with_forces:
+                data[array] = scale * np.array([[-1.0, 1.0, 0.0], [-2.0, 2.0, 0.0], [-4.0, 4.0, 0.0]])
+        name = "boulders_%09d.vtp" % k
+        vtp.write_vtp(os.path.join(belt_member, name), points, data, time_s, k)
+        entries.append((time_s, name))
+    vtp.write_pvd(os.path.join(belt_member, "boulders.pvd"), entries)
+
+
+write_belt_snapshots(False)
 belt_table = os.path.join(WORK, "belt.csv")
 rc, out, err = tool("collect", "--runs-dir", belt, "--csv", belt_table)
 belt_rows = list(csv.DictReader(open(belt_table))) if os.path.isfile(belt_table) else []
-check("collect: discs resting on the belt, from the window's disc snapshots: 2 of 3 in each of its four (%s)"
+check("collect: discs resting on the belt, from the window's disc snapshots: 2 of 3 in each of its four (%s); "
+      "snapshots without forces give the forces on them as nan"
       % [(r["boulders_on_belt"], r["boulders_on_belt_se"]) for r in belt_rows],
-      rc == 0 and [(float(r["boulders_on_belt"]), float(r["boulders_on_belt_se"])) for r in belt_rows] == [(2.0, 0.0)],
-      out + err[-1000:])
+      rc == 0 and [(float(r["boulders_on_belt"]), float(r["boulders_on_belt_se"])) for r in belt_rows] == [(2.0, 0.0)]
+      and all(r[k] == "nan" for r in belt_rows for k in ON_BELT), out + err[-1000:])
+write_belt_snapshots(True)
+rc, out, err = tool("collect", "--runs-dir", belt, "--csv", belt_table)
+belt_rows = list(csv.DictReader(open(belt_table))) if os.path.isfile(belt_table) else []
+belt_params = configparser.ConfigParser(inline_comment_prefixes=(";", "#"))
+belt_params.read(os.path.join(belt_member, "params.ini"))
+belt_weight = (np.pi * (0.2 ** 2 + 0.25 ** 2) * float(belt_params["fluid"]["density_kgpm3"])
+               * float(belt_params["boulders"]["density_ratio"]) * float(belt_params["body"]["gravity_mps2"])
+               * np.cos(np.radians(float(belt_params["body"]["slope_deg"]))))
+expected = [belt_weight, 3.0, 30.0, 300.0, 3000.0]
+got = [float(belt_rows[0][k]) for k in ON_BELT] if len(belt_rows) == 1 else []
+check("collect: the forces normal to the belt on the two resting discs, summed, their weight from params.ini (%s "
+      "against %s)" % (got, expected), rc == 0 and len(got) == 5
+      and all(abs(a - b) <= 1e-9 * abs(b) for a, b in zip(got, expected)), out + err[-1000:])
 with open(os.path.join(belt_member, "boulders_000000002.vtp"), "w") as f:
     f.write("not a snapshot")
 rc, out, err = tool("collect", "--runs-dir", belt)

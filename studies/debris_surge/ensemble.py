@@ -41,7 +41,11 @@ count), the means of Fr and mu_eq/mu0 over the window (the paper's 20-75 s; a ru
 25 s is averaged over its second half, and the window used is written) with their standard errors (froude_se,
 mu_eq_over_mu0_se: one member's window mean, its rows' autocorrelation counted; not the spread over seeds), how
 many discs rest on the belt (boulders_on_belt: at the contact margin from the belt's face, within 0.05 dp; the
-mean over the window's disc snapshots, with its standard error; nan without them), the mean contact forces on the
+mean over the window's disc snapshots, with its standard error; nan without them) and the forces normal to the belt
+(away from it) on the discs resting on it, summed over them and averaged over the same snapshots (on_belt_weight_npm:
+their weight, m g cos(slope); on_belt_fluid_npm, on_belt_film_npm, on_belt_disc_contact_npm and
+on_belt_bed_contact_npm, from the snapshots' forces: the fluid's, the films', the other discs' and the belt's;
+nan in snapshots without forces; at rest the last four balance the first), the mean contact forces on the
 discs over the window (bed_, wall_ and disc_normal_force_npm, and the same _friction_force_npm: N per metre of width,
 of the belt, of the other walls and between discs; nan in a flow.csv without them) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
@@ -76,7 +80,8 @@ PARKED_DIR = os.path.join(ROOT, "studies", "debris_surge", "parked")
 PARKED_EXTRA = ("flow.csv", "boulders.csv")  # eq. 21's rows from the start, and the disc list (phi)
 COLUMNS = ["asked", "count", "seed", "dp_m", "phi", "window_start_s", "window_end_s", "rows", "froude",
            "froude_se", "mu_eq_over_mu0", "mu_eq_over_mu0_se", "h_max_m", "u_bar_mps", "boulders_behind_front_m",
-           "boulders_on_belt", "boulders_on_belt_se", "bed_normal_force_npm", "bed_friction_force_npm",
+           "boulders_on_belt", "boulders_on_belt_se", "on_belt_weight_npm", "on_belt_fluid_npm", "on_belt_film_npm",
+           "on_belt_disc_contact_npm", "on_belt_bed_contact_npm", "bed_normal_force_npm", "bed_friction_force_npm",
            "wall_normal_force_npm", "wall_friction_force_npm", "disc_normal_force_npm", "disc_friction_force_npm",
            "most_boulders_ahead", "end_s", "wall_s", "status", "uniform_froude", "max_density_deviation"]
 PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start_s": float, "window_end_s": float,
@@ -84,6 +89,10 @@ PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
                   "uniform_froude": (0.0, 100.0), "window_start_s": (0.0, 1e6), "window_end_s": (0.0, 1e6)}
 ZERO_ALLOWED = ("phi", "window_start_s")  # the fluid alone, a window from the start; every other bound is open
+SNAPSHOT_FORCES = {"on_belt_fluid_npm": "fluid_force_npm", "on_belt_film_npm": "film_force_npm",
+                   "on_belt_disc_contact_npm": "disc_contact_force_npm",
+                   "on_belt_bed_contact_npm": "wall_contact_force_npm"}  # collect's columns: a snapshot array's y
+ON_BELT_FORCES = ("on_belt_weight_npm",) + tuple(SNAPSHOT_FORCES)
 ON_BELT_DP = 0.05  # a disc rests on the belt when its gap to the belt's face is the contact margin to within this
 WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this (plot's default)
 
@@ -300,24 +309,36 @@ def most_boulders_ahead(flow_csv):
 
 
 def boulders_on_belt(folder, start, stop):
-    """(mean, standard error) over the window's disc snapshots (boulders.pvd) of how many discs rest on the belt:
-    a disc whose gap to the belt's face (y = 0, walls.bottom) is the contact margin (contacts.margin_dp), where the
-    contact solver holds it, to within ON_BELT_DP; (nan, nan) without disc snapshots in the window."""
+    """(mean, standard error, forces) over the window's disc snapshots (boulders.pvd) of how many discs rest on the
+    belt: a disc whose gap to the belt's face (y = 0, walls.bottom) is the contact margin (contacts.margin_dp), where
+    the contact solver holds it, to within ON_BELT_DP; (nan, nan) without disc snapshots in the window. forces: the
+    ON_BELT_FORCES, the mean over those snapshots of the sums over the discs resting in each; nan where the snapshots
+    carry no forces (written before they did, or the first of a run)."""
     pvd = os.path.join(folder, "boulders.pvd")
+    forces = {k: [] for k in ON_BELT_FORCES}
     if not os.path.isfile(pvd):
-        return math.nan, math.nan
+        return math.nan, math.nan, {k: math.nan for k in ON_BELT_FORCES}
     try:
         p = RunParams(folder)
         reach_m = (p.real("contacts", "margin_dp") + ON_BELT_DP) * p.positive("numerics", "dp_m")
+        disc_density = p.positive("fluid", "density_kgpm3") * p.positive("boulders", "density_ratio")
+        g_normal = p.positive("body", "gravity_mps2") * math.cos(math.radians(p.real("body", "slope_deg")))
         counts = []
         for time_s, name in vtp.read_pvd(pvd):
             if start <= time_s <= stop + 1e-9:
                 discs = vtp.read_vtp(os.path.join(folder, name), required=("radius_m",), finite=True)
-                counts.append(int((discs["points"][:, 1] - discs["radius_m"] <= reach_m).sum()))
+                resting = discs["points"][:, 1] - discs["radius_m"] <= reach_m
+                counts.append(int(resting.sum()))
+                if all(a in discs for a in SNAPSHOT_FORCES.values()):
+                    forces["on_belt_weight_npm"].append(
+                        float((math.pi * discs["radius_m"][resting] ** 2).sum() * disc_density * g_normal))
+                    for column, array in SNAPSHOT_FORCES.items():
+                        forces[column].append(float(discs[array][resting, 1].sum()))
     except (ParamsError, vtp.VtpError) as e:
         fail(str(e))
     mean, error, _ = study.mean_with_error(counts)
-    return mean, error
+    return mean, error, {k: sum(v) / len(v) if v and all(map(math.isfinite, v)) else math.nan
+                         for k, v in forces.items()}
 
 
 def largest_density_deviation(folder):
@@ -394,7 +415,7 @@ def command_collect(args):
                       "froude_se": errors["froude"], "mu_eq_over_mu0": means["mu_eq_over_mu0"],
                       "mu_eq_over_mu0_se": errors["mu_eq_over_mu0"], "h_max_m": means["h_max_m"],
                       "u_bar_mps": means["u_bar_mps"], "boulders_behind_front_m": means["boulders_behind_front_m"],
-                      "boulders_on_belt": on_belt[0], "boulders_on_belt_se": on_belt[1],
+                      "boulders_on_belt": on_belt[0], "boulders_on_belt_se": on_belt[1], **on_belt[2],
                       **contact_forces(flow, start, stop),
                       "most_boulders_ahead": most_boulders_ahead(flow), "end_s": end, "wall_s": progress["wall_s"],
                       "status": progress["status"], "uniform_froude": uniform_froude(folder),
