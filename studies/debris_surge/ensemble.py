@@ -68,6 +68,8 @@ import sys
 import threading
 import time
 
+import numpy as np
+
 from surgepy import cli_checks, study, vtp
 from surgepy.run_params import ParamsError, RunParams
 
@@ -312,8 +314,8 @@ def boulders_on_belt(folder, start, stop):
     """(mean, standard error, forces) over the window's disc snapshots (boulders.pvd) of how many discs rest on the
     belt: a disc whose gap to the belt's face (y = 0, walls.bottom) is the contact margin (contacts.margin_dp), where
     the contact solver holds it, to within ON_BELT_DP; (nan, nan) without disc snapshots in the window. forces: the
-    ON_BELT_FORCES, the mean over those snapshots of the sums over the discs resting in each; nan where the snapshots
-    carry no forces (written before they did, or the first of a run)."""
+    ON_BELT_FORCES, the mean over those of the snapshots that carry the forces (not those written before they did,
+    nor a run's first) of the sums over the discs resting in each; nan where none does."""
     pvd = os.path.join(folder, "boulders.pvd")
     forces = {k: [] for k in ON_BELT_FORCES}
     if not os.path.isfile(pvd):
@@ -329,7 +331,7 @@ def boulders_on_belt(folder, start, stop):
                 discs = vtp.read_vtp(os.path.join(folder, name), required=("radius_m",), finite=True)
                 resting = discs["points"][:, 1] - discs["radius_m"] <= reach_m
                 counts.append(int(resting.sum()))
-                if all(a in discs for a in SNAPSHOT_FORCES.values()):
+                if all(a in discs and np.all(np.isfinite(discs[a])) for a in SNAPSHOT_FORCES.values()):
                     forces["on_belt_weight_npm"].append(
                         float((math.pi * discs["radius_m"][resting] ** 2).sum() * disc_density * g_normal))
                     for column, array in SNAPSHOT_FORCES.items():
@@ -337,8 +339,7 @@ def boulders_on_belt(folder, start, stop):
     except (ParamsError, vtp.VtpError) as e:
         fail(str(e))
     mean, error, _ = study.mean_with_error(counts)
-    return mean, error, {k: sum(v) / len(v) if v and all(map(math.isfinite, v)) else math.nan
-                         for k, v in forces.items()}
+    return mean, error, {k: sum(v) / len(v) if v else math.nan for k, v in forces.items()}
 
 
 def largest_density_deviation(folder):
