@@ -168,8 +168,7 @@ static contact_discs contact_discs_of(boulder_set *b)
 
 /* The step's mean forces on each disc (boulder_set's step_ fields), from its accelerations without contacts (ax, ay),
  * its velocity at the step's start (the _n copies) and now, and the contact solver's impulses in the contact fields:
- * m dv/dt = m g' + fluid + films + contacts, g' the disc's own acceleration (gravity, a channel's drive); a locked
- * disc's are 0 */
+ * m dv/dt = m g' + fluid + films + contacts, g' the disc's own acceleration (gravity, a channel's drive) */
 static void step_forces(surge_sim *sim, double dt_s)
 {
     boulder_set *b = &sim->boulders;
@@ -178,12 +177,6 @@ static void step_forces(surge_sim *sim, double dt_s)
     for (int i = 0; i < b->count; i++) {
         b->step_wall_contact_fx[i] /= dt_s, b->step_wall_contact_fy[i] /= dt_s;
         b->step_disc_contact_fx[i] /= dt_s, b->step_disc_contact_fy[i] /= dt_s;
-        if (b->inv_mass[i] == 0) {
-            b->step_fluid_fx[i] = b->step_fluid_fy[i] = b->step_film_fx[i] = b->step_film_fy[i] = 0;
-            b->step_wall_contact_fx[i] = b->step_wall_contact_fy[i] = 0;
-            b->step_disc_contact_fx[i] = b->step_disc_contact_fy[i] = 0;
-            continue;
-        }
         const double m = b->mass[i];
         b->step_fluid_fx[i] = m * (b->ax[i] - gx);
         b->step_fluid_fy[i] = m * (b->ay[i] - gy);
