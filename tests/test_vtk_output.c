@@ -388,6 +388,17 @@ static void test_boulders(const char *dir)
     size_t len = 0;
     char *text = slurp(path, &len);
     CHECK(text != NULL, path);
+    char *components = text ? strstr(text, "Name=\"film_force_npm\" NumberOfComponents=\"3\"") : NULL;
+    CHECK(components != NULL, "the film force's tag");
+    if (components) { /* a force array of the wrong shape is refused, named */
+        components[strlen("Name=\"film_force_npm\" NumberOfComponents=\"")] = '2';
+        FILE *f = fopen(path, "wb");
+        CHECK(f && fwrite(text, 1, len, f) == len && fclose(f) == 0, path);
+        CHECK(surge_vtp_read_boulders(path, &back, err, sizeof err) == -1 && strstr(err, "film_force_npm") &&
+                  strstr(err, "boulders.vtp"),
+              err);
+        components[strlen("Name=\"film_force_npm\" NumberOfComponents=\"")] = '3';
+    }
     if (text) {
         for (char *hit = text; (hit = strstr(hit, "_force_npm\"")) != NULL; hit++)
             hit[0] = 'X'; /* another array's name: the forces are gone */

@@ -45,7 +45,7 @@ mean over the window's disc snapshots, with its standard error; nan without them
 (away from it) on the discs resting on it, summed over them and averaged over the same snapshots (on_belt_weight_npm:
 their weight, m g cos(slope); on_belt_fluid_npm, on_belt_film_npm, on_belt_disc_contact_npm and
 on_belt_bed_contact_npm, from the snapshots' forces: the fluid's, the films', the other discs' and the belt's;
-nan in snapshots without forces; at rest the last four balance the first), the mean contact forces on the
+over the snapshots that carry them, nan where none does; at rest the last four balance the first), the mean contact forces on the
 discs over the window (bed_, wall_ and disc_normal_force_npm, and the same _friction_force_npm: N per metre of width,
 of the belt, of the other walls and between discs; nan in a flow.csv without them) and the most discs that were ever ahead of
 the front (discs that left the surge, which may then roll round the period); a table (--csv) and box plots of Fr and
