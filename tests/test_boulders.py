@@ -8,7 +8,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
   GROUP couette   a neutrally buoyant disc centred in a Couette channel (cases/boulder_couette.ini) turns at half
                   the vorticity, -shear/2 (Jeffery 1922), within 3 %, and stays put.
   GROUP momentum  discs thrown through a weightless fluid slab in a periodic domain without walls, one across the
-                  periodic boundary: the total momentum of fluid and discs stays what it was.
+                  periodic boundary, with the default placement and packed: the total momentum of fluid and discs
+                  stays what it was.
   GROUP restart   a boulder run stopped half way and restarted from its checkpoint ends in the same state
                   hash as the uninterrupted run; the boulders' .vtp files and boulders.pvd are written.
   GROUP stream    a pyzmq subscriber's `bodies` messages of a paused-then-resumed run carry the discs, and the
@@ -152,31 +153,36 @@ def momentum(out, snapshot_file, boulders):
 
 def group_momentum():
     # the first disc straddles the periodic boundary and crosses it; the last two start a spacing apart, one closing on
-    # the other (the pressure between their particles, contacts.solid_pressure)
+    # the other (the pressure between their particles, contacts.solid_pressure). Packed (boulders.pack_fluid), fluid
+    # particles start at the contact distance from the discs, where the contact rule stops their approach: the discs
+    # take the reaction (without it the packed run lost 1.2e-3 of the discs' momentum)
     discs = ("0.195 0.05 0.0125 0.04 0.005 0, 0.08 0.05 0.0125 -0.01 0 0.5, 0.10 0.02 0.0125 0 -0.01 0, "
              "0.15 0.03 0.0125 0 0 0, 0.15 0.0575 0.0125 0 -0.01 0")
-    out, p, cmd = surge("momentum", ["run", "boulder_couette.ini", "-s", "walls.bottom=false", "-s", "walls.top=false",
-                                     "-s", "boulders.list_m=" + discs, "-s", "boulders.density_ratio=1.5",
-                                     "-s", "time.end_s=0.5", "-s", "output.snapshot_interval_s=0.25",
-                                     "-s", "fluid.viscosity_m2ps=0.002", "-s", "domain.height_m=0.2"])
-    check("momentum: run finishes", p.returncode == 0, cmd + "\n" + p.stderr[-2000:])
-    if p.returncode != 0:
-        return
-    entries = vtp.read_pvd(os.path.join(out, "boulders.pvd"))
-    first = vtp.read_vtp(os.path.join(out, entries[0][1]))
-    last = vtp.read_vtp(os.path.join(out, entries[-1][1]))
-    p0, scale = momentum(out, entries[0][1].replace("boulders_", "snap_"), first)
-    p1, _ = momentum(out, entries[-1][1].replace("boulders_", "snap_"), last)
-    moved = np.abs(last["velocity_mps"][:, :2] - first["velocity_mps"][:, :2]).max()
-    print("momentum: total (%.6g, %.6g) -> (%.6g, %.6g) kg m/s per m; disc speeds changed by up to %.3g m/s"
-          % (p0[0], p0[1], p1[0], p1[1], moved))
-    check("momentum: the discs exchanged momentum with the fluid (speeds changed by > 10 %)", moved > 0.001,
-          str(moved))
-    # measured 2026-11-25 with the neighbour lists: 3.5e-9 of it (2026-11-22, before them: 4.3e-5, and 0 to print
-    # precision when no disc crossed the periodic boundary; the crossing disc's particles were wrapped mid-step)
-    print("momentum: largest change %.3g of the discs' initial momentum" % (np.abs(p1 - p0).max() / scale))
-    check("momentum: total momentum kept to 1e-3 of the discs' initial momentum",
-          np.abs(p1 - p0).max() < 1e-3 * scale, "change %s, scale %g" % (p1 - p0, scale))
+    for packed in ("false", "true"):
+        name = "momentum" if packed == "false" else "momentum packed"
+        out, p, cmd = surge(name.replace(" ", "_"),
+                            ["run", "boulder_couette.ini", "-s", "walls.bottom=false", "-s", "walls.top=false",
+                             "-s", "boulders.list_m=" + discs, "-s", "boulders.density_ratio=1.5",
+                             "-s", "time.end_s=0.5", "-s", "output.snapshot_interval_s=0.25",
+                             "-s", "fluid.viscosity_m2ps=0.002", "-s", "domain.height_m=0.2",
+                             "-s", "boulders.pack_fluid=" + packed])
+        check("%s: run finishes" % name, p.returncode == 0, cmd + "\n" + p.stderr[-2000:])
+        if p.returncode != 0:
+            continue
+        entries = vtp.read_pvd(os.path.join(out, "boulders.pvd"))
+        first = vtp.read_vtp(os.path.join(out, entries[0][1]))
+        last = vtp.read_vtp(os.path.join(out, entries[-1][1]))
+        p0, scale = momentum(out, entries[0][1].replace("boulders_", "snap_"), first)
+        p1, _ = momentum(out, entries[-1][1].replace("boulders_", "snap_"), last)
+        moved = np.abs(last["velocity_mps"][:, :2] - first["velocity_mps"][:, :2]).max()
+        print("%s: total (%.6g, %.6g) -> (%.6g, %.6g) kg m/s per m; disc speeds changed by up to %.3g m/s"
+              % (name, p0[0], p0[1], p1[0], p1[1], moved))
+        check("%s: the discs exchanged momentum with the fluid (speeds changed by > 10 %%)" % name, moved > 0.001,
+              str(moved))
+        # measured 2026-12-03: 1.1e-8 (default placement) and 5.8e-9 (packed) of it
+        print("%s: largest change %.3g of the discs' initial momentum" % (name, np.abs(p1 - p0).max() / scale))
+        check("%s: total momentum kept to 1e-3 of the discs' initial momentum" % name,
+              np.abs(p1 - p0).max() < 1e-3 * scale, "change %s, scale %g" % (p1 - p0, scale))
 
 
 def group_restart():

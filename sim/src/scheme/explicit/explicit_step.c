@@ -148,11 +148,17 @@ static int explicit_step(surge_sim *sim)
         #pragma omp for schedule(static)
         for (int a = first; a < n; a++) {
             double vx1 = sim->vx_n[a] + dt * sim->ax[a], vy1 = sim->vy_n[a] + dt * sim->ay[a];
-            /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md) */
+            /* within reach of a wall face: no approach to it (a perfectly inelastic normal contact; docs/method.md);
+             * a disc's face takes the reaction (explicit_discs_take_contact_reactions) */
             const double approach_mps = vx1 * sim->face_nx[a] + vy1 * sim->face_ny[a] - sim->face_vn_mps[a];
-            if (sim->face_gap_m[a] < face_reach_m && approach_mps < 0) {
+            const int contact = sim->face_gap_m[a] < face_reach_m && approach_mps < 0;
+            if (contact) {
                 vx1 -= approach_mps * sim->face_nx[a];
                 vy1 -= approach_mps * sim->face_ny[a];
+            }
+            if (sim->face_disc[a] >= 0) { /* the repulsion's push is taken (fluid_forces.c): now the rule's */
+                sim->face_push_x[a] = (real)(contact ? -approach_mps * sim->face_nx[a] / dt : 0.0);
+                sim->face_push_y[a] = (real)(contact ? -approach_mps * sim->face_ny[a] / dt : 0.0);
             }
             /* eps = div(v) dt (+ div(dr) of the shift) */
             const double eps = -(double)sim->drho[a] / sim->rho[a] * dt + sim->shift_div[a];
@@ -164,6 +170,8 @@ static int explicit_step(surge_sim *sim)
             sim->y[a] = sim->y_n[a] + half * (sim->vy_n[a] + (real)vy1) + sy;
         }
     }
+    if (boulders)
+        explicit_discs_take_contact_reactions(sim, dt);
     phase_end(sim, &t->update_s);
     return end_step(sim, t_n, dt);
 }
