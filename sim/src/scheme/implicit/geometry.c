@@ -251,6 +251,9 @@ static void mirror_weights(surge_sim *sim)
 }
 
 #define SCAN_DIV_R_MAX 1.9 /* only a particle whose div r is below this is scanned */
+/* a particle whose kernel sum reaches the lattice's full one has no air in its kernel: it is not on a free surface,
+ * whatever its div r (the border of a void in the bulk, pressed together as the void closes; docs/method.md) */
+#define SURFACE_FULL_KERNEL_RATIO 1.0
 
 /* Whether the region beyond fluid particle a along the unit normal (nx, ny) holds no particle of list entries
  * from..to (Marrone et al. 2010, sect. 2.2): with T the point radius_m out along the normal, a particle b blocks it
@@ -333,6 +336,8 @@ static void fluid_geometry(surge_sim *sim)
             sim->surface[a] = scan_empty(sim, a, nl->fluid_first[i], nl->fluid_first[i + 1], 0, nx, ny, scan_m) &&
                               scan_empty(sim, a, nl->wall_first[i], nl->wall_first[i + 1], 1, nx, ny, scan_m);
         }
+        if (w->kernel_ratio[i] >= SURFACE_FULL_KERNEL_RATIO)
+            sim->surface[a] = 0;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
             w->minv_xx[i] = m_yy / det, w->minv_xy[i] = -m_xy / det, w->minv_yy[i] = m_xx / det;
