@@ -323,21 +323,20 @@ static void fluid_geometry(surge_sim *sim)
          * contact line, where the wall raises div r; docs/method.md). Not the latter next to a disc, whose rings
          * fill its circle less evenly than a wall's rows their half-plane: a particle 0.7 dp off a disc of radius 5
          * dp has 0.87 of the lattice's kernel sum in fluid at rest */
-        sim->surface[a] = div_r < (real)sim->params.implicit.surface_threshold ||
-                          (!near_disc && w->kernel_ratio[i] < sim->second_row_kernel_ratio -
-                                                                  sim->params.implicit.surface_kernel_margin);
+        const int full_kernel = w->kernel_ratio[i] >= SURFACE_FULL_KERNEL_RATIO;
+        sim->surface[a] = !full_kernel && (div_r < (real)sim->params.implicit.surface_threshold ||
+                                           (!near_disc && w->kernel_ratio[i] < sim->second_row_kernel_ratio -
+                                                                                   sim->params.implicit.surface_kernel_margin));
         /* or, next to a disc, where the kernel-sum test is left out, nothing beyond it: a cavity's border, whose
          * sums the disc's particles fill (div r up to 1.7 at the 60-disc surge's; the bulk's is 2, and the scan is
          * spared there) */
-        const double grad_c = !sim->surface[a] && near_disc && scan_m > 0 && div_r < SCAN_DIV_R_MAX
+        const double grad_c = !full_kernel && !sim->surface[a] && near_disc && scan_m > 0 && div_r < SCAN_DIV_R_MAX
                                   ? sqrt((double)grad_c_x * grad_c_x + (double)grad_c_y * grad_c_y) : 0;
         if (grad_c > 0) {
             const double nx = -grad_c_x / grad_c, ny = -grad_c_y / grad_c;
             sim->surface[a] = scan_empty(sim, a, nl->fluid_first[i], nl->fluid_first[i + 1], 0, nx, ny, scan_m) &&
                               scan_empty(sim, a, nl->wall_first[i], nl->wall_first[i + 1], 1, nx, ny, scan_m);
         }
-        if (w->kernel_ratio[i] >= SURFACE_FULL_KERNEL_RATIO)
-            sim->surface[a] = 0;
         const double det = (double)m_xx * m_yy - (double)m_xy * m_xy;
         if (det > 0.25) {
             w->minv_xx[i] = m_yy / det, w->minv_xy[i] = -m_xy / det, w->minv_yy[i] = m_xx / det;
