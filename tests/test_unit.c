@@ -1453,6 +1453,7 @@ static void cavity_tank(surge_params *p)
     p->numerics.c0_mps = 10; /* no gravity to derive it from; the implicit scheme does not step by it */
     p->numerics.dt_fixed_s = 1e-4;
     p->domain.height_m = 0.5;
+    p->health.max_density_deviation = 0.5; /* the pressed and squeezed fluid reads up to 1.2 of rho0 */
     p->boulders.placement = SURGE_BOULDERS_LIST;
     char list[96], err[160];
     snprintf(list, sizeof list, "%g %g %g", CAVITY_DISC_X_M, CAVITY_DISC_Y_M, CAVITY_DISC_R_M);
@@ -1546,14 +1547,9 @@ static int test_implicit_cavity(void)
 #define VOID_RADIUS_DP 2.0
 #define VOID_REACH_DP 6.0
 #define VOID_GAP_DP 2.5
-static void void_tank(surge_params *p)
-{
-    cavity_tank(p);
-    p->health.max_density_deviation = 0.5; /* the squeezed fluid reads up to 1.2 of rho0 */
-}
 static int void_flags(double squeeze_dp, int *border, int *flagged, int *full, int *full_flagged)
 {
-    surge_sim *sim = case_sim("still_tank.ini", 0.01, void_tank);
+    surge_sim *sim = case_sim("still_tank.ini", 0.01, cavity_tank);
     if (!sim)
         return 1;
     const double dp = sim->params.numerics.dp_m, depth = sim->params.fluid.depth_m;
@@ -1609,6 +1605,81 @@ static int test_implicit_void(void)
             return 1;
         expect_below("implicit_void: closing, border particles with a full kernel sum on the surface", full_flagged, 0);
     }
+    return failures;
+}
+
+/* A compressed patch under the free surface (the still tank, dp 1 cm, no gravity): the fluid within 4 dp of a point
+ * 2.5 dp below the surface is drawn toward it by up to squeeze_dp, so that particles within a kernel of the surface
+ * (near_surface) reach kernel sums above the lattice's. The density they report (snapshots, the health check) must
+ * show it: held at rho0 near the surface, a void's border closing at 1.17 of the lattice's sum went unseen until a
+ * step put two particles 0.13 dp apart (docs/method.md, "Never where the kernel is full"). Returns the largest kernel
+ * sum (over the lattice's) and reported |rho/rho0 - 1| near the surface, the largest reported elsewhere, and the
+ * health check's verdict with the bound given. */
+#define PATCH_REACH_DP 4.0
+#define PATCH_DEPTH_DP 2.5
+static double patch_bound;
+static void patch_tank(surge_params *p)
+{
+    cavity_tank(p);
+    p->boulders.placement = SURGE_BOULDERS_NONE;
+    p->health.max_density_deviation = patch_bound;
+}
+static int surface_patch(double squeeze_dp, double bound, double *ratio_near, double *reported_near,
+                         double *reported_rest, int *stopped_on_density)
+{
+    patch_bound = bound;
+    surge_sim *sim = case_sim("still_tank.ini", 0.01, patch_tank);
+    if (!sim)
+        return 1;
+    const double dp = sim->params.numerics.dp_m, reach = PATCH_REACH_DP * dp;
+    double top = -INFINITY, x_low = INFINITY, x_high = -INFINITY;
+    for (int k = sim->wall_count; k < sim->count; k++)
+        top = fmax(top, sim->y[k]), x_low = fmin(x_low, sim->x[k]), x_high = fmax(x_high, sim->x[k]);
+    const double cx = 0.5 * (x_low + x_high), cy = top - PATCH_DEPTH_DP * dp;
+    for (int k = sim->wall_count; k < sim->count; k++) {
+        const double dx = sim->x[k] - cx, dy = sim->y[k] - cy, d = hypot(dx, dy);
+        if (d > 0 && d < reach) {
+            const double inward = squeeze_dp * dp * sin(SURGE_PI * d / reach);
+            sim->x[k] -= (real)(inward * dx / d), sim->y[k] -= (real)(inward * dy / d);
+        }
+    }
+    *stopped_on_density = surge_sim_step(sim) != 0 && surge_sim_health(sim)->check == SURGE_CHECK_DENSITY;
+    if (*stopped_on_density)
+        printf("implicit_surface_density: %s\n", surge_sim_health(sim)->message);
+    const implicit_work *w = implicit_of(sim);
+    *ratio_near = *reported_near = *reported_rest = 0;
+    for (int k = sim->wall_count; k < sim->count; k++) {
+        const double deviation = fabs(sim->rho[k] / sim->rho0 - 1.0);
+        if (sim->near_surface[k]) {
+            *ratio_near = fmax(*ratio_near, w->kernel_ratio[k - sim->wall_count]);
+            *reported_near = fmax(*reported_near, deviation);
+        } else {
+            *reported_rest = fmax(*reported_rest, deviation);
+        }
+    }
+    printf("implicit_surface_density: drawn in by %.2f dp: near the surface largest kernel sum %.4f of the lattice's, "
+           "reported |rho/rho0 - 1| %.4f; elsewhere %.4f\n", squeeze_dp, *ratio_near, *reported_near, *reported_rest);
+    surge_sim_destroy(sim);
+    return 0;
+}
+
+static int test_implicit_surface_density(void)
+{
+    double ratio_near, reported_near, reported_rest;
+    int stopped;
+    if (surface_patch(0.3, 0.5, &ratio_near, &reported_near, &reported_rest, &stopped) != 0)
+        return 1;
+    expect_below("implicit_surface_density: the patch's compression near the surface, 1.05 - kernel sum", 1.05 - ratio_near, 0);
+    /* the compression near the surface is reported (the density is stored in single precision) */
+    expect_below("implicit_surface_density: kernel sum - 1 - reported deviation near the surface",
+                 (ratio_near - 1.0) - reported_near, 1e-5);
+    expect_below("implicit_surface_density: a health stop with the bound 0.5", stopped, 0);
+    /* and the health check stops on it, with a bound above everything else the step reports */
+    const double bound = 0.5 * (reported_rest + (ratio_near - 1.0));
+    expect_below("implicit_surface_density: reported elsewhere - bound", reported_rest - bound, 0);
+    if (surface_patch(0.3, bound, &ratio_near, &reported_near, &reported_rest, &stopped) != 0)
+        return 1;
+    expect_below("implicit_surface_density: no density stop between the two", 1 - stopped, 0);
     return failures;
 }
 
@@ -1814,6 +1885,8 @@ int main(int argc, char **argv)
         return test_implicit_cavity() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_void"))
         return test_implicit_void() ? 1 : 0;
+    if (!strcmp(argv[1], "implicit_surface_density"))
+        return test_implicit_surface_density() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_dry_spin"))
         return test_implicit_dry_spin() ? 1 : 0;
     if (!strcmp(argv[1], "implicit_disc_momentum"))

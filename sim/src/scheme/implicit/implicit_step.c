@@ -554,10 +554,11 @@ static void correct_velocities(surge_sim *sim, double dt)
         w->pressure_n[i] = p_new;
         w->x[i] = sim->vx[a] - dt / rho0 * w->grad_x[i];
         w->x[nf + i] = sim->vy[a] - dt / rho0 * w->grad_y[i];
-        /* the density the spacing says in the bulk (an output; the scheme holds rho0); next to a disc only an
-         * excess (above) */
-        sim->rho[a] = (real)(sim->near_surface[a] ? rho0
-                             : w->near_disc[i] ? rho0 * fmax(1.0, w->kernel_ratio[i]) : rho0 * w->kernel_ratio[i]);
+        /* the density the spacing says (an output and the health check's; the scheme holds rho0): in the bulk the
+         * kernel sum's; near the surface or a disc, where the sum is truncated, only an excess over the lattice's
+         * full sum (a void closing at the surface's pressure, held at rho0 there before, read 1.17) */
+        sim->rho[a] = (real)(sim->near_surface[a] || w->near_disc[i] ? rho0 * fmax(1.0, w->kernel_ratio[i])
+                                                                     : rho0 * w->kernel_ratio[i]);
     }
     /* the walls' pressure for the outputs: p_n+1 continued hydrostatically, as the next step takes it */
     #pragma omp parallel for schedule(static) if (wide(sim))
