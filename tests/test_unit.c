@@ -1613,8 +1613,8 @@ static int test_implicit_void(void)
  * (near_surface) reach kernel sums above the lattice's. The density they report (snapshots, the health check) must
  * show it: held at rho0 near the surface, a void's border closing at 1.17 of the lattice's sum went unseen until a
  * step put two particles 0.13 dp apart (docs/method.md, "Never where the kernel is full"). Returns the largest kernel
- * sum (over the lattice's) and reported |rho/rho0 - 1| near the surface, the largest reported elsewhere, and the
- * health check's verdict with the bound given. */
+ * sum (over the lattice's) and reported |rho/rho0 - 1| near the surface and the largest reported elsewhere (0 where the
+ * step stopped), and whether the health check stopped the step on the density with the bound given. */
 #define PATCH_REACH_DP 4.0
 #define PATCH_DEPTH_DP 2.5
 static double patch_bound;
@@ -1643,11 +1643,14 @@ static int surface_patch(double squeeze_dp, double bound, double *ratio_near, do
             sim->x[k] -= (real)(inward * dx / d), sim->y[k] -= (real)(inward * dy / d);
         }
     }
-    *stopped_on_density = surge_sim_step(sim) != 0 && surge_sim_health(sim)->check == SURGE_CHECK_DENSITY;
-    if (*stopped_on_density)
-        printf("implicit_surface_density: %s\n", surge_sim_health(sim)->message);
-    const implicit_work *w = implicit_of(sim);
     *ratio_near = *reported_near = *reported_rest = 0;
+    *stopped_on_density = surge_sim_step(sim) != 0 && surge_sim_health(sim)->check == SURGE_CHECK_DENSITY;
+    if (*stopped_on_density) { /* rolled back: nothing of the step to read */
+        printf("implicit_surface_density: %s\n", surge_sim_health(sim)->message);
+        surge_sim_destroy(sim);
+        return 0;
+    }
+    const implicit_work *w = implicit_of(sim);
     for (int k = sim->wall_count; k < sim->count; k++) {
         const double deviation = fabs(sim->rho[k] / sim->rho0 - 1.0);
         if (sim->near_surface[k]) {

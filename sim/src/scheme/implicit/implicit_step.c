@@ -556,7 +556,7 @@ static void correct_velocities(surge_sim *sim, double dt)
         w->x[nf + i] = sim->vy[a] - dt / rho0 * w->grad_y[i];
         /* the density the spacing says (an output and the health check's; the scheme holds rho0): in the bulk the
          * kernel sum's; near the surface or a disc, where the sum is truncated, only an excess over the lattice's
-         * full sum (a void closing at the surface's pressure, held at rho0 there before, read 1.17) */
+         * full sum (a void's border closing while on the free surface reads up to 1.17; docs/method.md) */
         sim->rho[a] = (real)(sim->near_surface[a] || w->near_disc[i] ? rho0 * fmax(1.0, w->kernel_ratio[i])
                                                                      : rho0 * w->kernel_ratio[i]);
     }
