@@ -116,9 +116,14 @@ static const surge_param_info registry[] = {
      "also where the kernel is truncated at the free surface). docs/method.md.",
      OFF(numerics.density_diffusion_form)},
     {"numerics", "density_relaxation", SURGE_PARAM_REAL, "-", 1.0, 0, 10, true, NULL,
-     "kappa: where the kernel is full (no free-surface or boulder particle within 2h), each density relaxes "
+     "kappa: where the kernel is full (no free-surface particle within 2h), each density relaxes "
      "toward the particles' kernel sum sum_b m W_ab at kappa times the local strain rate, so that spacing and "
      "density cannot part where the fluid deforms (0: off; docs/method.md).", OFF(numerics.density_relaxation)},
+    {"numerics", "density_relaxation_near_discs", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
+     "Apply the density relaxation within 2h of a disc too, its particles counted in the kernel sum as the "
+     "fluid's (false: left out there, where the fluid around crowded discs then spreads at constant density: "
+     "its kernel sum fell to 0.87-0.90 of its density in the densest debris surge; docs/method.md).",
+     OFF(numerics.density_relaxation_near_discs)},
     {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "
      "linear velocity fields where the kernel is truncated, as at the free surface).",

@@ -134,6 +134,7 @@ typedef struct surge_params {
         double density_diffusion; /* delta of the density-diffusion term */
         int density_diffusion_form; /* surge_diffusion_form */
         double density_relaxation;  /* kappa: bulk densities relax toward the kernel sum at kappa |2D| (0: off) */
+        bool density_relaxation_near_discs; /* the relaxation within 2h of a disc too */
         bool continuity_correction; /* velocity divergence renormalised by the kernel moment matrix */
         double neighbour_skin_h;    /* neighbour-list skin in units of h (0: rebuilt every step) */
         bool viscous_dt_limit;

@@ -353,6 +353,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real gx = (real)sim->gx, gy = (real)sim->gy;
     /* relaxation of the density toward the kernel sum in the bulk: kappa per unit strain (corrector pass only) */
     const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
+    const int relax_near_discs = sim->params.numerics.density_relaxation_near_discs;
     const real mass = c.mass, alpha = c.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
     /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
     const real face_reach_m = (real)sim_contact_reach_m(sim);
@@ -404,9 +405,9 @@ void interaction_compute(surge_sim *sim, int corrector)
             div_v = -inv * (s.g_xx * s.m_yy - s.g_xy * s.m_xy - s.g_yx * s.m_xy + s.g_yy * s.m_xx);
         }
         sim->drho[a] = rhoa * div_v + ddt_coef * s.diffusion;
-        /* full kernel support, and no boulder's particles (their spacing along a curved surface is not the fluid's):
-         * the kernel sum is the density the spacing says */
-        if (relax_per_strain > 0 && !s.near_surface && !s.near_boulder) {
+        /* full kernel support: the kernel sum is the density the spacing says (a disc's particles, packed around
+         * at the fluid's spacing, count as the fluid's; unless told otherwise, discs are no exception) */
+        if (relax_per_strain > 0 && !s.near_surface && (relax_near_discs || !s.near_boulder)) {
             /* at the rate kappa |2D|, D = sym(G) the strain rate (M = I in the bulk): where the fluid deforms, since
              * deformation is what moves spacing and density apart; a fluid at rest keeps its densities */
             const real shear = s.g_xy + s.g_yx;
