@@ -122,7 +122,7 @@ static const surge_param_info registry[] = {
     {"numerics", "density_relaxation_near_discs", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Apply the density relaxation within 2h of a disc too, its particles counted in the kernel sum as the "
      "fluid's (false: left out there, where the fluid around crowded discs then spreads at constant density: "
-     "its kernel sum fell to 0.87-0.90 of its density in the densest debris surge; docs/method.md).",
+     "its kernel sum fell to 0.87-0.91 of its density in the densest debris surge; docs/method.md).",
      OFF(numerics.density_relaxation_near_discs)},
     {"numerics", "continuity_correction", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
      "Renormalise the velocity divergence of the continuity equation by the kernel moment matrix (exact for "

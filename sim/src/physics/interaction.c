@@ -405,8 +405,8 @@ void interaction_compute(surge_sim *sim, int corrector)
             div_v = -inv * (s.g_xx * s.m_yy - s.g_xy * s.m_xy - s.g_yx * s.m_xy + s.g_yy * s.m_xx);
         }
         sim->drho[a] = rhoa * div_v + ddt_coef * s.diffusion;
-        /* full kernel support: the kernel sum is the density the spacing says (a disc's particles, packed around
-         * at the fluid's spacing, count as the fluid's; unless told otherwise, discs are no exception) */
+        /* full kernel support: the kernel sum is the density the spacing says (a disc's particles, laid out at the
+         * fluid's spacing, count as the fluid's unless density_relaxation_near_discs is off) */
         if (relax_per_strain > 0 && !s.near_surface && (relax_near_discs || !s.near_boulder)) {
             /* at the rate kappa |2D|, D = sym(G) the strain rate (M = I in the bulk): where the fluid deforms, since
              * deformation is what moves spacing and density apart; a fluid at rest keeps its densities */
