@@ -49,6 +49,7 @@ import socket
 import struct
 import subprocess
 import sys
+import threading
 import time
 
 import numpy as np
@@ -834,7 +835,11 @@ def group_replies():
             stop_reply.update(surge_client.Control(run.ctl, 20).request({"cmd": "stop"}))
         except TimeoutError:
             stop_reply["timeout"] = True
-    sent, replies = pipelined(run.ctl, 2000, quiet_s=3, on_sent=stop)
+    # the stop goes from its own thread, so that this client keeps reading while it waits for the stop's reply (the
+    # run refuses what is left for 1 s after it ends; a client that stops reading meanwhile misses the rest)
+    stopper = threading.Thread(target=stop)
+    sent, replies = pipelined(run.ctl, 2000, quiet_s=3, on_sent=stopper.start)
+    stopper.join(30)
     rc = run.wait(60)
     check("replies: requests waiting when a stop ends the run are each answered or refused (%s; stop %s)" %
           (kinds(replies), "answered" if stop_reply.get("ok") else stop_reply),
