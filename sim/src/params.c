@@ -57,6 +57,13 @@ static const surge_param_info registry[] = {
      "Where fluid approaches a wall or the belt (not a boulder), the wall particle meets it with the mirrored normal "
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
+    {"walls", "no_penetration_at", SURGE_PARAM_ENUM, "-", SURGE_NO_PENETRATION_AT_FACE, 0, 1, true, "face|ghost",
+     "Where no_penetration reads the fluid's approach: face (its velocity at the wall face, extrapolated from the "
+     "ghost node's first-order interpolation, or the ghost node's Shepard value where that is ill-conditioned) or "
+     "ghost (at the ghost node, the wall particle's mirror image, up to 2h into the fluid, where a thinning layer's "
+     "descent reads as an approach: a thin explicit current then rides high and spreads fast; "
+     "docs/validation/spreading.md).",
+     OFF(walls.no_penetration_at)},
     {"walls", "quadratic_no_slip", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "Implicit scheme (the explicit one refuses it): the velocity a no-slip wall particle (not a disc's) takes in "
      "the viscous solve. 0: mDBC's mirror, 2 u_wall - u_ghost, exact where the velocity is linear across the wall; "

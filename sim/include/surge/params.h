@@ -37,6 +37,11 @@ typedef enum surge_diffusion_form {
     SURGE_DIFFUSION_ANTUONO = 1,   /* Antuono et al. 2010 (delta-SPH): less the renormalised density gradient */
 } surge_diffusion_form;
 
+typedef enum surge_no_penetration_at {
+    SURGE_NO_PENETRATION_AT_FACE = 0,  /* the fluid's velocity at the wall face, extrapolated from the ghost node */
+    SURGE_NO_PENETRATION_AT_GHOST = 1, /* the fluid's velocity at the ghost node */
+} surge_no_penetration_at;
+
 typedef enum surge_fluid_shape {
     SURGE_SHAPE_BLOCK = 0,       /* rectangle [x0, x1] x [0, depth] */
     SURGE_SHAPE_LUBRICATION = 1, /* steady lubrication front with the block's volume, from x0 downstream */
@@ -112,6 +117,7 @@ typedef struct surge_params {
         bool upstream;            /* vertical wall at upstream_x_m inside a periodic domain, fluid on its +x side */
         bool disc_catcher;        /* discs (not fluid) cannot cross the end of the period, x = domain.length_m */
         bool no_penetration;      /* continuity sees approaching fluid met by the mirrored normal velocity */
+        int no_penetration_at;    /* surge_no_penetration_at: where the approach is read */
         bool quadratic_no_slip;   /* no-slip walls' velocity from a quadratic fit (else mDBC's mirror) */
         double face_repulsion_reach_dp; /* fluid closer than this to a wall face is pushed back (dp; 0: off) */
         double upstream_x_m;
