@@ -836,7 +836,7 @@ def group_replies():
         except TimeoutError:
             stop_reply["timeout"] = True
     # the stop goes from its own thread, so that this client keeps reading while it waits for the stop's reply (the
-    # run refuses what is left for 1 s after it ends; a client that stops reading meanwhile misses the rest)
+    # run refuses what is left after it ends while its clients read; one that stops reading for 1 s misses the rest)
     stopper = threading.Thread(target=stop)
     sent, replies = pipelined(run.ctl, 2000, quiet_s=3, on_sent=stopper.start)
     stopper.join(30)

@@ -39,10 +39,13 @@ enum { LONGEST_REQUEST = 8192 };
 #define MAX_CREDIT_S 0.01
 #define MAX_DEBT_S 0.1 /* one dear request (a checkpoint of a large scene) leaves the socket deaf 5 s at most */
 #define PAUSED_BUDGET_S 0.02
-/* when the run ends, requests still waiting are refused for up to this long before the socket closes, until none
- * has come for END_QUIET_MS */
-#define END_REFUSALS_S 1.0
-enum { END_QUIET_MS = 100 };
+/* when the run ends, requests still waiting are refused until none has come for END_QUIET_MS (END_BUSY_QUIET_MS
+ * once any came after the end: its client may still be sending, slowed by a busy machine) and none is owed; a client
+ * owed refusals is served while it reads (one that reads nothing for END_STALL_S is left), for up to END_REFUSALS_S
+ * in all, then the socket closes */
+#define END_REFUSALS_S 5.0
+#define END_STALL_S 1.0
+enum { END_QUIET_MS = 100, END_BUSY_QUIET_MS = 500 };
 
 /* Replies owed to a client whose queue to it is full (it has left REPLY_QUEUE replies unread): the first reply not
  * yet sent, and the number of "busy" refusals owed after it, one for each request that came from the client in the
@@ -706,19 +709,45 @@ static int serve_one(surge_control *c, surge_sim *sim, int *requests)
     return receive_one(c, sim, requests, 0);
 }
 
-/* The run has ended: each request still waiting, or arriving until none has for END_QUIET_MS, is refused, and what
- * is owed is sent as far as the clients read; for END_REFUSALS_S at most, then the socket closes */
+/* The replies owed to clients whose queues are full */
+static long owed_replies_count(const surge_control *c)
+{
+    long count = 0;
+    for (int i = 0; i < c->owed_count; i++)
+        count += (c->owed[i].reply != NULL) + c->owed[i].busy;
+    return count;
+}
+
+/* Sends what is owed as far as the clients read; returns whether anything went out */
+static int send_owed_progress(surge_control *c)
+{
+    const long before = owed_replies_count(c);
+    send_owed(c);
+    return owed_replies_count(c) < before;
+}
+
+/* The run has ended: each request still waiting, or arriving until none has for END_QUIET_MS (END_BUSY_QUIET_MS
+ * once any has), is refused, and what is owed is sent as the clients read, until they stop reading for
+ * END_STALL_S; for END_REFUSALS_S at most, then the socket closes */
 static void refuse_waiting(surge_control *c)
 {
     const double start_s = surge_wall_clock_s();
-    int requests = 0;
+    double progress_s = start_s;
+    int requests = 0, refused = 0;
     while (surge_wall_clock_s() - start_s < END_REFUSALS_S) {
-        send_owed(c);
-        while (receive_one(c, NULL, &requests, 1) && surge_wall_clock_s() - start_s < END_REFUSALS_S)
-            ;
-        send_owed(c);
+        if (send_owed_progress(c))
+            progress_s = surge_wall_clock_s();
+        while (receive_one(c, NULL, &requests, 1) && surge_wall_clock_s() - start_s < END_REFUSALS_S) {
+            progress_s = surge_wall_clock_s();
+            refused = 1;
+        }
+        if (send_owed_progress(c))
+            progress_s = surge_wall_clock_s();
+        if (c->owed_count > 0 && surge_wall_clock_s() - progress_s > END_STALL_S)
+            return;
         zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
-        if (zmq_poll(&item, 1, c->owed_count > 0 ? 10 : END_QUIET_MS) <= 0 && c->owed_count == 0)
+        const int quiet_ms = refused ? END_BUSY_QUIET_MS : END_QUIET_MS;
+        if (zmq_poll(&item, 1, c->owed_count > 0 ? 10 : quiet_ms) <= 0 && c->owed_count == 0)
             return;
     }
 }

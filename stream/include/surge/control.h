@@ -45,7 +45,8 @@ void surge_control_peer_counts(const surge_control *control, long *over_limit, l
 const char *surge_control_endpoint(const surge_control *control);
 
 /* The run has ended: refuses the requests still waiting ("the run has ended"), and those that come until none has
- * for 0.1 s, for 1 s at most, then closes the socket. */
+ * for 0.1 s (0.5 s once any has), sending the refusals as the clients read (a client that reads nothing for 1 s is
+ * left), for 5 s at most, then closes the socket. */
 void surge_control_close(surge_control *control);
 
 #endif
