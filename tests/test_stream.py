@@ -32,6 +32,9 @@ Usage: test_stream.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP [SCHEME]
                   sends 5000 requests and reads nothing for 3 s (its replies fill ZeroMQ's queue: the rest are
                   refused "busy", none dropped); 600 pipelined to a running run are all answered; another client
                   sends 2000 while a stop request ends the run (those still waiting are refused "the run has ended").
+  GROUP ending    a client that never reads its replies, and one that keeps sending, cannot keep a run from exiting
+                  once a stop ends it (the socket leaves the first after 1 s without reading, closes 5 s after
+                  the end at most) and the run says what it left.
   GROUP strays    unsubscribe messages from raw ZeroMQ peers that never subscribed (and one that unsubscribes twice)
                   do not cancel other peers' subscriptions to state, stats and state/x_m,y_m; a genuine unsubscribe
                   by the last holder still releases its subset.
@@ -850,6 +853,69 @@ def group_replies():
           run.describe())
 
 
+def group_ending():
+    """When a run ends, the control socket refuses what still comes, but no client can keep the run from exiting.
+    1. A client sends 3000 requests to a paused run and never reads; another's stop ends the run. The replies owed
+       to the first cannot go out: the run leaves them once that client has read nothing for 1 s, exits, and says
+       how many it left.
+    2. A client keeps sending requests and reading the replies while a stop ends a running run: each request after
+       the end is refused, and the socket closes 5 s after the end all the same; the run exits and says so.
+    A run that waited on either client would not exit: each wait here is limited to 60 s."""
+    run = Surge("ending_stalled", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0"], publish=False,
+                paused=True)
+    ctl = surge_client.Control(run.ctl, 20)
+    started = ctl.request({"cmd": "status"}).get("ok")
+    silent = zmq.Context.instance().socket(zmq.DEALER)
+    silent.setsockopt(zmq.LINGER, 0)
+    silent.setsockopt(zmq.RCVHWM, 1)
+    silent.setsockopt(zmq.RCVBUF, 4096)
+    silent.connect(run.ctl)
+    sent = 0
+    deadline = time.time() + 30
+    while sent < 3000 and time.time() < deadline:
+        try:
+            silent.send(b'{"cmd": "status"}', zmq.NOBLOCK)
+            sent += 1
+        except zmq.Again:
+            time.sleep(0.001)
+    stopped = ctl.request({"cmd": "stop"})
+    rc = run.wait(60)
+    silent.close()
+    left = re.search(r"control: (\d+) repl(?:y|ies) not delivered to 1 client that read nothing for 1 s", run.stderr)
+    check("ending: a client that never reads its %d replies does not keep the run from exiting (%s)" %
+          (sent, left.group(0) if left else "no such line"),
+          started and sent == 3000 and stopped.get("ok") is True and rc == 0 and left is not None and
+          int(left.group(1)) > 0, run.describe())
+
+    run = Surge("ending_endless", ["-s", "time.end_s=1000", "-s", "output.snapshot_interval_s=0"], publish=False)
+    replies, done = [], threading.Event()
+
+    def endless():
+        sock = zmq.Context.instance().socket(zmq.DEALER)
+        sock.setsockopt(zmq.LINGER, 0)
+        sock.connect(run.ctl)
+        while not done.is_set():
+            sock.send(b'{"cmd": "status"}')
+            while sock.poll(20):
+                replies.append(json.loads(sock.recv()))
+        sock.close()
+    client = threading.Thread(target=endless)
+    client.start()
+    answered = wait_for(lambda: any(r.get("ok") for r in replies), 30)
+    stopped = surge_client.Control(run.ctl, 20).request({"cmd": "stop"})
+    rc = run.wait(60)
+    done.set()
+    client.join(10)
+    ended = sum(1 for r in replies if str(r.get("error", "")).startswith("the run has ended"))
+    refused = re.search(r"control: refused (\d+) requests? that waited or came after the run ended", run.stderr)
+    closed = re.search(r"control: (closed 5 s after the run ended, requests still coming|.*5 s after the end)",
+                       run.stderr)
+    check("ending: a client that keeps sending after the end is refused (%d refusals read) and the socket closes "
+          "5 s after the end (%s)" % (ended, closed.group(0) if closed else "no such line"),
+          answered and stopped.get("ok") is True and rc == 0 and ended > 0 and refused is not None and
+          int(refused.group(1)) >= ended and closed is not None, run.describe())
+
+
 def raw_subscriber(port, frames):
     """A ZeroMQ peer written by hand (ZMTP 3.0, NULL security, socket type SUB) over TCP: it sends the given
     frames as they are, such as b"\\x00topic", an unsubscribe that a SUB or XSUB socket would never pass on for a
@@ -1062,7 +1128,7 @@ def group_curve():
 
 groups = {"curve": group_curve, "state": group_state, "control": group_control, "inputs": group_inputs,
           "stalled": group_stalled, "peers": group_peers, "subsets": group_subsets, "endpoints": group_endpoints,
-          "strays": group_strays, "replies": group_replies}
+          "strays": group_strays, "replies": group_replies, "ending": group_ending}
 os.makedirs(WORK, exist_ok=True)
 groups[sys.argv[4]]()
 sys.exit(finish())

@@ -145,7 +145,17 @@ int close_live_links(live_links *l, const surge_sim *sim)
     if (over_limit + idle > 0)
         fprintf(stderr, "surge: closed %ld control connection%s over the limit of peers at once and %ld idle\n",
                 over_limit, over_limit == 1 ? "" : "s", idle);
-    surge_control_close(l->control);
+    surge_control_end end;
+    surge_control_close(l->control, &end);
+    if (end.refused > 0)
+        fprintf(stderr, "surge: control: refused %ld request%s that waited or came after the run ended\n", end.refused,
+                end.refused == 1 ? "" : "s");
+    if (end.undelivered > 0)
+        fprintf(stderr, "surge: control: %ld repl%s not delivered to %d client%s that %s\n", end.undelivered,
+                end.undelivered == 1 ? "y" : "ies", end.clients_left, end.clients_left == 1 ? "" : "s",
+                end.stalled ? "read nothing for 1 s" : "had not read them 5 s after the end");
+    else if (end.time_limit)
+        fprintf(stderr, "surge: control: closed 5 s after the run ended, requests still coming\n");
     surge_replay_free(l->replay);
     surge_journal_close(l->journal);
     if (l->curve && surge_curve_refused_count(l->curve) > 0)

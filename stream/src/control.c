@@ -135,13 +135,20 @@ surge_control *surge_control_start(void *context, const surge_control_def *def, 
 
 const char *surge_control_endpoint(const surge_control *c) { return c->endpoint; }
 
-static void refuse_waiting(surge_control *c);
+static void refuse_waiting(surge_control *c, surge_control_end *end);
+static long owed_replies_count(const surge_control *c);
 
-void surge_control_close(surge_control *c)
+void surge_control_close(surge_control *c, surge_control_end *end)
 {
+    surge_control_end ignored;
+    if (!end)
+        end = &ignored;
+    *end = (surge_control_end){0};
     if (!c)
         return;
-    refuse_waiting(c);
+    refuse_waiting(c, end);
+    end->undelivered = owed_replies_count(c);
+    end->clients_left = c->owed_count;
     peer_guard_stop(c->guard);
     zmq_close(c->socket);
     for (int i = 0; i < c->owed_count; i++)
@@ -729,27 +736,30 @@ static int send_owed_progress(surge_control *c)
 /* The run has ended: each request still waiting, or arriving until none has for END_QUIET_MS (END_BUSY_QUIET_MS
  * once any has), is refused, and what is owed is sent as the clients read, until they stop reading for
  * END_STALL_S; for END_REFUSALS_S at most, then the socket closes */
-static void refuse_waiting(surge_control *c)
+static void refuse_waiting(surge_control *c, surge_control_end *end)
 {
     const double start_s = surge_wall_clock_s();
     double progress_s = start_s;
-    int requests = 0, refused = 0;
+    int requests = 0;
     while (surge_wall_clock_s() - start_s < END_REFUSALS_S) {
         if (send_owed_progress(c))
             progress_s = surge_wall_clock_s();
         while (receive_one(c, NULL, &requests, 1) && surge_wall_clock_s() - start_s < END_REFUSALS_S) {
             progress_s = surge_wall_clock_s();
-            refused = 1;
+            end->refused++;
         }
         if (send_owed_progress(c))
             progress_s = surge_wall_clock_s();
-        if (c->owed_count > 0 && surge_wall_clock_s() - progress_s > END_STALL_S)
+        if (c->owed_count > 0 && surge_wall_clock_s() - progress_s > END_STALL_S) {
+            end->stalled = 1;
             return;
+        }
         zmq_pollitem_t item = {.socket = c->socket, .events = ZMQ_POLLIN};
-        const int quiet_ms = refused ? END_BUSY_QUIET_MS : END_QUIET_MS;
+        const int quiet_ms = end->refused > 0 ? END_BUSY_QUIET_MS : END_QUIET_MS;
         if (zmq_poll(&item, 1, c->owed_count > 0 ? 10 : quiet_ms) <= 0 && c->owed_count == 0)
             return;
     }
+    end->time_limit = 1;
 }
 
 /* Answers requests until the budget from start_s is spent (at least one, if any is waiting). */

@@ -44,9 +44,18 @@ void surge_control_peer_counts(const surge_control *control, long *over_limit, l
 /* The endpoint bound, with the port the system chose for a wildcard one */
 const char *surge_control_endpoint(const surge_control *control);
 
+/* How the control socket closed at the run's end */
+typedef struct surge_control_end {
+    long refused;      /* requests refused after the end: waiting then, or sent until the socket closed */
+    long undelivered;  /* replies and refusals still owed when it closed */
+    int clients_left;  /* the clients they were owed to */
+    int stalled;       /* closed because those clients read nothing for 1 s */
+    int time_limit;    /* closed after 5 s, requests still coming or replies still owed */
+} surge_control_end;
+
 /* The run has ended: refuses the requests still waiting ("the run has ended"), and those that come until none has
  * for 0.1 s (0.5 s once any has), sending the refusals as the clients read (a client that reads nothing for 1 s is
- * left), for 5 s at most, then closes the socket. */
-void surge_control_close(surge_control *control);
+ * left), for 5 s at most, then closes the socket. Fills end (may be NULL) with how it went. */
+void surge_control_close(surge_control *control, surge_control_end *end);
 
 #endif
