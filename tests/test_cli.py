@@ -6,8 +6,8 @@ Usage: test_cli.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                  crash, never exit 0); `surge check` accepts every shipped case; `surge params` documents
                  every key the cases use; every --help prints usage.
   GROUP blowup   an absurd fixed time step makes the health monitor stop the run (exit 1) with a clear
-                 message, a finite last_good.vtp, a checkpoint and clean diagnostics; the same case with
-                 its normal time step runs healthy.
+                 message, a finite last_good.vtp, its checkpoint last_good.bin (an earlier periodic
+                 checkpoint.bin kept) and clean diagnostics; the same case with its normal time step runs healthy.
   GROUP restart  `surge run --restart` continues to the same state hash as an uninterrupted run; the run
                  folder's run.pvd and diagnostics.csv cover both halves; the hash does not depend on the
                  thread count.
@@ -731,9 +731,9 @@ def group_blowup():
            "no 'health check failed: CHECK at particle N, step S, t = T s' with a particle id")
     fail_step = int(m.group(2)) if m else None
     fail_t = float(m.group(3)) if m else None
-    report("blowup_message_names_outputs", "last_good.vtp" in r.stderr and "checkpoint.bin" in r.stderr, r)
+    report("blowup_message_names_outputs", "last_good.vtp" in r.stderr and "last_good.bin" in r.stderr, r)
 
-    for name in ("last_good.vtp", "checkpoint.bin", "params.ini", "diagnostics.csv"):
+    for name in ("last_good.vtp", "last_good.bin", "params.ini", "diagnostics.csv"):
         report("blowup_writes_%s" % name.replace(".", "_"), os.path.isfile(os.path.join(out, name)), r,
                "%s missing in %s (has: %s)" % (name, out, sorted(os.listdir(out)) if os.path.isdir(out) else "no folder"))
 
@@ -761,11 +761,14 @@ def group_blowup():
             report("blowup_last_good_is_healthy", dev <= 0.1 + 1e-6, None,
                    "max |rho/rho0 - 1| of the fluid in last_good.vtp is %g > 0.1" % dev)
 
-    path = os.path.join(out, "checkpoint.bin")
+    path = os.path.join(out, "last_good.bin")
     if os.path.isfile(path):
         with open(path, "rb") as f:
             magic = f.read(8)
         report("blowup_checkpoint_is_checkpoint", magic == b"SURGECK1", None, "starts with %r" % magic)
+        step = checkpoint_position(path)[0] if magic == b"SURGECK1" else None
+        report("blowup_checkpoint_is_last_good", fail_step is not None and step == fail_step - 1, None,
+               "last_good.bin at step %s, the failure at step %s" % (step, fail_step))
 
     path = os.path.join(out, "diagnostics.csv")
     if os.path.isfile(path):
@@ -790,6 +793,18 @@ def group_blowup():
                None, "params.ini does not record dt_fixed_s = 0.01")
         r2 = surge("check", path)
         report("blowup_params_reloads_as_case", exited(r2, 0) and "ok" in r2.stdout, r2)
+
+    # a periodic checkpoint written before the stop stays (an earlier state to rerun the approach from)
+    out = os.path.join(WORK, "blowup_periodic")
+    r = surge("run", case, "-s", "numerics.dt_fixed_s=0.004", "-s", "output.checkpoint_interval_s=0.008",
+              "-s", "output.progress_interval_s=0", "-o", out, timeout=RUN_TIMEOUT_S)
+    m = re.search(r"health check failed: .* step (\d+),", r.stderr)
+    periodic, last_good = os.path.join(out, "checkpoint.bin"), os.path.join(out, "last_good.bin")
+    steps = [checkpoint_position(p)[0] if os.path.isfile(p) else None for p in (periodic, last_good)]
+    report("blowup_keeps_periodic_checkpoint",
+           exited(r, 1) and m is not None and steps[1] == int(m.group(1)) - 1 and steps[0] is not None and
+           0 < steps[0] < steps[1] and "checkpoint.bin keeps the last periodic checkpoint" in r.stderr, r,
+           "checkpoint.bin at step %s, last_good.bin at step %s" % tuple(steps))
 
     r = surge("run", case, "-s", "time.end_s=0.05", "-s", "output.progress_interval_s=0",
               "-o", os.path.join(WORK, "healthy"), timeout=RUN_TIMEOUT_S)

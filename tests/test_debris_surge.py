@@ -141,9 +141,10 @@ sick = os.path.join(WORK, "sick", "n0_s1_dp0.066")
 progress3 = json.load(open(os.path.join(sick, "progress.json")))
 with open(os.path.join(sick, "diagnostics.csv")) as f:
     last_t = float(list(csv.DictReader(f))[-1]["time_s"])
-check("run: --continue-stopped continues a stopped member from its checkpoint to the end (status %s, last "
+check("run: --continue-stopped continues a stopped member from its last_good.bin to the end (status %s, last "
       "diagnostics at %.3f s, continued with %s)" % (progress3.get("status"), last_t, progress3.get("continued_with")),
-      rc3 == 0 and progress3.get("status") == "done" and last_t > 0.19 and "--restart" in out3 and
+      rc3 == 0 and progress3.get("status") == "done" and last_t > 0.19 and
+      "--restart %s" % os.path.join(sick, "last_good.bin") in out3 and
       progress3.get("continued_with") == [["health.max_density_deviation=0.5"]], out3 + err3[-1500:])
 
 # a longer --end-s takes a finished member on from its last checkpoint (not from the start), recorded; the same

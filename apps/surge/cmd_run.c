@@ -21,7 +21,8 @@ static const char *usage_run =
     "  snap_*.vtp       particle snapshots (VTK PolyData), listed with their times in run.pvd for ParaView\n"
     "  diagnostics.csv  time series (energy, max speed, density deviation, fluid volume...)\n"
     "  checkpoint.bin   state to continue from with --restart (final, and every output.checkpoint_interval_s)\n"
-    "  last_good.vtp    only when the health monitor stopped the run: the last healthy state\n"
+    "  last_good.vtp    only when the health monitor stopped the run: the last healthy state, and\n"
+    "  last_good.bin    the same as a checkpoint (checkpoint.bin keeps the last periodic one)\n"
     "\n"
     "options:\n"
     "  -s section.key=value  override a parameter (repeatable; see 'surge params')\n"
@@ -152,6 +153,17 @@ static int render_default_scene(cli *c, const char *outdir)
     return claim_movie(c->movie_path, c->overwrite);
 }
 
+/* Whether outdir holds a checkpoint.bin, the periodic one a health stop leaves in place */
+static int periodic_checkpoint_kept(const char *outdir)
+{
+    char path[4096 + 32];
+    snprintf(path, sizeof path, "%.4096s/checkpoint.bin", outdir);
+    FILE *f = fopen(path, "rb");
+    if (f)
+        fclose(f);
+    return f != NULL;
+}
+
 /* How the run ended, said; returns the exit status. */
 static int report_run_end(const cli *c, surge_run_result r, const char *err, const char *outdir, uint64_t hash)
 {
@@ -164,8 +176,10 @@ static int report_run_end(const cli *c, surge_run_result r, const char *err, con
         fprintf(stderr, "surge: done, state hash %016llx, outputs in %s\n", (unsigned long long)hash, outdir);
         return EXIT_OK;
     case SURGE_RUN_UNHEALTHY:
-        fprintf(stderr, "surge: %s\nsurge: last good state written to %s/last_good.vtp and %s/checkpoint.bin\n",
-                err, outdir, outdir);
+        fprintf(stderr, "surge: %s\nsurge: last good state written to %s/last_good.vtp and %s/last_good.bin (continue "
+                        "from it with surge run --restart %s/last_good.bin and a setting that lets it through)%s\n",
+                err, outdir, outdir, outdir,
+                periodic_checkpoint_kept(outdir) ? "; checkpoint.bin keeps the last periodic checkpoint" : "");
         return EXIT_UNHEALTHY;
     case SURGE_RUN_STOPPED:
         fprintf(stderr, "surge: stopped by a control request, state hash %016llx; checkpoint written to "

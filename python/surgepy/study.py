@@ -208,9 +208,10 @@ def _record_program(tool, folder, progress, program, resuming):
     progress["programs"] = programs
 
 
-def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
-    """Runs surge for one study point in folder: from its checkpoint when an earlier piece was interrupted, else
-    fresh_argv (which names the case and -o folder; the run starts over); common options go to both. At the deadline
+def run_resumable(tool, folder, fresh_argv, surge, common, deadline, checkpoint_name="checkpoint.bin"):
+    """Runs surge for one study point in folder: from its checkpoint (checkpoint_name: last_good.bin continues a run
+    the health monitor stopped) when an earlier piece was interrupted, else fresh_argv (which names the case and -o
+    folder; the run starts over); common options go to both. At the deadline
     (wall clock, None: none) or on Ctrl-C the run gets SIGINT and leaves a checkpoint (exit 4). Returns (exit status,
     progress) with the wall time of all pieces in progress["wall_s"] and the programs that ran them in
     progress["programs"] (`surge version`; a note when a run continues under another); the caller records the final
@@ -220,7 +221,7 @@ def run_resumable(tool, folder, fresh_argv, surge, common, deadline):
         progress = read_progress(folder)
     except ValueError as e:
         fail(tool, str(e))
-    checkpoint = os.path.join(folder, "checkpoint.bin")
+    checkpoint = os.path.join(folder, checkpoint_name)
     resuming = os.path.isfile(checkpoint) and progress["status"] in ("interrupted", "running")
     if resuming:
         argv = [surge, "run", "--restart", checkpoint] + common

@@ -21,7 +21,7 @@ runs-dir/n<count>_s<seed>_dp<dp> or runs-dir/phi<fraction>_s<seed>_dp<dp>, resum
 from its checkpoint, a finished one is skipped (or, when --end-s asks for more flow than its checkpoint holds,
 continued from there to the new end, recorded in progress.json as extended_from_s), and so is one the health
 monitor stopped, whose folder keeps its
-last good state; --continue-stopped continues such members from that state, passing the --set parameters, which
+last good state (last_good.vtp, last_good.bin); --continue-stopped continues such members from that state, passing the --set parameters, which
 must then be live ones such as health.max_density_deviation, and records them in progress.json). --member K runs
 only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
@@ -178,15 +178,16 @@ def run_member(args, asked, seed, deadline):
         progress["status"] = "interrupted"  # a longer --end-s continues a finished member from its last checkpoint
         progress["extended_from_s"] = progress.get("extended_from_s", []) + [round(reached_s, 6)]
         study.write_progress(folder, progress)
-    continued = []
-    if progress["status"] == "unhealthy":  # the same run would stop again; its last_good.vtp and checkpoint stay
+    continued, checkpoint_name = [], "checkpoint.bin"
+    if progress["status"] == "unhealthy":  # the same run would stop again; its last_good.vtp and .bin stay
         if not args.continue_stopped:
             print("%s: %s: stopped by the health monitor earlier (see its last_good.vtp); remove the folder to run it "
                   "again, or continue it from its last good state with --continue-stopped and a --set that lets it "
                   "through" % (TOOL, folder), flush=True)
             return
-        if not os.path.isfile(os.path.join(folder, "checkpoint.bin")):
-            fail("%s: stopped by the health monitor, but its checkpoint.bin (the last good state) is missing" % folder)
+        checkpoint_name = "last_good.bin"
+        if not os.path.isfile(os.path.join(folder, checkpoint_name)):
+            fail("%s: stopped by the health monitor, but its last_good.bin (the last good state) is missing" % folder)
         continued = [item for setting in args.set for item in ("-s", setting)]
         progress["status"] = "interrupted"  # run_resumable continues an interrupted member from its checkpoint
         progress["continued_with"] = progress.get("continued_with", []) + [args.set]
@@ -194,7 +195,7 @@ def run_member(args, asked, seed, deadline):
     fresh = [args.surge, "run", CASE, "-o", folder, "--overwrite"] + scene_settings(args, asked, seed)
     common = ["-s", "time.end_s=%g" % args.end_s, "-s", "output.checkpoint_interval_s=5",
               "-s", "output.progress_interval_s=60", "--threads", str(args.threads)]
-    rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common + continued, deadline)
+    rc, progress = study.run_resumable(TOOL, folder, fresh, args.surge, common + continued, deadline, checkpoint_name)
     if rc != 4:
         progress["status"] = "done" if rc == 0 else "unhealthy"
         study.write_progress(folder, progress)

@@ -6,7 +6,7 @@
 #include <stddef.h>
 
 /* A file name (no folder) that surge run writes: params.ini, diagnostics.csv, checkpoint.bin, run.pvd,
- * boulders.pvd, control.jsonl, last_good.vtp, snap_*.vtp, boulders_*.vtp. */
+ * boulders.pvd, control.jsonl, last_good.vtp, last_good.bin, snap_*.vtp, boulders_*.vtp. */
 int surge_is_run_file(const char *name);
 /* A frame the renderer writes: frame_*.png (and frames.csv, its index). */
 int surge_is_frame_file(const char *name);

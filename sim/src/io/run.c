@@ -149,10 +149,12 @@ static int write_flow(const surge_sim *sim, run_outputs *o, char *err, size_t er
     return 0;
 }
 
-static int write_checkpoint(const surge_sim *sim, run_outputs *o, char *err, size_t err_len)
+/* name: checkpoint.bin, or last_good.bin for the last good state of a run the health monitor stopped (which keeps
+ * the periodic checkpoint.bin, an earlier state to rerun the approach from with other settings) */
+static int write_checkpoint(const surge_sim *sim, run_outputs *o, const char *name, char *err, size_t err_len)
 {
     char path[4096];
-    join(path, sizeof path, o->dir, "checkpoint.bin");
+    join(path, sizeof path, o->dir, name);
     if (surge_sim_checkpoint_write(sim, path, err, err_len) != 0)
         return -1;
     o->last_checkpoint_step = surge_sim_step_count(sim);
@@ -360,7 +362,8 @@ static int write_due_outputs(surge_sim *sim, run_outputs *o, run_clock *c, int *
         return -1;
     if (o->flow_csv && output_due(&c->flows, t, p->output.flow_interval_s, 0) && write_flow(sim, o, err, err_len) != 0)
         return -1;
-    if (output_due(&c->checkpoints, t, p->output.checkpoint_interval_s, 0) && write_checkpoint(sim, o, err, err_len) != 0)
+    if (output_due(&c->checkpoints, t, p->output.checkpoint_interval_s, 0) &&
+        write_checkpoint(sim, o, "checkpoint.bin", err, err_len) != 0)
         return -1;
     *fatal = 0;
     if (p->output.progress_interval_s > 0 && surge_wall_clock_s() >= c->next_progress) {
@@ -387,7 +390,7 @@ static surge_run_result step_until_done(surge_sim *sim, const surge_run_options 
         if (requests & SURGE_REQUEST_SNAPSHOT && surge_sim_step_count(sim) != o->last_snapshot_step &&
             write_snapshot(sim, o, NULL, 1, err, err_len) != 0)
             return SURGE_RUN_IO_ERROR;
-        if (requests & SURGE_REQUEST_CHECKPOINT && write_checkpoint(sim, o, err, err_len) != 0)
+        if (requests & SURGE_REQUEST_CHECKPOINT && write_checkpoint(sim, o, "checkpoint.bin", err, err_len) != 0)
             return SURGE_RUN_IO_ERROR;
         *fatal = 0;
         if (requests & SURGE_REQUEST_STOP)
@@ -412,15 +415,17 @@ static surge_run_result step_until_done(surge_sim *sim, const surge_run_options 
     }
 }
 
-/* The final state (the last good one after a health failure) always reaches disk: a snapshot and a checkpoint */
+/* The final state always reaches disk: a snapshot and a checkpoint (after a health failure the last good state, as
+ * last_good.vtp and last_good.bin) */
 static surge_run_result write_final(surge_sim *sim, run_outputs *o, surge_run_result result, char *err, size_t err_len)
 {
     char final_err[512];
-    const char *final_name = result == SURGE_RUN_UNHEALTHY ? "last_good.vtp" : NULL;
+    const int unhealthy = result == SURGE_RUN_UNHEALTHY;
+    const char *final_name = unhealthy ? "last_good.vtp" : NULL;
     const int snapshot_due = result == SURGE_RUN_UNHEALTHY || surge_sim_step_count(sim) != o->last_snapshot_step;
     if ((snapshot_due &&
          write_snapshot(sim, o, final_name, result != SURGE_RUN_UNHEALTHY, final_err, sizeof final_err) != 0) ||
-        write_checkpoint(sim, o, final_err, sizeof final_err) != 0) {
+        write_checkpoint(sim, o, unhealthy ? "last_good.bin" : "checkpoint.bin", final_err, sizeof final_err) != 0) {
         if (result != SURGE_RUN_UNHEALTHY && result != SURGE_RUN_IO_ERROR) /* the first error is the one to name */
             snprintf(err, err_len, "%s", final_err);
         result = result == SURGE_RUN_UNHEALTHY ? result : SURGE_RUN_IO_ERROR;

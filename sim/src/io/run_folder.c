@@ -17,7 +17,7 @@ static int has_affixes(const char *name, const char *prefix, const char *suffix)
 int surge_is_run_file(const char *name)
 {
     static const char *const fixed[] = {"params.ini", "diagnostics.csv", "checkpoint.bin", "run.pvd", "boulders.pvd",
-                                        "control.jsonl", "last_good.vtp", "boulders.csv", "flow.csv"};
+                                        "control.jsonl", "last_good.vtp", "last_good.bin", "boulders.csv", "flow.csv"};
     for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
         if (!strcmp(name, fixed[i]))
             return 1;
