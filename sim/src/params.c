@@ -390,6 +390,12 @@ static const surge_param_info registry[] = {
      OFF(shifting.surface_threshold)},
     {"shifting", "max_shift_dp", SURGE_PARAM_REAL, "dp", 0.1, 0, 1, true, NULL,
      "Largest shift of a particle in one step, in units of dp.", OFF(shifting.max_shift_dp)},
+    {"shifting", "surface_anti_clumping", SURGE_PARAM_REAL, "-", 0, 0, 10, true, NULL,
+     "Explicit scheme, lind: w of the shift that parts particles crowded together in the free-surface layer, where "
+     "Lind's shift is off: dr = -min(A_L/2, 2 w (k - 1)) h c0 dt grad C with k the kernel sum over the rest "
+     "lattice's, zero where the spacing is at rest or wider; in the top two rows the truncated kernel sum stays below "
+     "the lattice's and nothing acts (0: off; 1 carried the densest debris surge past a stop, docs/method.md).",
+     OFF(shifting.surface_anti_clumping)},
     {"shifting", "consistent_density", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "The density also takes on the divergence of each shift, so that densities follow the particles' spacing "
      "(mass moves with the particles; opt-in, docs/method.md).", OFF(shifting.consistent_density)},

@@ -211,6 +211,7 @@ typedef struct surge_params {
         double lind_coefficient;     /* A_L of Lind's form */
         double surface_threshold;    /* div r below this marks a free-surface particle (2D bulk: 2) */
         double max_shift_dp;         /* largest shift in one step, in units of dp */
+        double surface_anti_clumping; /* explicit lind: w of the shift of crowded particles in the surface layer */
         bool consistent_density;     /* the shift's divergence changes the density too (volume follows spacing) */
     } shifting;
     struct {

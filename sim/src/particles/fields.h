@@ -55,6 +55,7 @@ enum { FIELD_SORTED = 1, FIELD_HASHED = 2, FIELD_CHECKPOINTED = 4 };
     F(grad_rho_x, real, FIELD_ALL, 0, "renormalised density gradient (density diffusion)")                           \
     F(grad_rho_y, real, FIELD_ALL, 0, "")                                                                             \
     F(div_r, real, FIELD_ALL, 0, "div r: 2 in the bulk, less at the free surface")                                    \
+    F(kernel_ratio, real, FIELD_ALL, 0, "sum_b m W_ab (fluid and walls) over rho0's lattice sum: above 1 where crowded") \
     F(shift_x, real, FIELD_ALL, 0, "this step's shifting displacement (m)")                                           \
     F(shift_y, real, FIELD_ALL, 0, "")                                                                                \
     F(shift_div, real, FIELD_ALL, 0, "its divergence div(dr), the relative volume change it makes")                   \

@@ -355,6 +355,7 @@ void interaction_compute(surge_sim *sim, int corrector)
     const real relax_per_strain = corrector ? (real)sim->params.numerics.density_relaxation : 0;
     const int relax_near_discs = sim->params.numerics.density_relaxation_near_discs;
     const real mass = c.mass, alpha = c.alpha, inv_lattice_sum = (real)(1.0 / sim->lattice_kernel_sum);
+    const real inv_rho0 = (real)(1.0 / sim->rho0);
     /* wall-face repulsion (docs/method.md): none beyond face_reach_m from the face, 0.1 c0^2 / dp at the face */
     const real face_reach_m = (real)sim_contact_reach_m(sim);
     const real face_search_m = face_reach_m > 0 ? (real)sim->params.numerics.dp_m : 0;
@@ -424,6 +425,7 @@ void interaction_compute(surge_sim *sim, int corrector)
             sim->grad_c_x[a] = s.grad_c_x;
             sim->grad_c_y[a] = s.grad_c_y;
             sim->near_surface[a] = (uint8_t)s.near_surface;
+            sim->kernel_ratio[a] = mass * (alpha + s.kernel_w) * inv_lattice_sum * inv_rho0;
         }
     }
     #pragma omp barrier

@@ -21,14 +21,21 @@ static void shift_displacement(const surge_sim *sim, int a, double dt, double *s
         coef = p->shifting.velocity_coefficient * sim->derived.h_m * dt *
                sqrt((double)sim->vx[a] * sim->vx[a] + (double)sim->vy[a] * sim->vy[a]);
         break;
-    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C, none within the free-surface layer */
+    case SURGE_SHIFT_LIND: /* dr = -(A_L/2) h c0 dt grad C; within the free-surface layer only where crowded */
         if (sim->scheme->incompressible) { /* no speed of sound: below */
             coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.h_m;
             break;
         }
-        if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold)
-            return;
-        coef = 0.5 * p->shifting.lind_coefficient * sim->derived.h_m * sim->derived.c0_mps * dt;
+        coef = 0.5 * p->shifting.lind_coefficient;
+        if (sim->near_surface[a] || sim->div_r[a] < p->shifting.surface_threshold) {
+            /* min(A_L/2, 2 w (k - 1)) with k the kernel ratio: the implicit scheme's anti-clumping shift
+             * 2 w (k - 1) h^2 grad C with c0 dt for its h, as in Lind's form; zero at rest spacing or wider */
+            const double crowding = (double)sim->kernel_ratio[a] - 1.0;
+            if (!(crowding > 0 && p->shifting.surface_anti_clumping > 0))
+                return;
+            coef = fmin(coef, 2.0 * p->shifting.surface_anti_clumping * crowding);
+        }
+        coef = coef * sim->derived.h_m * sim->derived.c0_mps * dt;
         break;
     default: return;
     }
