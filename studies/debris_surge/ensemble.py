@@ -27,8 +27,8 @@ only the K-th member of `list` (0-based), for a
 job-array scheduler; --jobs J runs J members at a time (with --threads each). The boulders have the paper's
 density ratio 0.9. --set NAME=VALUE (repeatable) passes a parameter to every member's first run; `surge check`
 vets them before any member starts, and each member's params.ini records them. The case's automatic c0 carries
-discs since 2026-11-28 (112 m/s; docs/method.md, "c0"); the members in docs/validation/debris_surge.md before then
-ran with --set numerics.c0_mps=110, which the ensembles at dp = 0.04 m keep for their remaining members.
+discs (112 m/s; docs/method.md, "c0"); the ensembles at dp = 0.04 m in docs/validation/debris_surge.md ran with
+--set numerics.c0_mps=110 and keep it for their remaining members.
 park / unpark: a member longer than one sitting is carried in the committed tree, since nothing else survives from
 one checkout to the next: `park` copies each interrupted (or still running) member's last checkpoint, flow.csv,
 boulders.csv and small files (the checkpoint gzip-compressed; no snapshot, which collect does not read: 0.57 MB
@@ -581,7 +581,7 @@ def main():
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     d = sub.add_parser("plot", help="box plots from tables that collect wrote")
     d.add_argument("--csv", action="append", required=True, metavar="FILE",
-                   help="a table collect wrote (--csv; before 2026-11-28 it had no uniform_froude), or one with its "
+                   help="a table collect wrote (--csv), or one with its "
                         "columns %s; repeatable"
                         % ", ".join(PLOTTED))
     d.add_argument("--png", type=cli_checks.png_file, required=True, help="draw the box plots to this PNG file")
