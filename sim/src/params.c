@@ -394,7 +394,7 @@ static const surge_param_info registry[] = {
      "Explicit scheme, lind: w of the shift that parts particles crowded together in the free-surface layer, where "
      "Lind's shift is off: dr = -min(A_L/2, 2 w (k - 1)) h c0 dt grad C with k the kernel sum over the rest "
      "lattice's, zero where the spacing is at rest or wider; in the top two rows the truncated kernel sum stays below "
-     "the lattice's and nothing acts (0: off; 1 carried the densest debris surge past a stop, docs/method.md).",
+     "the lattice's and nothing acts (0: off; it spreads a crowded front nose, docs/method.md).",
      OFF(shifting.surface_anti_clumping)},
     {"shifting", "consistent_density", SURGE_PARAM_BOOL, "-", 0, 0, 1, true, NULL,
      "The density also takes on the divergence of each shift, so that densities follow the particles' spacing "
