@@ -11,7 +11,8 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   periodic boundary, with the default placement and packed: the total momentum of fluid and discs
                   stays what it was.
   GROUP restart   a boulder run stopped half way and restarted from its checkpoint ends in the same state
-                  hash as the uninterrupted run; the boulders' .vtp files and boulders.pvd are written.
+                  hash as the uninterrupted run (two discs; 54 on the debris surge's belt); the boulders' .vtp
+                  files and boulders.pvd are written.
   GROUP stream    a pyzmq subscriber's `bodies` messages of a paused-then-resumed run carry the discs, and the
                   final one equals the run's last boulders .vtp bit for bit.
   GROUP inputs    bad boulder lists, placements and contact parameters (the lubrication's too) get clear errors
@@ -201,6 +202,20 @@ def group_restart():
     check("restart: restarted run (2 threads) ends in the uninterrupted run's state hash",
           r.returncode == 0 and h_whole and h_restart and h_whole.group(1) == h_restart.group(1),
           r.stderr[-1500:] + "\nwhole: %s" % (h_whole.group(1) if h_whole else None))
+    # a crowded scene: 54 discs on the debris surge's belt, fluid particles stopped at the discs' faces (whose reaction
+    # changes the discs' speeds after their particles were placed): a restart on two threads repeats the run
+    crowded = ["debris_surge.ini", "-s", "numerics.dp_m=0.05", "-s", "boulders.placement=graded", "-s",
+               "boulders.solid_fraction=0.29", "-s", "boulders.seed=13", "-s", "boulders.density_ratio=0.9", "-s",
+               "output.snapshot_interval_s=0", "-s", "output.flow_interval_s=0"]
+    whole_c, p_c, cmd_c = surge("restart_crowded_whole", ["run"] + crowded + ["-s", "time.end_s=0.04"])
+    half_c, q_c, _ = surge("restart_crowded_half", ["run"] + crowded + ["-s", "time.end_s=0.02"])
+    r_c = subprocess.run([SURGE, "run", "--restart", os.path.join(half_c, "checkpoint.bin"), "-o", half_c, "--threads",
+                          "2", "-s", "time.end_s=0.04"], capture_output=True, text=True, timeout=300, env=ENV)
+    h_whole_c = re.search(r"state hash ([0-9a-f]{16})", p_c.stderr)
+    h_restart_c = re.search(r"state hash ([0-9a-f]{16})", r_c.stderr)
+    check("restart: a restarted run of 54 discs on the belt (2 threads) ends in the uninterrupted run's state hash",
+          p_c.returncode == 0 and q_c.returncode == 0 and r_c.returncode == 0 and h_whole_c and h_restart_c and
+          h_whole_c.group(1) == h_restart_c.group(1), cmd_c + "\n" + p_c.stderr[-800:] + r_c.stderr[-800:])
     # a wall particle's build position far outside the domain, the checksum made right again (the fuzz pass found
     # 2.9e260 there overflowing a cell index): refused with the reason
     with open(os.path.join(half, "checkpoint.bin"), "rb") as f:

@@ -44,14 +44,19 @@ int explicit_discs_correct(surge_sim *sim, double dt_s)
 
 /* The reaction of the contact rule (explicit_step.c) on a disc's face: each fluid particle it stopped approaching the
  * face gives the disc -m_a dv_a / m (face_push, dv_a / dt; radial, no torque), as in the implicit scheme
- * (implicit_discs.c). Summed in index order: the same whatever the thread count */
+ * (implicit_discs.c). Summed in index order: the same whatever the thread count. The disc's particles then take the
+ * disc's new velocity, as a restart places them (checkpoint.c), so that a restarted run repeats this one. */
 void explicit_discs_take_contact_reactions(surge_sim *sim, double dt_s)
 {
     boulder_set *b = &sim->boulders;
+    int pushed = 0;
     for (int a = sim->wall_count; a < sim->count; a++)
         if (sim->face_disc[a] >= 0) {
             const int d = sim->face_disc[a];
             b->vx[d] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_x[a];
             b->vy[d] -= dt_s * sim->mass * b->inv_mass[d] * sim->face_push_y[a];
+            pushed = 1;
         }
+    if (pushed)
+        boulders_place_particles(sim);
 }
