@@ -623,9 +623,11 @@ static int test_disc_contact_rules(void)
     /* the reaction: the disc's force with and without the particle's push */
     const int pushed = sim->face_disc[a] == 0;
     boulders_fluid_forces(sim, NULL);
+    boulders_take_face_reactions(sim);
     const double fy_with = b->fy[0];
     sim->face_disc[a] = -1;
     boulders_fluid_forces(sim, NULL);
+    boulders_take_face_reactions(sim);
     const double reaction = fy_with - b->fy[0], expected = -sim->mass * sim->face_push_y[a];
     printf("disc_contact_rules: thrown at a disc at 0.5 m/s from 0.1 dp: after the step vy - v_disc = %.3g m/s, "
            "gap %.3g m (%.2f dp); push %.3g m/s2 outward, reaction on the disc %.4g N/m (expected %.4g)\n",

@@ -116,6 +116,7 @@ surge_sim *sim_create_checked(const surge_params *params,
     }
     sim->derived.boulder_count = sim->boulders.count;
     grid_sort_walls(sim);
+    boulders_index_particles(sim);
     grid_sort_fluid(sim);
     boundary_wall_speeds(sim, 0.0);
     return sim;

@@ -53,7 +53,9 @@
     F(spin_coupling, real, "by wall index: sum over fluid neighbours of the viscous pair coefficient")              \
     F(of_wall, int32_t, "by wall particle id: the disc it belongs to (-1: a fixed wall)")                           \
     F(local_x, double, "by wall particle id: its offset from the disc's centre at angle 0 (m)")                     \
-    F(local_y, double, "")
+    F(local_y, double, "")                                                                                           \
+    F(by_disc, int32_t, "the discs' particles' wall indices, disc by disc, each disc's in ascending order")          \
+    F(in_order, int32_t, "the same in ascending order")
 
 #define DISC_MEMBER(name, meaning) double *name;
 #define DISC_COPY_MEMBER(name, meaning) double *name##_n;
@@ -65,6 +67,7 @@ typedef struct boulder_set {
     SURGE_DISC_STEP_FIELDS(DISC_COPY_MEMBER)
     SURGE_DISC_FIELDS(DISC_MEMBER)
     SURGE_WALL_DISC_FIELDS(WALL_DISC_MEMBER)
+    int32_t *by_disc_first; /* count + 1: disc i's particles are by_disc[by_disc_first[i] .. by_disc_first[i + 1]) */
     contact_solver *contacts;
 } boulder_set;
 

@@ -44,6 +44,7 @@ int boulders_allocate_wall_fields(boulder_set *b, int wall_count)
 #define ALLOC_WALL(name, type, meaning) ok &= (b->name = calloc((size_t)(wall_count > 0 ? wall_count : 1), sizeof(type))) != NULL;
     SURGE_WALL_DISC_FIELDS(ALLOC_WALL)
 #undef ALLOC_WALL
+    ok &= (b->by_disc_first = calloc((size_t)b->count + 1, sizeof *b->by_disc_first)) != NULL;
     return ok ? 0 : -1;
 }
 
@@ -56,6 +57,7 @@ void boulders_free(boulder_set *b)
     SURGE_DISC_STEP_FIELDS(FREE_DISC_COPY)
     SURGE_DISC_FIELDS(FREE_DISC)
     SURGE_WALL_DISC_FIELDS(FREE_WALL)
+    free(b->by_disc_first);
 #undef FREE_DISC
 #undef FREE_DISC_COPY
 #undef FREE_WALL

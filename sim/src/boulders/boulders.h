@@ -27,10 +27,14 @@ double boulders_wall_face_distance_m(const surge_params *p, double x, double y);
  * less room to the next face (the second disc or a wall) than twice the contact distance (boulders_cover) */
 int boulders_room_too_narrow(const surge_sim *sim, double x, double y, double nearest_m, double second_m);
 void boulders_place_particles(surge_sim *sim);                /* positions and velocities from the discs */
+void boulders_index_particles(surge_sim *sim); /* by_disc, after the walls are sorted or read (boulder_set.h) */
 /* The mDBC ghost offset wall particle k of a disc has when the disc's orientation is angle. */
 void boulders_ghost_offset(const surge_sim *sim, int k, double angle, real *gdx, real *gdy);
-/* eq. 10, after interaction_compute; the pressures taken relative to reference_pa[disc] (NULL: 0) */
+/* eq. 10 from the walls' states and the fluid's records (after boundary_update), the pressures taken relative to
+ * reference_pa[disc] (NULL: 0). Called by every thread of a parallel region: its loops are shared among them. */
 void boulders_fluid_forces(surge_sim *sim, const double *reference_pa);
+/* After boulders_fluid_forces and interaction_compute, on one thread: the reactions to the face repulsion */
+void boulders_take_face_reactions(surge_sim *sim);
 /* Fills the discs' cos_angle and sin_angle from their angles (scratch; writes through the const set's arrays). */
 void boulders_orient(const boulder_set *b);
 /* Velocity of the disc's surface where wall particle k's ghost is mirrored (the no-slip target), at the orientation of

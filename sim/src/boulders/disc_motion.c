@@ -31,6 +31,33 @@ static inline void ghost_offset(const boulder_set *b, int i, double rx, double r
     *gdy = (real)(ry * to_ghost);
 }
 
+/* The disc particles' wall indices in ascending order (in_order) and by disc (by_disc, a counting sort, ascending within
+ * each disc: a loop over one disc's particles adds in the order a loop over all walls would) */
+void boulders_index_particles(surge_sim *sim)
+{
+    boulder_set *b = &sim->boulders;
+    if (b->count == 0)
+        return;
+    int32_t *first = b->by_disc_first;
+    memset(first, 0, ((size_t)b->count + 1) * sizeof *first);
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int i = b->of_wall[sim->id[k]];
+        if (i >= 0)
+            first[i + 1]++;
+    }
+    for (int i = 0; i < b->count; i++)
+        first[i + 1] += first[i];
+    int n = 0;
+    for (int k = 0; k < sim->wall_count; k++) {
+        const int i = b->of_wall[sim->id[k]];
+        if (i >= 0)
+            b->by_disc[first[i]++] = k, b->in_order[n++] = k;
+    }
+    for (int i = b->count; i > 0; i--) /* first[i] now holds the end of disc i: shift back to beginnings */
+        first[i] = first[i - 1];
+    first[0] = 0;
+}
+
 void boulders_place_particles(surge_sim *sim)
 {
     const boulder_set *b = &sim->boulders;
@@ -39,10 +66,8 @@ void boulders_place_particles(surge_sim *sim)
     const double period = sim->grid.period_m;
     boulders_orient(b);
     #pragma omp parallel for schedule(static)
-    for (int k = 0; k < sim->wall_count; k++) {
-        const int id = sim->id[k], i = b->of_wall[id];
-        if (i < 0)
-            continue;
+    for (int e = 0; e < b->by_disc_first[b->count]; e++) {
+        const int k = b->in_order[e], id = sim->id[k], i = b->of_wall[id];
         double rx, ry;
         boulders_rotated_offset(b, id, b->cos_angle[i], b->sin_angle[i], &rx, &ry);
         double x = b->x[i] + rx;

@@ -568,6 +568,7 @@ surge_sim *surge_sim_checkpoint_read(const char *path, const char *const *overri
         sim = NULL;
     }
     if (sim) {
+        boulders_index_particles(sim); /* the walls in the checkpoint's order */
         boundary_wall_speeds(sim, clock.time_s);
         boulders_place_particles(sim);
     }

@@ -294,8 +294,10 @@ void neighbours_track(surge_sim *sim)
 int neighbours_adopt_build_positions(surge_sim *sim)
 {
     grid_sort_fluid(sim);
-    if (sim->boulders.count > 0)
+    if (sim->boulders.count > 0) {
         grid_sort_walls(sim);
+        boulders_index_particles(sim);
+    }
     return build_lists(sim);
 }
 
@@ -317,10 +319,9 @@ static double largest_excursion(const surge_sim *sim)
     }
     const boulder_set *b = &sim->boulders;
     if (b->count > 0) {
-        for (int k = 0; k < sim->wall_count; k++) {
-            const int i = b->of_wall[sim->id[k]];
-            if (i < 0)
-                continue;
+        #pragma omp parallel for schedule(static) reduction(max : largest)
+        for (int e = 0; e < b->by_disc_first[b->count]; e++) {
+            const int k = b->in_order[e], i = b->of_wall[sim->id[k]];
             const double dx = sim->x[k] - nl->x_build[k], dy = sim->y[k] - nl->y_build[k];
             const double speed = sqrt(b->vx[i] * b->vx[i] + b->vy[i] * b->vy[i]) + fabs(b->omega[i]) * b->radius[i];
             largest = fmax(largest, sqrt(dx * dx + dy * dy) + half_dt * speed);

@@ -296,6 +296,7 @@ int scene_build(surge_sim *s, char *err, size_t err_len)
     for (int i = 0; i < s->wall_count; i++)
         s->boulders.of_wall[i] = -1;
     boulders_create_particles(s, walls.n);
+    boulders_index_particles(s);
     boulders_place_particles(s);
     for (int i = 0; i < walls.n; i++) {
         s->x[i] = walls.x[i];

@@ -30,13 +30,15 @@ static double variable_dt(const surge_sim *sim, double max_acc2, double max_visc
 }
 
 /* One force evaluation (the predictor's or the corrector's): displacements since the list build, the walls' mDBC
- * state, the fluid's rates, in one parallel region (waking the threads once, not three times), then the discs'. The
- * phases split at the barriers that end interaction_prepare's and boundary_update's loops: the master thread reads
- * the clock as it leaves each (the records and the pair loops are the interaction's, the walls' states the
- * boundary's). */
+ * state, the fluid's rates and the fluid's forces on the discs, in one parallel region (waking the threads once, not
+ * four times), then the reactions to the face repulsion on the discs. The phases split at the barriers that end
+ * interaction_prepare's and boundary_update's loops: the master thread reads the clock as it leaves each (the records
+ * and the pair loops are the interaction's, the walls' states the boundary's), and as it ends its share of the pair
+ * loops (the discs' forces after it are the discs'). */
 static void evaluate_rates(surge_sim *sim, int corrector)
 {
     surge_phase_times *t = &sim->phase_times;
+    const int discs = sim->boulders.count > 0;
     #pragma omp parallel
     {
         interaction_prepare(sim);
@@ -46,12 +48,17 @@ static void evaluate_rates(surge_sim *sim, int corrector)
         #pragma omp master
         phase_end(sim, &t->boundary_s);
         interaction_compute(sim, corrector);
+        if (discs) { /* a thread done with its fluid takes up the discs' particles at once */
+            #pragma omp master
+            phase_end(sim, &t->interaction_s);
+            boulders_fluid_forces(sim, NULL);
+        }
     }
-    phase_end(sim, &t->interaction_s);
-    if (sim->boulders.count > 0) {
-        boulders_fluid_forces(sim, NULL);
+    if (discs) {
+        boulders_take_face_reactions(sim);
         phase_end(sim, &t->discs_s);
-    }
+    } else
+        phase_end(sim, &t->interaction_s);
 }
 
 /* The step's end at t_n + dt: its time, step count and the walls' speeds, then the health check; a failed check takes

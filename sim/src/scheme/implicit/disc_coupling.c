@@ -82,11 +82,27 @@ void implicit_discs_prepare(surge_sim *sim)
         sim->rho[kw] = (real)sim->rho0, sim->inv_rho[kw] = (real)(1.0 / sim->rho0);
     }
     size_t n = 0;
-    for (int i = 0; i < nf; i++)
+    for (int i = 0; i < nf; i++) {
+        w->disc_entry_fluid_first[i] = (int64_t)n;
         for (int64_t e = nl->wall_first[i]; e < nl->wall_first[i + 1]; e++)
             if (disc_of(sim, nl->wall_index[e]) >= 0 && (w->wall_w[e] != 0 || w->wall_gx[e] != 0 || w->wall_gy[e] != 0))
                 w->disc_entry[n] = e, w->disc_entry_fluid[n] = i, n++;
+    }
+    w->disc_entry_fluid_first[nf] = (int64_t)n;
     w->disc_entries = n;
+    /* grouped by disc, in fluid order within each (a counting sort): a disc's sums over them add as a loop over all
+     * the entries would */
+    int64_t *by_disc_first = w->disc_entry_disc_first;
+    memset(by_disc_first, 0, ((size_t)b->count + 1) * sizeof *by_disc_first);
+    for (size_t q = 0; q < n; q++)
+        by_disc_first[disc_of(sim, nl->wall_index[w->disc_entry[q]]) + 1]++;
+    for (int d = 0; d < b->count; d++)
+        by_disc_first[d + 1] += by_disc_first[d];
+    for (size_t q = 0; q < n; q++)
+        w->disc_entry_by_disc[by_disc_first[disc_of(sim, nl->wall_index[w->disc_entry[q]])]++] = (int64_t)q;
+    for (int d = b->count; d > 0; d--) /* by_disc_first[d] now holds the end of disc d: shift back to beginnings */
+        by_disc_first[d] = by_disc_first[d - 1];
+    by_disc_first[0] = 0;
     #pragma omp parallel for schedule(static) if (wide(sim))
     for (size_t q = 0; q < n; q++)
         divergence_row(sim, w->disc_entry_fluid[q], w->disc_entry[q], nl->wall_index[w->disc_entry[q]],
@@ -98,10 +114,9 @@ void implicit_discs_mirror(surge_sim *sim, const double *disc_velocity)
 {
     implicit_work *w = implicit_of(sim);
     const boulder_set *b = &sim->boulders;
-    for (int kw = 0; kw < sim->wall_count; kw++) {
-        const int d = disc_of(sim, kw);
-        if (d < 0)
-            continue;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int e = 0; e < b->by_disc_first[b->count]; e++) {
+        const int kw = b->in_order[e], d = b->of_wall[sim->id[kw]];
         const double omega = disc_velocity[3 * d + 2] / b->radius[d];
         w->mirror_vx[kw] = disc_velocity[3 * d] - omega * w->surface_y[kw];
         w->mirror_vy[kw] = disc_velocity[3 * d + 1] + omega * w->surface_x[kw];
@@ -123,46 +138,53 @@ static void disc_pressure_forces(surge_sim *sim, const double *p, double *force)
     const real grad_coef = sim->kernel.grad_coef, inv_h = sim->kernel.inv_h, support2 = sim->kernel.support2;
     const double scale = sim->mass * sim->mass / (sim->rho0 * sim->rho0);
     double *reference = w->disc_reference_pa;
-    memset(reference, 0, (size_t)b->count * sizeof *reference);
-    memset(force, 0, 3 * (size_t)b->count * sizeof *force);
-    for (int kw = 0; kw < first; kw++) /* in index order: the same sums whatever the thread count */
-        if (disc_of(sim, kw) >= 0)
-            reference[disc_of(sim, kw)] += w->wall_x[kw];
-    for (int d = 0; d < b->count; d++)
-        reference[d] /= boulders_particles_of(sim, d);
-    for (int kw = 0; kw < first; kw++) {
-        const int d = disc_of(sim, kw);
-        if (d < 0)
-            continue;
-        const double pk = w->wall_x[kw] - reference[d];
-        double fx = 0, fy = 0;
-        for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
-            const int a = nl->wall_fluid_index[e];
-            /* r_a - r_k, as boulders_fluid_forces has it */
-            const real dx = -(nl->wall_fluid_dx0[e] + (nl->moved_x[kw] - nl->moved_x[a]));
-            const real dy = -(nl->wall_fluid_dy0[e] + (nl->moved_y[kw] - nl->moved_y[a]));
-            const real r2 = dx * dx + dy * dy;
-            if (!(r2 < support2))
-                continue;
-            const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-            const double pa = (w->fixed[a - first] ? 0.0 : p[a - first]) - reference[d];
-            fx += (pa + pk) * f * dx, fy += (pa + pk) * f * dy;
+    #pragma omp parallel if (wide(sim))
+    {
+        /* each disc's sums over its particles in ascending index order (by_disc): the same whatever the thread count */
+        #pragma omp for schedule(static)
+        for (int d = 0; d < b->count; d++) {
+            double sum = 0;
+            for (int q = b->by_disc_first[d]; q < b->by_disc_first[d + 1]; q++)
+                sum += w->wall_x[b->by_disc[q]];
+            reference[d] = sum / boulders_particles_of(sim, d);
         }
-        if (sim->params.contacts.solid_pressure) /* the particles of walls and other discs in reach (fluid_forces.c) */
-            for (int64_t e = nl->solid_first[kw]; e < nl->solid_first[kw + 1]; e++) {
-                const int j = nl->solid_index[e], other = disc_of(sim, j);
-                real dx, dy; /* r_k - r_j */
-                const real r2 = neighbours_solid_offset(nl, kw, e, &dx, &dy);
-                if (!(r2 < support2))
-                    continue;
-                const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
-                /* between two discs, one reference for both sides: the pair's forces stay equal and opposite */
-                const double shared = other < 0 ? reference[d] : 0.5 * (reference[d] + reference[other]);
-                const double pair = (w->wall_x[j] - shared) + (w->wall_x[kw] - shared);
-                fx -= pair * f * dx, fy -= pair * f * dy;
+        #pragma omp for schedule(dynamic, 1)
+        for (int d = 0; d < b->count; d++) {
+            double force_x = 0, force_y = 0, torque = 0;
+            for (int q = b->by_disc_first[d]; q < b->by_disc_first[d + 1]; q++) {
+                const int kw = b->by_disc[q];
+                const double pk = w->wall_x[kw] - reference[d];
+                double fx = 0, fy = 0;
+                for (int64_t e = nl->wall_fluid_first[kw]; e < nl->wall_fluid_first[kw + 1]; e++) {
+                    const int a = nl->wall_fluid_index[e];
+                    /* r_a - r_k, as boulders_fluid_forces has it */
+                    const real dx = -(nl->wall_fluid_dx0[e] + (nl->moved_x[kw] - nl->moved_x[a]));
+                    const real dy = -(nl->wall_fluid_dy0[e] + (nl->moved_y[kw] - nl->moved_y[a]));
+                    const real r2 = dx * dx + dy * dy;
+                    if (!(r2 < support2))
+                        continue;
+                    const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                    const double pa = (w->fixed[a - first] ? 0.0 : p[a - first]) - reference[d];
+                    fx += (pa + pk) * f * dx, fy += (pa + pk) * f * dy;
+                }
+                if (sim->params.contacts.solid_pressure) /* the particles of walls and other discs in reach (fluid_forces.c) */
+                    for (int64_t e = nl->solid_first[kw]; e < nl->solid_first[kw + 1]; e++) {
+                        const int j = nl->solid_index[e], other = disc_of(sim, j);
+                        real dx, dy; /* r_k - r_j */
+                        const real r2 = neighbours_solid_offset(nl, kw, e, &dx, &dy);
+                        if (!(r2 < support2))
+                            continue;
+                        const double f = kernel2d_grad_factor_inside(grad_coef, inv_h, REAL_SQRT(r2));
+                        /* between two discs, one reference for both sides: the pair's forces stay equal and opposite */
+                        const double shared = other < 0 ? reference[d] : 0.5 * (reference[d] + reference[other]);
+                        const double pair = (w->wall_x[j] - shared) + (w->wall_x[kw] - shared);
+                        fx -= pair * f * dx, fy -= pair * f * dy;
+                    }
+                force_x += scale * fx, force_y += scale * fy;
+                torque += scale * (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
             }
-        force[3 * d] += scale * fx, force[3 * d + 1] += scale * fy;
-        force[3 * d + 2] += scale * (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
+            force[3 * d] = force_x, force[3 * d + 1] = force_y, force[3 * d + 2] = torque;
+        }
     }
 }
 
@@ -212,15 +234,19 @@ void implicit_coupled_viscous_operator(surge_sim *sim, const double *x, double *
     implicit_discs_mirror(sim, disc_x);
     implicit_viscous_operator(sim, x, out);
     double *force = w->disc_force;
-    memset(force, 0, 3 * (size_t)b->count * sizeof *force);
     const double nu_m = sim->params.fluid.viscosity_m2ps * sim->mass;
-    for (size_t q = 0; q < w->disc_entries; q++) { /* in fluid order: the same sums whatever the thread count */
-        const int64_t e = w->disc_entry[q];
-        const int i = w->disc_entry_fluid[q], kw = nl->wall_index[e], d = disc_of(sim, kw);
-        const double fx = nu_m * w->wall_w[e] * (x[i] - w->wall_x[kw]);
-        const double fy = nu_m * w->wall_w[e] * (x[nf + i] - w->wall_y[kw]);
-        force[3 * d] += fx, force[3 * d + 1] += fy;
-        force[3 * d + 2] += (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
+    #pragma omp parallel for schedule(dynamic, 1) if (wide(sim))
+    for (int d = 0; d < b->count; d++) { /* each disc's entries in fluid order: the same sums whatever the thread count */
+        double force_x = 0, force_y = 0, torque = 0;
+        for (int64_t t = w->disc_entry_disc_first[d]; t < w->disc_entry_disc_first[d + 1]; t++) {
+            const int64_t q = w->disc_entry_by_disc[t], e = w->disc_entry[q];
+            const int i = w->disc_entry_fluid[q], kw = nl->wall_index[e];
+            const double fx = nu_m * w->wall_w[e] * (x[i] - w->wall_x[kw]);
+            const double fy = nu_m * w->wall_w[e] * (x[nf + i] - w->wall_y[kw]);
+            force_x += fx, force_y += fy;
+            torque += (w->lever_x[kw] * fy - w->lever_y[kw] * fx) / b->radius[d];
+        }
+        force[3 * d] = force_x, force[3 * d + 1] = force_y, force[3 * d + 2] = torque;
     }
     implicit_film_forces(sim, disc_x, force);
     const double dt = sim->dt_s;
@@ -257,11 +283,15 @@ void implicit_coupled_pressure_operator(surge_sim *sim, const double *x, double 
     implicit_pressure_operator(sim, x, out);
     pressure_velocity_change(sim, x, dt);
     const double *change = w->disc_force;
-    for (size_t q = 0; q < w->disc_entries; q++) {
-        const int i = w->disc_entry_fluid[q], d = disc_of(sim, nl->wall_index[w->disc_entry[q]]);
-        const double *row = w->disc_divergence + 3 * q, *du = change + 3 * d;
-        if (!w->fixed[i])
+    const int nf = sim->count - sim->wall_count;
+    #pragma omp parallel for schedule(static) if (wide(sim))
+    for (int i = 0; i < nf; i++) {
+        if (w->fixed[i])
+            continue;
+        for (int64_t q = w->disc_entry_fluid_first[i]; q < w->disc_entry_fluid_first[i + 1]; q++) {
+            const double *row = w->disc_divergence + 3 * q, *du = change + 3 * disc_of(sim, nl->wall_index[w->disc_entry[q]]);
             out[i] += rho0_dt * (row[0] * du[0] + row[1] * du[1] + row[2] * du[2]);
+        }
     }
 }
 

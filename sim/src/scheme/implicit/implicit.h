@@ -70,6 +70,9 @@ typedef struct implicit_work {
     size_t disc_entries;                 /* of disc_entry, which holds as many as the wall lists */
     int64_t *disc_entry;                 /* the fluid's wall-list entries that are disc particles, in fluid order */
     int32_t *disc_entry_fluid;           /* and their fluid particle */
+    int64_t *disc_entry_fluid_first;     /* nf + 1: fluid particle i's disc entries are [first[i], first[i + 1]) */
+    int64_t *disc_entry_by_disc;         /* the disc entries grouped by disc, ascending within each */
+    int64_t *disc_entry_disc_first;      /* discs + 1: disc d's are disc_entry_by_disc[first[d] .. first[d + 1]) */
     double *surface_x, *surface_y;       /* per wall: a disc particle's surface point (its mirror line's) from the
                                           * disc's centre (m) */
     double *lever_x, *lever_y;           /* per wall: a disc particle's offset from the disc's centre (m) */

@@ -37,7 +37,8 @@ int implicit_reserve_work(surge_sim *sim)
         const size_t room = implicit_room_for(we);
         if (GROW(wall_w, room) || GROW(wall_gx, room) || GROW(wall_gy, room) || GROW(wall_pc, room) ||
             GROW(wall_iw, room) || GROW(wall_igx, room) || GROW(wall_igy, room) || GROW(wall_side, room) ||
-            (discs > 0 && (GROW(disc_entry, room) || GROW(disc_entry_fluid, room) || GROW(disc_divergence, 3 * room))))
+            (discs > 0 && (GROW(disc_entry, room) || GROW(disc_entry_fluid, room) || GROW(disc_entry_by_disc, room) ||
+                           GROW(disc_divergence, 3 * room))))
             return -1;
         w->wall_cap = room;
     }
@@ -49,7 +50,7 @@ int implicit_reserve_work(surge_sim *sim)
     }
     if (sim->boulders.count > w->disc_cap || !w->disc_reference_pa) {
         if (GROW(disc_reference_pa, discs) || GROW(spin_drag, discs) || GROW(disc_velocity, 3 * discs) ||
-            GROW(disc_force, 3 * discs))
+            GROW(disc_force, 3 * discs) || GROW(disc_entry_disc_first, discs + 1))
             return -1;
         w->disc_cap = sim->boulders.count;
     }
@@ -67,7 +68,7 @@ int implicit_reserve_work(surge_sim *sim)
         const size_t n2 = 2 * nf + 3 * discs, nblocks = n2 / DOT_BLOCK + 2; /* the fluid's velocities, the discs' */
         if (GROW(minv_xx, nf) || GROW(minv_xy, nf) || GROW(minv_yy, nf) ||
             GROW(kernel_ratio, nf) || GROW(weighted_rx, nf) || GROW(weighted_ry, nf) || GROW(grad_x, nf) ||
-            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(other_face, nf) || GROW(other_push_x, nf) || GROW(other_push_y, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
+            GROW(grad_y, nf) || GROW(pressure_n, nf) || GROW(disc_entry_fluid_first, nf + 1) || GROW(pressure_diag, nf) || GROW(fixed, nf) || GROW(near_disc, nf) || GROW(other_face, nf) || GROW(other_push_x, nf) || GROW(other_push_y, nf) || GROW(expected_ratio, nf) || GROW(rhs, n2) || GROW(x, n2) ||
             GROW(offset, n2) || GROW(diag, n2) || GROW(r, n2) || GROW(rhat, n2) ||
             GROW(p, n2) || GROW(v, n2) || GROW(s, n2) || GROW(t, n2) ||
             GROW(y, n2) || GROW(z, n2) || GROW(partial, 2 * nblocks) ||
@@ -107,7 +108,8 @@ void implicit_destroy(surge_sim *sim)
         return;
     void *arrays[] = {w->fluid_w, w->fluid_gx, w->fluid_gy, w->wall_w, w->wall_gx, w->wall_gy, w->mirror_w,
                       w->mirror_nw, w->mirror_qw, w->ghost_w, w->ghost_nw, w->ghost_qw, w->quadratic_base, w->quadratic_ok, w->mirror_vx, w->mirror_vy, w->disc_reference_pa,
-                      w->disc_entry, w->disc_entry_fluid, w->surface_x, w->surface_y, w->lever_x, w->lever_y, w->disc_divergence,
+                      w->disc_entry, w->disc_entry_fluid, w->disc_entry_fluid_first, w->disc_entry_by_disc,
+                      w->disc_entry_disc_first, w->surface_x, w->surface_y, w->lever_x, w->lever_y, w->disc_divergence,
                       w->disc_velocity, w->disc_force, w->spin_drag, w->films,
                       w->fluid_pc, w->wall_pc, w->pressure_diag, w->dry, w->wetness, w->immersion, w->wall_sum,
                       w->minv_xx, w->minv_xy, w->minv_yy, w->kernel_ratio, w->weighted_rx, w->weighted_ry, w->grad_x,
