@@ -415,6 +415,19 @@ static void send_message(surge_publisher *p, const char *topic, cJSON *header, c
     free(text);
 }
 
+/* A double in a header, every bit kept: cJSON's own printing stops at 15 digits where they read back within its
+ * tolerance, so a receiver could not match a state's time to a snapshot's. Non-finite values as null. */
+static void add_exact_number(cJSON *h, const char *name, double value)
+{
+    if (!isfinite(value)) {
+        cJSON_AddNullToObject(h, name);
+        return;
+    }
+    char text[32];
+    snprintf(text, sizeof text, "%.17g", value);
+    cJSON_AddRawToObject(h, name, text);
+}
+
 static cJSON *common_header(const char *topic, const surge_frame *f)
 {
     cJSON *h = cJSON_CreateObject();
@@ -422,8 +435,8 @@ static cJSON *common_header(const char *topic, const surge_frame *f)
     cJSON_AddStringToObject(h, "topic", topic);
     cJSON_AddNumberToObject(h, "seq", (double)f->sequence);
     cJSON_AddNumberToObject(h, "step", (double)f->diag.step);
-    cJSON_AddNumberToObject(h, "time_s", f->diag.time_s);
-    cJSON_AddNumberToObject(h, "dt_s", f->diag.dt_s);
+    add_exact_number(h, "time_s", f->diag.time_s);
+    add_exact_number(h, "dt_s", f->diag.dt_s);
     return h;
 }
 
@@ -595,7 +608,7 @@ static void publish_png(surge_publisher *p)
         cJSON_AddStringToObject(h, "topic", "frame");
         cJSON_AddNumberToObject(h, "seq", (double)sequence);
         cJSON_AddNumberToObject(h, "step", (double)step);
-        cJSON_AddNumberToObject(h, "time_s", time_s);
+        add_exact_number(h, "time_s", time_s);
         cJSON_AddNumberToObject(h, "count", (double)len);
         cJSON *fields = cJSON_AddArrayToObject(h, "fields");
         static const state_field png_field = {"png", "u8", "PNG file", 1};
