@@ -36,7 +36,7 @@ schemes: the dense end with both schemes (docs/validation/poiseuille_loaded.md, 
 at phi 0.5 (seed 1, 239 discs), r/dp 3, the lubrication model on, 1 s, explicit and implicit. The explicit scheme
 takes the films in the contact solver's sub-steps, whose disc velocities its fluid sees at the next step; the
 implicit scheme inside its solves. Checks: both runs end healthy; their mu_eq/mu0 (0.8-1 s) within 8 % of each other
-(measured: implicit 1.9959, explicit 2.0671, -3.4 %; without the model -24.4 %, and with the films after the implicit
+(measured: implicit 1.9959, explicit 2.0540, -2.8 %; without the model -24.4 %, and with the films after the implicit
 solve, in the contact solver, the implicit run stopped at 0.76 s).
 
 measured: the dense end with the measured squeeze film (contacts.lubrication_resolved = measured, docs/boulders.md):
@@ -59,8 +59,8 @@ squeeze film, tangential film), 0.3 s; the explicit scheme with its own share, t
 the explicit scheme's. Each scheme's share is measured on a lone disc, where the explicit SPH resolves more of a film
 than the implicit one; in the channel the two resolve alike, so the share taken decides the dense end. Checks: the
 three runs end healthy; mu_eq/mu0 (0.2-0.3 s) of the implicit scheme with the explicit share within 8 % of the
-explicit scheme's (measured 4.7979 against 4.4815, +7.1 %); with its own share at least 20 % above it (measured 6.4874,
-+44.8 %).
+explicit scheme's (measured 4.7979 against 4.4776, +7.2 %); with its own share at least 20 % above it (measured 6.4874,
++44.9 %).
 
 Usage: test_loaded_channel.py SURGE ROOT OUTDIR dilute|kicks|packing|schemes|measured|tangential|share"""
 import csv

@@ -11,7 +11,7 @@ Xeon VM, 6 particles 8.0 dp ahead on an AMD EPYC VM).
 Explicit scheme, dp 5 mm (the coarse end, about 15 s on one core): its body's front within 10 % of the model at
 10 s, its first row at most 0.63 dp above the bed, no fluid ahead of the body below 0.5 dp (a film under the first
 row), and no fluid closer to the bed's face than the wall-face repulsion's 0.25 dp in any snapshot (the spreading
-page: +8.4 %, 0.608 dp, the one particle ahead of the body at 0.92 dp, the lowest at 0.31 dp; with the walls'
+page: +8.2 %, 0.605 dp, the one particle ahead of the body 1.7 dp ahead, the lowest at 0.315 dp; with the walls'
 no-penetration term read at the ghost node, +17.4 % and 0.667 dp, which the first two bounds catch).
 
 usage: test_spreading.py SURGE SOURCE_DIR WORK_DIR"""

@@ -489,6 +489,69 @@ static int test_corner_continuity(void)
 }
 
 /* A 2 cm layer on a no-slip bed, periodic over 0.1 m, dp = 5 mm: the scene of the single-particle tests below */
+/* The walls' no-penetration term read at the face (boundary.c): the ghost node's approach carried to the face by
+ * the rate a volume-keeping flow has along the normal. On a flat bed under a 16 dp layer, for every bed particle
+ * away from the periodic seam, (a) a volume-keeping stagnation flow onto the bed, v = (a (x - xc), -a y), reads no
+ * approach (the fluid at the face does not move toward it: a thinning layer), and (b) a pure compression toward the
+ * bed, v = (0, -k y), reads the ghost node's approach k y_ghost: the fluid's own compression is not carried, as the
+ * full gradient would (it read 0 there and fed pressure waves near a belt). Both fields are linear, which the
+ * first-order interpolation holds exactly where the kernel is full. */
+static double no_penetration_error(int compression)
+{
+    surge_params p = surge_default_params();
+    p.domain.length_m = 0.06;
+    p.domain.height_m = 0.04;
+    p.domain.periodic_x = true;
+    p.walls.left = p.walls.right = p.walls.top = p.walls.upstream = false;
+    p.walls.bottom = true;
+    p.walls.bottom_speed_mps = 0;
+    p.fluid.x0_m = 0;
+    p.fluid.x1_m = 0.06;
+    p.fluid.depth_m = 0.016;
+    p.numerics.dp_m = 0.001;
+    char err[256];
+    surge_sim *sim = surge_sim_create(&p, err, sizeof err);
+    if (!sim) {
+        fprintf(stderr, "%s\n", err);
+        return INFINITY;
+    }
+    const double rate_per_s = 2.0, xc = 0.03;
+    for (int a = sim->wall_count; a < sim->count; a++) {
+        sim->rho[a] = (real)sim->rho0;
+        sim->vx[a] = (real)(compression ? 0.0 : rate_per_s * (sim->x[a] - xc));
+        sim->vy[a] = (real)(-rate_per_s * sim->y[a]);
+    }
+    double largest = 0;
+    if (neighbours_update(sim) == 0) {
+        interaction_prepare(sim);
+        boundary_update(sim);
+        int checked = 0;
+        for (int b = 0; b < sim->wall_count; b++) {
+            if (fabs(sim->x[b] - xc) > 0.01 || sim->y[b] > 0)
+                continue;
+            const double ghost_y_m = sim->y[b] + sim->ghost_dy[b];
+            const double expected_mps = compression ? rate_per_s * ghost_y_m : 0.0;
+            const double read_mps = sim->wall_cont_vy[b] - sim->vy[b];
+            largest = fmax(largest, fabs(read_mps - expected_mps) / (rate_per_s * ghost_y_m));
+            checked++;
+        }
+        if (checked == 0)
+            largest = INFINITY;
+    } else
+        largest = INFINITY;
+    surge_sim_destroy(sim);
+    return largest;
+}
+
+static int test_no_penetration_face(void)
+{
+    expect_below("no_penetration_face: volume-keeping stagnation flow, |read - 0| / (rate y_ghost)",
+                 no_penetration_error(0), 1e-4);
+    expect_below("no_penetration_face: compression, |read - rate y_ghost| / (rate y_ghost)", no_penetration_error(1),
+                 1e-4);
+    return failures;
+}
+
 static surge_params small_bed_params(void)
 {
     surge_params p = surge_default_params();
@@ -1954,6 +2017,8 @@ int main(int argc, char **argv)
         return test_health_speed() ? 1 : 0;
     if (!strcmp(argv[1], "wall_contact_rules"))
         return test_wall_contact_rules() ? 1 : 0;
+    if (!strcmp(argv[1], "no_penetration_face"))
+        return test_no_penetration_face() ? 1 : 0;
     if (!strcmp(argv[1], "diffusion_linear"))
         return test_diffusion_linear() ? 1 : 0;
     if (!strcmp(argv[1], "c0_discs"))

@@ -58,8 +58,9 @@ static const surge_param_info registry[] = {
      "velocity in the continuity equation (compressed as by its mirror image; docs/method.md).",
      OFF(walls.no_penetration)},
     {"walls", "no_penetration_at", SURGE_PARAM_ENUM, "-", SURGE_NO_PENETRATION_AT_FACE, 0, 1, true, "face|ghost",
-     "Where no_penetration reads the fluid's approach: face (its velocity at the wall face, extrapolated from the "
-     "ghost node's first-order interpolation, or the ghost node's Shepard value where that is ill-conditioned) or "
+     "Where no_penetration reads the fluid's approach: face (its normal velocity at the wall face, carried from the "
+     "ghost node's first-order interpolation by the rate a volume-keeping flow has, minus the stretch along the wall, "
+     "so that pressure waves do not feed it; the ghost node's Shepard value where that is ill-conditioned) or "
      "ghost (at the ghost node, the wall particle's mirror image, up to 2h into the fluid, where a thinning layer's "
      "descent reads as an approach: a thin explicit current then rides high and spreads fast; "
      "docs/validation/spreading.md).",

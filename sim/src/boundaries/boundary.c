@@ -155,7 +155,9 @@ void boundary_update(surge_sim *sim)
         if (sim->wall_of[b] == WALL_BOULDER)
             boulders_surface_velocity(sim, b, &wall_vx, &wall_vy);
         double rho_b = rho0, vgx = wall_vx, vgy = wall_vy;
-        double face_vx = vgx, face_vy = vgy; /* the fluid's velocity at the wall face, first order where it can be */
+        /* the stretch along the wall at the ghost node, t.grad(v).t (t the unit tangent; first order where it can
+         * be): where the fluid keeps its volume, the normal velocity's rate along the normal is its negative */
+        double stretch_per_s = 0.0;
         const double det = a00 * (a11 * a22 - a12 * a21) - a01 * (a10 * a22 - a12 * a20) +
                            a02 * (a10 * a21 - a11 * a20);
         if (fabs(det) >= MIN_DETERMINANT) {
@@ -174,14 +176,13 @@ void boundary_update(surge_sim *sim)
             rho_b = sol[0][0] - sim->ghost_dx[b] * sol[0][1] - sim->ghost_dy[b] * sol[0][2];
             vgx = sol[1][0];
             vgy = sol[2][0];
-            /* the face lies halfway between particle and ghost node */
-            face_vx = vgx - 0.5 * (sim->ghost_dx[b] * sol[1][1] + sim->ghost_dy[b] * sol[1][2]);
-            face_vy = vgy - 0.5 * (sim->ghost_dx[b] * sol[2][1] + sim->ghost_dy[b] * sol[2][2]);
+            const double g2 = (double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b];
+            const double tx = -sim->ghost_dy[b], ty = sim->ghost_dx[b]; /* along the wall, |t|^2 = g2 */
+            stretch_per_s = (tx * (tx * sol[1][1] + ty * sol[1][2]) + ty * (tx * sol[2][1] + ty * sol[2][2])) / g2;
         } else if (a00 >= MIN_SHEPARD_SUM) {
             rho_b = rhs_rho[0] / a00;
             vgx = rhs_vx[0] / a00;
             vgy = rhs_vy[0] / a00;
-            face_vx = vgx, face_vy = vgy;
         }
         /* walls never pull fluid: no density below rho0 (no tensile wall pressure) */
         sim->rho[b] = (real)fmax(rho_b, rho0);
@@ -191,9 +192,12 @@ void boundary_update(surge_sim *sim)
         /* no penetration: where the fluid at the wall face (by default; or at the ghost node) approaches a fixed
          * wall or a belt, the wall particle meets it with the mirrored normal velocity in the continuity equation, so
          * the approach compresses the fluid as a mirror image would (fluid moving away sees the wall's own velocity).
-         * At the ghost node, up to 2h into the fluid, a thinning layer's descent reads as an approach that the fluid
-         * at the face does not make. Not on boulders: a disc driven into the fluid would compress it twice over
-         * (docs/method.md). */
+         * At the face: the ghost node's approach carried over the half particle-ghost distance d by the gradient the
+         * fluid has where it keeps its volume, v.n(face) = v.n(ghost) + d t.grad(v).t, so that the fluid's own
+         * compression (the rest of n.grad(v).n) does not feed the term: carried by the full gradient, it pumped
+         * pressure waves in a pocket of fluid next to the belt. At the ghost node, up to 2h into the fluid, a thinning layer's descent reads as an
+         * approach that the fluid at the face does not make. Not on boulders: a disc driven into the fluid would
+         * compress it twice over (docs/method.md). */
         const double glen = sqrt((double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b]);
         const double nx = sim->ghost_dx[b] / glen, ny = sim->ghost_dy[b] / glen; /* into the fluid */
         sim->wall_nx[b] = (real)nx;
@@ -201,8 +205,8 @@ void boundary_update(surge_sim *sim)
         sim->wall_depth_m[b] = (real)(0.5 * glen);
         double cont_vx = vx[b], cont_vy = vy[b];
         if (sim->params.walls.no_penetration && sim->wall_of[b] != WALL_BOULDER) {
-            const double ux = at_face ? face_vx : vgx, uy = at_face ? face_vy : vgy;
-            const double approach = -((ux - wall_vx) * nx + (uy - wall_vy) * ny);
+            const double ghost_approach_mps = -((vgx - wall_vx) * nx + (vgy - wall_vy) * ny);
+            const double approach = at_face ? ghost_approach_mps - 0.5 * glen * stretch_per_s : ghost_approach_mps;
             if (approach > 0) {
                 cont_vx += approach * nx;
                 cont_vy += approach * ny;
