@@ -195,9 +195,9 @@ void boundary_update(surge_sim *sim)
          * At the face: the ghost node's approach carried over the half particle-ghost distance d by the gradient the
          * fluid has where it keeps its volume, v.n(face) = v.n(ghost) + d t.grad(v).t, so that the fluid's own
          * compression (the rest of n.grad(v).n) does not feed the term: carried by the full gradient, it pumped
-         * pressure waves in a pocket of fluid next to the belt. At the ghost node, up to 2h into the fluid, a thinning layer's descent reads as an
-         * approach that the fluid at the face does not make. Not on boulders: a disc driven into the fluid would
-         * compress it twice over (docs/method.md). */
+         * pressure waves in a pocket of fluid next to the belt. At the ghost node, up to 2h into the fluid, a
+         * thinning layer's descent reads as an approach that the fluid at the face does not make. Not on boulders: a
+         * disc driven into the fluid would compress it twice over (docs/method.md). */
         const double glen = sqrt((double)sim->ghost_dx[b] * sim->ghost_dx[b] + (double)sim->ghost_dy[b] * sim->ghost_dy[b]);
         const double nx = sim->ghost_dx[b] / glen, ny = sim->ghost_dy[b] / glen; /* into the fluid */
         sim->wall_nx[b] = (real)nx;
