@@ -27,7 +27,11 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     value that is not a finite number or outside its range, with an asked that is neither n<count> nor
     phi<fraction>, with a member twice, averaged over another window (unless --window-tolerance-s allows it) or
     from another scene (another uniform flow) is refused, naming the file and the line (after a blank line too);
-    a member on a flat channel has uniform_froude nan in collect's table, and collect's box plots are then refused.
+    a member on a flat channel has uniform_froude nan in collect's table, and collect's box plots are then refused;
+  - `compare` reads one table against another member by member (the members that asked for the same discs with the
+    same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
+    errors from the seeds' spread, the members only one table has; a member twice, a value that is not a positive
+    number, a window too far from the first table's, one table or no member in both are refused, named.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import configparser
@@ -380,4 +384,43 @@ os.remove(os.path.join(older, "n6_s1_dp0.067", "boulders.csv"))
 rc, out, err = tool("collect", "--runs-dir", older)
 check("collect: a disc member without boulders.csv is refused, named", rc == 2 and "n6_s1_dp0.067" in err and
       "no boulders.csv" in err, out + err[-1000:])
+# compare: hand-made tables with known answers. Seed 1: mu_eq/mu0 5.0 +- 0.1 against 5.5 +- 0.1, +10.0 %, 0.5 over
+# the combined 0.1414 = 3.5 errors; seed 2 the same 6.0 in both; the means 5.5 +- 0.5 and 5.75 +- 0.25 (the seeds'
+# standard deviations over sqrt(2)), +4.5 %, 0.25 / 0.559 = 0.4 errors; seed 3 only in B, n28 seed 1 only in A
+compare_header = "asked,seed,dp_m,window_start_s,window_end_s,froude,froude_se,mu_eq_over_mu0,mu_eq_over_mu0_se\n"
+table_a, table_b = os.path.join(WORK, "compare_a.csv"), os.path.join(WORK, "compare_b.csv")
+with open(table_a, "w") as f:
+    f.write(compare_header + "phi0.53,1,0.025,6,20,0.6,0.01,5.0,0.1\nphi0.53,2,0.025,6,20,0.7,0.02,6.0,0.2\n"
+            "n28,1,0.025,6,20,0.8,0.01,2.0,0.1\n")
+with open(table_b, "w") as f:
+    f.write(compare_header + "phi0.53,2,0.02,6,20.2,0.7,0.02,6.0,0.2\nphi0.53,1,0.02,6,20,0.66,0.01,5.5,0.1\n"
+            "phi0.53,3,0.02,6,20,0.7,0.01,6.0,nan\n")
+rc, out, err = tool("compare", "--csv", table_a, "--csv", table_b)
+lines = out.split("\n")
+seed1 = [l for l in lines if re.match(r"\s*phi0.53\s+1\s", l)]
+mean = [l for l in lines if l.strip().startswith("mean")]
+check("compare: member by member and the means, B against A, in percent and combined errors",
+      rc == 0 and len(seed1) == 1 and "+10.0 % ( +3.5)" in seed1[0] and "+10.0 % ( +4.2)" in seed1[0]
+      and "0.025" in seed1[0] and "0.02 " in seed1[0]
+      and any(re.match(r"\s*phi0.53\s+2\s.*\+0.0 % \( \+0.0\).*\+0.0 % \( \+0.0\)", l) for l in lines)
+      and len(mean) == 1 and "of 2" in mean[0] and "5.500 +- 0.500" in mean[0] and "5.750 +- 0.250" in mean[0]
+      and "+4.5 % ( +0.4)" in mean[0]
+      and "only in %s: n28 seed 1" % table_a in out and "only in %s: phi0.53 seed 3" % table_b in out, out + err)
+compare_good = "phi0.53,1,0.025,6,20,0.6,0.01,5.0,0.1\n"
+compare_refusals = [
+    (compare_header + compare_good + compare_good, "line 3: phi0.53 seed 1 again (first at line 2)"),
+    (compare_header + compare_good.replace(",5.0,", ",0,"), "line 2: mu_eq_over_mu0 = 0 is not a positive number"),
+    (compare_header + compare_good.replace(",0.01,", ",-1,"), "line 2: froude_se = -1 is neither"),
+    (compare_header + compare_good.replace(",6,20,", ",20,40,"), "line 2: its window 20-40 s is not 6-20 s"),
+    (compare_header + compare_good.replace("phi0.53,1,", "phi0.29,1,"), "no member is in both"),
+    (compare_header.replace(",froude_se", ""), "no column froude_se")]
+for k, (text, expected) in enumerate(compare_refusals):
+    bad = os.path.join(WORK, "compare_bad%d.csv" % k)
+    with open(bad, "w") as f:
+        f.write(text)
+    rc, out, err = tool("compare", "--csv", table_a, "--csv", bad)
+    check("compare: a table that cannot be compared is refused, named (%s)" % expected,
+          rc == 2 and expected in err and ("compare_bad%d.csv" % k in err or "no member" in expected), out + err)
+rc, out, err = tool("compare", "--csv", table_a)
+check("compare: one table is refused", rc == 2 and "two tables" in err, out + err)
 sys.exit(finish())

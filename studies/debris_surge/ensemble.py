@@ -12,6 +12,7 @@ says more.
   studies/debris_surge/ensemble.py collect [--runs-dir runs/debris_surge] [--window 20 75] [--csv FILE]
         [--png FILE]
   studies/debris_surge/ensemble.py plot --csv FILE [--csv FILE ...] --png FILE
+  studies/debris_surge/ensemble.py compare --csv A --csv B [--window-tolerance-s 0.5]
   studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
@@ -56,6 +57,12 @@ plot: the same box plots from one or more tables that collect wrote (--csv), or 
 columns asked, seed, dp_m, phi, window_start_s, window_end_s, froude, mu_eq_over_mu0 and uniform_froude (members
 whose folders are gone; other columns may be empty), one box per dp and asked; a member given twice, a value out of
 range, or rows averaged over windows further apart than --window-tolerance-s (default 0.5 s) are refused.
+compare: two tables that collect wrote (two schemes, two resolutions, two builds), member by member: the members
+that asked for the same discs (asked) with the same seed, whatever their dp; per member each table's Fr and
+mu_eq/mu0 with their standard errors and B against A (relative difference, and in units of the two errors combined),
+then the same for the means over the members in both, the errors of the means from the seeds' spread (nan for one
+member), and the members only one table has. A member twice in one table, a value that is not finite or not
+positive, or windows further apart than --window-tolerance-s are refused, naming the file and the line.
 """
 import argparse
 import csv
@@ -90,6 +97,8 @@ PLOTTED = {"asked": str, "seed": int, "dp_m": float, "phi": float, "window_start
            "froude": float, "mu_eq_over_mu0": float, "uniform_froude": float}  # the columns `plot` reads from a table
 PLOTTED_RANGES = {"dp_m": (0.0, 1.0), "phi": (0.0, 1.0), "froude": (0.0, 100.0), "mu_eq_over_mu0": (0.0, 1e4),
                   "uniform_froude": (0.0, 100.0), "window_start_s": (0.0, 1e6), "window_end_s": (0.0, 1e6)}
+COMPARED = {"asked": str, "seed": int, "dp_m": float, "window_start_s": float, "window_end_s": float,
+            "froude": float, "froude_se": float, "mu_eq_over_mu0": float, "mu_eq_over_mu0_se": float}
 ZERO_ALLOWED = ("phi", "window_start_s")  # the fluid alone, a window from the start; every other bound is open
 SNAPSHOT_FORCES = {"on_belt_fluid_npm": "fluid_force_npm", "on_belt_film_npm": "film_force_npm",
                    "on_belt_disc_contact_npm": "disc_contact_force_npm",
@@ -477,6 +486,79 @@ def command_plot(args):
     return 0
 
 
+def compared_table(path, tolerance_s, first):
+    """compare's rows of one table by (asked, seed), vetted; first: a row of the first table for its window."""
+    rows = {}
+    for line, r in study.read_numbered_rows(TOOL, path, COMPARED):
+        row = {k: kind(r[k]) for k, kind in COMPARED.items()}
+        place = "%s, line %d" % (path, line)
+        for k in ("froude", "mu_eq_over_mu0", "dp_m"):
+            if not (math.isfinite(row[k]) and row[k] > 0):
+                fail("%s: %s = %s is not a positive number" % (place, k, r[k]))
+        for k in ("froude_se", "mu_eq_over_mu0_se"):
+            if not (math.isnan(row[k]) or row[k] >= 0) or math.isinf(row[k]):
+                fail("%s: %s = %s is neither a standard error nor nan" % (place, k, r[k]))
+        key = (row["asked"], row["seed"])
+        if key in rows:
+            fail("%s: %s seed %d again (first at line %d): a member counted twice" % (place, key[0], key[1],
+                                                                                      rows[key]["line"]))
+        reference = first or row
+        if any(abs(row[k] - reference[k]) > tolerance_s for k in ("window_start_s", "window_end_s")):
+            fail("%s: its window %g-%g s is not %g-%g s (the first table's first row) within %g s: means over other "
+                 "windows are not comparable (--window-tolerance-s)"
+                 % (place, row["window_start_s"], row["window_end_s"], reference["window_start_s"],
+                    reference["window_end_s"], tolerance_s))
+        rows[key] = dict(row, line=line)
+    return rows
+
+
+def against(a, a_se, b, b_se):
+    """B against A: the relative difference in percent and in units of the two errors combined (nan without)."""
+    combined = math.hypot(a_se, b_se)
+    return 100.0 * (b / a - 1.0), ((b - a) / combined if combined > 0 else float("nan"))
+
+
+def command_compare(args):
+    """Two collect tables member by member, and their means over the members both have."""
+    if len(args.csv) != 2:
+        fail("compare takes two tables (--csv A --csv B), got %d" % len(args.csv))
+    first = compared_table(args.csv[0], args.window_tolerance_s, None)
+    reference = next(iter(first.values()))
+    second = compared_table(args.csv[1], args.window_tolerance_s, reference)
+    both = sorted(set(first) & set(second), key=lambda k: (k[0][0] == "p", asked_value(k[0]), k[1]))
+    if not both:
+        fail("no member is in both %s and %s (members match by asked and seed)" % tuple(args.csv))
+    print("A = %s\nB = %s\nwindow %g-%g s" % (args.csv[0], args.csv[1], reference["window_start_s"],
+                                               reference["window_end_s"]))
+    header = "%8s %5s %7s %7s %17s %17s %17s %17s %17s %17s" % (
+        "asked", "seed", "dp A", "dp B", "Fr A", "Fr B", "B vs A (errors)", "mu/mu0 A", "mu/mu0 B", "B vs A (errors)")
+    print(header)
+    pair = "%8.3f +-%6.3f %8.3f +-%6.3f %+8.1f %% (%+5.1f)"
+    line = "%8s %5s %7s %7s " + pair + " " + pair
+    values = {k: ([], []) for k in ("froude", "mu_eq_over_mu0")}
+    for key in both:
+        a, b = first[key], second[key]
+        cells = []
+        for k in ("froude", "mu_eq_over_mu0"):
+            values[k][0].append(a[k])
+            values[k][1].append(b[k])
+            cells += [a[k], a[k + "_se"], b[k], b[k + "_se"], *against(a[k], a[k + "_se"], b[k], b[k + "_se"])]
+        print(line % (key[0], key[1], "%g" % a["dp_m"], "%g" % b["dp_m"], *cells))
+    cells = []
+    for k in ("froude", "mu_eq_over_mu0"):
+        means, errors = [], []
+        for v in values[k]:
+            means.append(float(np.mean(v)))
+            errors.append(float(np.std(v, ddof=1) / math.sqrt(len(v))) if len(v) > 1 else float("nan"))
+        cells += [means[0], errors[0], means[1], errors[1], *against(means[0], errors[0], means[1], errors[1])]
+    print(line % ("mean", "of %d" % len(both), "", "", *cells))
+    for path, table, other in ((args.csv[0], first, second), (args.csv[1], second, first)):
+        alone = sorted(set(table) - set(other), key=lambda k: (k[0][0] == "p", asked_value(k[0]), k[1]))
+        if alone:
+            print("only in %s: %s" % (path, ", ".join("%s seed %d" % k for k in alone)))
+    return 0
+
+
 def asked_value(asked):
     """the number in a member's n<count> or phi<solid fraction>"""
     return float(asked[1:] if asked.startswith("n") else asked[3:])
@@ -588,6 +670,12 @@ def main():
     d.add_argument("--window-tolerance-s", type=cli_checks.non_negative, default=WINDOW_TOLERANCE_S,
                    help="how far, s, a row's averaging window may lie from the first row's (default %g: one flow "
                         "row); the title lists the windows" % WINDOW_TOLERANCE_S)
+    e = sub.add_parser("compare", help="two tables that collect wrote, member by member (schemes, resolutions)")
+    e.add_argument("--csv", action="append", required=True, metavar="FILE",
+                   help="a table collect wrote; twice: A, then B, which is read against A")
+    e.add_argument("--window-tolerance-s", type=cli_checks.non_negative, default=WINDOW_TOLERANCE_S,
+                   help="how far, s, a row's averaging window may lie from A's first row's (default %g)"
+                        % WINDOW_TOLERANCE_S)
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
@@ -604,6 +692,8 @@ def main():
         fail("--window: the end must come after the start")
     if args.command == "plot":
         return command_plot(args)
+    if args.command == "compare":
+        return command_compare(args)
     return command_run(args) if args.command == "run" else command_collect(args)
 
 
