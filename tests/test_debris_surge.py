@@ -31,7 +31,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
     errors from the seeds' spread, the members only one table has; a member twice, a value that is not a positive
-    number, a window too far from the first table's, one table or no member in both are refused, named.
+    number, an asked that is neither n<count> nor phi<fraction>, a window too far from the first table's, one
+    table or no member in both are refused, named.
 Each check prints "name: ok" or "name: FAILED ..."; the script exits 1 if any failed.
 """
 import configparser
@@ -413,6 +414,7 @@ compare_refusals = [
     (compare_header + compare_good.replace(",0.01,", ",-1,"), "line 2: froude_se = -1 is neither"),
     (compare_header + compare_good.replace(",6,20,", ",20,40,"), "line 2: its window 20-40 s is not 6-20 s"),
     (compare_header + compare_good.replace("phi0.53,1,", "phi0.29,1,"), "no member is in both"),
+    (compare_header + compare_good.replace("phi0.53,", "six,"), "line 2: asked = 'six' is neither"),
     (compare_header.replace(",froude_se", ""), "no column froude_se")]
 for k, (text, expected) in enumerate(compare_refusals):
     bad = os.path.join(WORK, "compare_bad%d.csv" % k)

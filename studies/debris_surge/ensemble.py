@@ -61,8 +61,9 @@ compare: two tables that collect wrote (two schemes, two resolutions, two builds
 that asked for the same discs (asked) with the same seed, whatever their dp; per member each table's Fr and
 mu_eq/mu0 with their standard errors and B against A (relative difference, and in units of the two errors combined),
 then the same for the means over the members in both, the errors of the means from the seeds' spread (nan for one
-member), and the members only one table has. A member twice in one table, a value that is not finite or not
-positive, or windows further apart than --window-tolerance-s are refused, naming the file and the line.
+member), and the members only one table has. A member twice in one table, an asked that is neither n<count> nor
+phi<fraction>, a value that is not finite or not positive, or windows further apart than --window-tolerance-s are
+refused, naming the file and the line.
 """
 import argparse
 import csv
@@ -498,6 +499,8 @@ def compared_table(path, tolerance_s, first):
         for k in ("froude_se", "mu_eq_over_mu0_se"):
             if not (math.isnan(row[k]) or row[k] >= 0) or math.isinf(row[k]):
                 fail("%s: %s = %s is neither a standard error nor nan" % (place, k, r[k]))
+        if not re.fullmatch(r"n\d+|phi\d+(\.\d+)?", row["asked"]):
+            fail("%s: asked = %r is neither n<count> nor phi<fraction>" % (place, row["asked"]))
         key = (row["asked"], row["seed"])
         if key in rows:
             fail("%s: %s seed %d again (first at line %d): a member counted twice" % (place, key[0], key[1],
@@ -510,6 +513,11 @@ def compared_table(path, tolerance_s, first):
                     reference["window_end_s"], tolerance_s))
         rows[key] = dict(row, line=line)
     return rows
+
+
+def member_order(key):
+    """compare's order of (asked, seed): the counts, then the solid fractions, each by value, then the seed"""
+    return key[0][0] == "p", asked_value(key[0]), key[1]
 
 
 def against(a, a_se, b, b_se):
@@ -525,7 +533,7 @@ def command_compare(args):
     first = compared_table(args.csv[0], args.window_tolerance_s, None)
     reference = next(iter(first.values()))
     second = compared_table(args.csv[1], args.window_tolerance_s, reference)
-    both = sorted(set(first) & set(second), key=lambda k: (k[0][0] == "p", asked_value(k[0]), k[1]))
+    both = sorted(set(first) & set(second), key=member_order)
     if not both:
         fail("no member is in both %s and %s (members match by asked and seed)" % tuple(args.csv))
     print("A = %s\nB = %s\nwindow %g-%g s" % (args.csv[0], args.csv[1], reference["window_start_s"],
@@ -553,7 +561,7 @@ def command_compare(args):
         cells += [means[0], errors[0], means[1], errors[1], *against(means[0], errors[0], means[1], errors[1])]
     print(line % ("mean", "of %d" % len(both), "", "", *cells))
     for path, table, other in ((args.csv[0], first, second), (args.csv[1], second, first)):
-        alone = sorted(set(table) - set(other), key=lambda k: (k[0][0] == "p", asked_value(k[0]), k[1]))
+        alone = sorted(set(table) - set(other), key=member_order)
         if alone:
             print("only in %s: %s" % (path, ", ".join("%s seed %d" % k for k in alone)))
     return 0
