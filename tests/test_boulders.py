@@ -342,10 +342,10 @@ def group_inputs():
         (["-s", "contacts.lubrication_min_gap_dp=0.5", "-s", "contacts.lubrication_cutoff_dp=0.4"],
          "must be below contacts.lubrication_cutoff_dp"),
         (["-s", "contacts.lubrication_resolved=fitted"], "contacts.lubrication_resolved: 'fitted' is not allowed"),
-        (["-s", "contacts.lubrication_tangential=reynolds"], "contacts.lubrication_tangential = reynolds needs "
-                                                             "contacts.lubrication_resolved = measured"),
-        (["-s", "contacts.lubrication_share=explicit"], "contacts.lubrication_share = explicit needs "
-                                                        "contacts.lubrication_resolved = measured"),
+        (["-s", "contacts.lubrication_resolved=cutoff"], "contacts.lubrication_tangential = sliding"),
+        (["-s", "contacts.lubrication_resolved=cutoff", "-s", "contacts.lubrication_tangential=sliding", "-s",
+          "contacts.lubrication_share=explicit"], "contacts.lubrication_share = explicit needs "
+                                                  "contacts.lubrication_resolved = measured"),
         (["-s", "contacts.lubrication_share=both"], "contacts.lubrication_share: 'both' is not allowed"),
     ]
     for extra, words in bad:
@@ -706,12 +706,13 @@ def group_resting():
 
 def group_implicit_films():
     """The lubrication films inside the implicit scheme's solves (docs/method.md, "Boulders in the implicit scheme"):
-    the disc of group_gap_pressure settling onto the bed, implicit scheme, the lubrication model on (the default,
-    cut-off 1 dp = 0.2 a). Below the cut-off the film holds the disc: at h/a 0.1 it approaches at 1.27 times the film's
+    the disc of group_gap_pressure settling onto the bed, implicit scheme, the cut-off lubrication model (1 dp = 0.2 a,
+    with the sliding film). Below the cut-off the film holds the disc: at h/a 0.1 it approaches at 1.27 times the film's
     own speed (measured); the SPH alone gives 13.9, and with the film in the contact solver's sub-steps after the solve
     the disc did not reach 0.1 a in 6 s (the fluid moved as if the film were not there)."""
     ratio = approach_over_film(*surge("implicit_films", [
         "run", "boulder_settling.ini", "-s", "boulders.list_m=0.05 0.01875 0.0125", "-s", "numerics.scheme=implicit",
+        "-s", "contacts.lubrication_resolved=cutoff", "-s", "contacts.lubrication_tangential=sliding",
         "-s", "time.end_s=3.9", "-s", "output.snapshot_interval_s=0.02"])[:2], target=0.1)
     check("implicit films: at h/a 0.1 the disc approaches at 0.6-1.8 times the film's speed",
           ratio is not None and 0.6 < ratio < 1.8, "ratio %s" % ratio)
@@ -769,7 +770,7 @@ def sheared_disc_speed(name, a_over_dp, tangential, scheme="implicit"):
 def group_implicit_films_tangential():
     """The tangential film (contacts.lubrication_tangential = reynolds, docs/boulders.md, "The tangential film"): a
     free disc 0.08 a over the moving bed of the Couette channel moves over the bed at the same speed at a/dp 4 and 8
-    (within 3 %; 0.3692 and 0.3657 of shear a measured, -1.0 %). With the sliding film (the default) it moves at 0.9647
+    (within 3 %; 0.3692 and 0.3657 of shear a measured, -1.0 %). With the sliding film it moves at 0.9647
     and 0.7635 of it (-21 %, and on to 0.5057 at a/dp 24): what the SPH leaves out of the film against the disc's
     translation along the bed grows as the gap falls below the kernel, and the sliding film's torque does not act on
     it. The explicit scheme, whose contact solver takes the film in its sub-steps with the share it resolves itself,
@@ -783,9 +784,10 @@ def group_implicit_films_tangential():
     check("tangential film: the explicit scheme's disc at a/dp 8 within 6 %% of the implicit one's (%s, %s)"
           % (explicit, fine), explicit is not None and fine is not None and abs(explicit / fine - 1) < 0.06)
     out, p, cmd = surge("tangential_cutoff", ["run", "boulder_couette.ini", "-s", "numerics.scheme=implicit",
-                                              "-s", "contacts.lubrication_tangential=reynolds", "-s", "time.end_s=0.1"])
-    check("tangential film: refused without the measured squeeze film, named",
-          p.returncode != 0 and "lubrication_resolved = measured" in p.stderr, p.stderr[-500:])
+                                              "-s", "contacts.lubrication_resolved=cutoff", "-s", "time.end_s=0.1"])
+    check("tangential film: the cut-off squeeze film beside it refused, naming the sliding film",
+          p.returncode != 0 and "lubrication_resolved = measured" in p.stderr
+          and "lubrication_tangential = sliding" in p.stderr, p.stderr[-500:])
 
 
 def group_implicit_passes():

@@ -380,8 +380,18 @@ static int test_set_param(void)
                  (rc == 0) + fabs(surge_sim_params(sim)->body.slope_deg - 30), 0);
     rc = surge_sim_set_param(sim, "fluid.nosuch", "1", err, sizeof err);
     expect_below("set_param: unknown key refused", rc == 0, 0);
-    /* the tangential film takes the measured share: refused live while the squeeze film is the cut-off model's, the
-     * setting kept */
+    /* the tangential film (the default) takes the measured share: the cut-off model is refused live while it is on,
+     * the setting kept and the message naming the way out; with the sliding film the cut-off model is taken, and the
+     * tangential film then refused */
+    rc = surge_sim_set_param(sim, "contacts.lubrication_resolved", "cutoff", err, sizeof err);
+    printf("set_param: lubrication_resolved = cutoff with the tangential film refused with: %s\n", err);
+    expect_below("set_param: the cut-off model beside the tangential film refused and the setting kept",
+                 (rc == 0) + (surge_sim_params(sim)->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED), 0);
+    expect_below("set_param: ... and the message names the sliding film",
+                 strstr(err, "lubrication_tangential = sliding") == NULL, 0);
+    rc = surge_sim_set_param(sim, "contacts.lubrication_tangential", "sliding", err, sizeof err) +
+         surge_sim_set_param(sim, "contacts.lubrication_resolved", "cutoff", err, sizeof err);
+    expect_below("set_param: the sliding film, then the cut-off model, taken (rc)", rc != 0, 0);
     rc = surge_sim_set_param(sim, "contacts.lubrication_tangential", "reynolds", err, sizeof err);
     printf("set_param: lubrication_tangential = reynolds with the cut-off model refused with: %s\n", err);
     expect_below("set_param: tangential film without the measured share refused and the setting kept",

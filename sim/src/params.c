@@ -328,9 +328,10 @@ static const surge_param_info registry[] = {
      "Keep every fluid lattice site outside a disc and pack the fluid around the discs before the first step, so "
      "that it fills the room the discs leave at its rest spacing. Off: the sites within a quarter spacing of a "
      "disc's surface are left out, and the fluid is 0.5 phi / ((r/dp) (1 - phi)) of its room short. Packed, the "
-     "implicit scheme's rest-density correction counts a deficit next to a disc too. Off by default until the "
-     "validation studies are run with it; the explicit scheme runs the packed loaded channel at r/dp 4, at r/dp 3 "
-     "only with numerics.cfl = 0.18 (docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
+     "implicit scheme's rest-density correction counts a deficit next to a disc too. Off by default: the explicit "
+     "scheme runs the packed loaded channel at r/dp 4, at r/dp 3 (the shipped channel) only with numerics.cfl = "
+     "0.18, and a packing is not mirror-symmetric (a disc settling down the middle of a tank drifts sideways at up "
+     "to 5 % of its fall speed; docs/boulders.md, \"Placement\").", OFF(boulders.pack_fluid)},
 
     {"contacts", "friction", SURGE_PARAM_REAL, "-", 0.5, 0, 10, true, NULL,
      "Coulomb friction coefficient mu between discs and between discs and walls.", OFF(contacts.friction)},
@@ -354,19 +355,20 @@ static const surge_param_info registry[] = {
      "they feel the fluid's: the pressure across gaps narrower than the kernel, which the fluid alone leaves out "
      "(docs/boulders.md).", OFF(contacts.solid_pressure)},
     {"contacts", "lubrication", SURGE_PARAM_BOOL, "-", 1, 0, 1, true, NULL,
-     "Add the lubrication force of gaps between discs, and between a disc and a wall, narrower than "
-     "lubrication_cutoff_dp: the 2D (cylinder) squeeze film's force and sliding film's torques less their values at "
-     "the cut-off, which the SPH resolves (docs/boulders.md).", OFF(contacts.lubrication)},
+     "Add the lubrication force of gaps between discs, and between a disc and a wall, that the SPH does not "
+     "resolve: the 2D (cylinder) squeeze film and tangential film less what the scheme resolves of them "
+     "(lubrication_resolved, lubrication_tangential; docs/boulders.md).", OFF(contacts.lubrication)},
     {"contacts", "lubrication_cutoff_dp", SURGE_PARAM_REAL, "dp", 1, 0.1, 10, true, NULL,
-     "Gap (surface to surface, in dp) below which the lubrication force acts.", OFF(contacts.lubrication_cutoff_dp)},
+     "The cut-off model's gap (surface to surface, in dp) below which its squeeze film (lubrication_resolved = cutoff) "
+     "and the sliding film (lubrication_tangential = sliding) act.", OFF(contacts.lubrication_cutoff_dp)},
     {"contacts", "lubrication_min_gap_dp", SURGE_PARAM_REAL, "dp", 0.01, 1e-4, 1, true, NULL,
      "The lubrication force is taken at this gap (dp) where the gap is narrower (surface roughness; it keeps the "
      "force finite at contact).", OFF(contacts.lubrication_min_gap_dp)},
-    {"contacts", "lubrication_resolved", SURGE_PARAM_ENUM, "-", SURGE_LUBRICATION_CUTOFF, 0, 1, true, "cutoff|measured",
+    {"contacts", "lubrication_resolved", SURGE_PARAM_ENUM, "-", SURGE_LUBRICATION_MEASURED, 0, 1, true, "cutoff|measured",
      "What the SPH resolves of a squeeze film, which the lubrication force leaves out: cutoff, the film's force at "
      "lubrication_cutoff_dp below it; measured, the share of the exact resistance the scheme in use resolves at "
      "each gap, measured for each scheme against the kernel's h (docs/boulders.md).", OFF(contacts.lubrication_resolved)},
-    {"contacts", "lubrication_tangential", SURGE_PARAM_ENUM, "-", SURGE_TANGENTIAL_SLIDING, 0, 1, true,
+    {"contacts", "lubrication_tangential", SURGE_PARAM_ENUM, "-", SURGE_TANGENTIAL_REYNOLDS, 0, 1, true,
      "sliding|reynolds",
      "The film's resistance to tangential motion: sliding, torques from the surfaces' relative sliding speed (its part "
      "below lubrication_cutoff_dp); reynolds, from Reynolds' equation with the gap's shape moving with the discs, a "
@@ -1045,7 +1047,8 @@ static int validate_contacts(const surge_params *p, char *err, size_t err_len)
     if (p->contacts.lubrication_tangential == SURGE_TANGENTIAL_REYNOLDS &&
         p->contacts.lubrication_resolved != SURGE_LUBRICATION_MEASURED) {
         fail(err, err_len, "contacts.lubrication_tangential = reynolds needs contacts.lubrication_resolved = measured "
-             "(here cutoff): it leaves out the share of the film the scheme resolves, which the measured model holds");
+             "(here cutoff), whose share of the film it leaves out; with the cut-off model take "
+             "contacts.lubrication_tangential = sliding");
         return -1;
     }
     /* the share table is the measured model's */
