@@ -28,6 +28,11 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     phi<fraction>, with a member twice, averaged over another window (unless --window-tolerance-s allows it) or
     from another scene (another uniform flow) is refused, naming the file and the line (after a blank line too);
     a member on a flat channel has uniform_froude nan in collect's table, and collect's box plots are then refused;
+  - `lift` reads, from synthetic snapshots of a fluid lattice at hydrostatic pressure round a disc under the surface and
+    one half out of it, the hydrostatic buoyancy of their submerged parts (the whole of the first, half the second)
+    and the fluid's force on them over it, and round the first alone the pressure over the hydrostatic one touching
+    the disc, one row out and far from it (1, 1, 1; 0.5, 1, 1 with the touching fluid's pressure halved); a folder without particle
+    snapshots or without snapshots in the window is refused, named;
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
     errors from the seeds' spread, the members only one table has; a member twice, a value that is not a positive
@@ -361,6 +366,65 @@ with open(os.path.join(belt_member, "boulders_000000002.vtp"), "w") as f:
 rc, out, err = tool("collect", "--runs-dir", belt)
 check("collect: a disc snapshot in the window that cannot be read is refused, the file named",
       rc == 2 and "boulders_000000002.vtp" in err and "Traceback" not in err, out + err[-1000:])
+# lift: a fluid lattice at rest at hydrostatic pressure round disc A (under the surface) and disc B (half out of it);
+# the pressures read round A alone (B lowers the surface the fluid shows in the columns it fills to the top)
+lift_dp = float(belt_params["numerics"]["dp_m"])
+rho_g_normal = (float(belt_params["fluid"]["density_kgpm3"]) * float(belt_params["body"]["gravity_mps2"])
+                * np.cos(np.radians(float(belt_params["body"]["slope_deg"]))))
+lattice = np.array([[(i + 0.5) * lift_dp, (j + 0.5) * lift_dp] for i in range(60) for j in range(30)])
+lift_top = lattice[:, 1].max()
+disc_a, disc_b = (np.array([1.5, 0.8]), 0.3, 3000.0), (np.array([3.2, lift_top + 0.5 * lift_dp]), 0.25, 1000.0)
+
+
+def write_lift_run(name, discs, touching_pressure_factor):
+    """A run folder (the belt member's params.ini) with one particle and one disc snapshot at 7 s: the lattice less
+    what lies within half a spacing of a disc, at hydrostatic pressure, that of the fluid within 1 dp of disc A's face
+    times touching_pressure_factor; each disc's fluid force (0, F)."""
+    folder = os.path.join(WORK, name)
+    shutil.rmtree(folder, ignore_errors=True)
+    os.makedirs(folder)
+    shutil.copy(os.path.join(belt_member, "params.ini"), folder)
+    centres, radii = np.array([d[0] for d in discs]), np.array([d[1] for d in discs])
+    gap_dp = (np.hypot(lattice[:, None, 0] - centres[None, :, 0], lattice[:, None, 1] - centres[None, :, 1])
+              - radii[None, :]) / lift_dp
+    fluid = lattice[gap_dp.min(axis=1) >= 0.5]
+    touching_a = np.hypot(*(fluid - disc_a[0]).T) - disc_a[1] < lift_dp
+    pressure = rho_g_normal * (lift_top - fluid[:, 1]) * np.where(touching_a, touching_pressure_factor, 1.0)
+    vtp.write_vtp(os.path.join(folder, "snap_000000001.vtp"), fluid,
+                  {"pressure_pa": pressure, "kind": np.zeros(len(fluid))}, 7.0, 1)
+    vtp.write_vtp(os.path.join(folder, "boulders_000000001.vtp"), centres,
+                  {"radius_m": radii, "fluid_force_npm": np.array([[0.0, d[2], 0.0] for d in discs])}, 7.0, 1)
+    vtp.write_pvd(os.path.join(folder, "run.pvd"), [(7.0, "snap_000000001.vtp")])
+    vtp.write_pvd(os.path.join(folder, "boulders.pvd"), [(7.0, "boulders_000000001.vtp")])
+    return folder
+
+
+def lift_row(out):
+    rows = [line.split(", ") for line in out.strip().split("\n")[1:]]
+    return [float(v) for v in rows[0][1:]] if len(rows) == 1 and len(rows[0]) == 9 else []
+
+
+lift_run = write_lift_run("lift_run", (disc_a, disc_b), 1.0)
+lift_buoyancy = rho_g_normal * np.pi * (0.3 ** 2 + 0.25 ** 2 / 2)
+rc, out, err = tool("lift", lift_run, "--window", "6", "8")
+got = lift_row(out)
+check("lift: the hydrostatic buoyancy of the submerged parts (disc A whole, B half) and the fluid's force over it "
+      "(%s; buoyancy %.1f N/m)" % (got[:5], lift_buoyancy),
+      rc == 0 and len(got) == 8 and got[:3] == [1, 2, 4000.0] and abs(got[3] - lift_buoyancy) <= 1e-3 * lift_buoyancy
+      and abs(got[4] - 4000.0 / lift_buoyancy) <= 2e-3, out + err[-1000:])
+for factor in (1.0, 0.5):
+    rc, out, err = tool("lift", write_lift_run("lift_pressure", (disc_a,), factor), "--window", "6", "8")
+    got = lift_row(out)
+    check("lift: the fluid at hydrostatic pressure, that touching the disc times %g, reads %g touching, 1 one row out "
+          "and far (%s)" % (factor, factor, got[5:]), rc == 0 and len(got) == 8 and abs(got[5] - factor) <= 1e-3
+          and abs(got[6] - 1.0) <= 1e-3 and abs(got[7] - 1.0) <= 1e-3, out + err[-1000:])
+rc, out, err = tool("lift", lift_run, "--window", "10", "12")
+check("lift: a window without snapshots is refused, the folder named",
+      rc == 2 and "lift_run: no particle and disc snapshots" in err and "Traceback" not in err, out + err[-1000:])
+os.remove(os.path.join(lift_run, "run.pvd"))
+rc, out, err = tool("lift", lift_run)
+check("lift: a folder without particle snapshots is refused, named",
+      rc == 2 and "lift_run: no run.pvd" in err and "Traceback" not in err, out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

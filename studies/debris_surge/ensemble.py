@@ -13,6 +13,7 @@ says more.
         [--png FILE]
   studies/debris_surge/ensemble.py plot --csv FILE [--csv FILE ...] --png FILE
   studies/debris_surge/ensemble.py compare --csv A --csv B [--window-tolerance-s 0.5]
+  studies/debris_surge/ensemble.py lift RUN_DIR [RUN_DIR ...] [--window 6 20]
   studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
@@ -64,6 +65,15 @@ then the same for the means over the members in both, the errors of the means fr
 member), and the members only one table has. A member twice in one table, an asked that is neither n<count> nor
 phi<fraction>, a value that is not finite or not positive, or windows further apart than --window-tolerance-s are
 refused, naming the file and the line.
+lift: how much of their buoyancy the fluid gives the discs, per run folder with particle snapshots (run.pvd) and disc
+snapshots at the same times, averaged over the window's snapshots: the fluid's force on all discs normal to the belt
+(fluid_lift_npm, the snapshots' fluid_force_npm), the hydrostatic buoyancy of their submerged parts (rho g cos(slope)
+times each disc's area below the local surface, the highest fluid particle within its radius + 2 dp along the belt,
+plus half a spacing), their ratio (lift_share: 1 where the fluid round every disc is hydrostatic and at rest), and the
+fluid's pressure over the hydrostatic pressure under the local surface (the highest fluid particle in columns
+0.1 m wide), summed over the fluid more than 4 dp deep: touching the discs (within 1 dp of a disc's face), the next
+row (1-2 dp), and farther than 8 dp from every disc. A folder without both snapshot series, without discs, or with no
+snapshot pair in the window is refused, named.
 """
 import argparse
 import csv
@@ -106,6 +116,9 @@ SNAPSHOT_FORCES = {"on_belt_fluid_npm": "fluid_force_npm", "on_belt_film_npm": "
                    "on_belt_bed_contact_npm": "wall_contact_force_npm"}  # collect's columns: a snapshot array's y
 ON_BELT_FORCES = ("on_belt_weight_npm",) + tuple(SNAPSHOT_FORCES)
 ON_BELT_DP = 0.05  # a disc rests on the belt when its gap to the belt's face is the contact margin to within this
+LIFT_COLUMN_M = 0.1  # lift: the local surface is the highest fluid particle in columns this wide along the belt
+LIFT_DEEP_DP = 4.0  # lift: the pressure is read where the fluid lies deeper than this below the local surface
+LIFT_BANDS_DP = (("touching", 0.0, 1.0), ("next_row", 1.0, 2.0), ("far", 8.0, math.inf))  # from the nearest disc face
 WINDOW_TOLERANCE_S = 0.5  # one flow.csv row: the windows of members that ran as long agree to this (plot's default)
 
 
@@ -351,6 +364,70 @@ def boulders_on_belt(folder, start, stop):
         fail(str(e))
     mean, error, _ = study.mean_with_error(counts)
     return mean, error, {k: sum(v) / len(v) if v else math.nan for k, v in forces.items()}
+
+
+def submerged_area(radius, surface_above_bottom):
+    """Area of a disc of this radius below a line this high above its lowest point (0 below it, the whole disc above)."""
+    offset = np.clip(surface_above_bottom, 0.0, 2.0 * radius) - radius  # the line's height above the centre
+    return radius ** 2 * np.arccos(-offset / radius) + offset * np.sqrt(radius ** 2 - offset ** 2)
+
+
+def lift(folder, start, stop):
+    """(snapshot pairs, discs, fluid_lift_npm, buoyancy_npm, {band: pressure ratio}) over the window: see `lift` in the
+    module's text."""
+    try:
+        p = RunParams(folder)
+        rho, dp = p.positive("fluid", "density_kgpm3"), p.positive("numerics", "dp_m")
+        g_normal = p.positive("body", "gravity_mps2") * math.cos(math.radians(p.real("body", "slope_deg")))
+        series = []
+        for name in ("run.pvd", "boulders.pvd"):
+            path = os.path.join(folder, name)
+            if not os.path.isfile(path):
+                fail("%s: no %s (lift reads the particle and the disc snapshots)" % (folder, name))
+            series.append({t: f for t, f in vtp.read_pvd(path) if start <= t <= stop + 1e-9})
+        times = sorted(set(series[0]) & set(series[1]))
+        if not times:
+            fail("%s: no particle and disc snapshots at the same time within %g-%g s" % (folder, start, stop))
+        lifts, buoyancies, sums = [], [], {band: [0.0, 0.0] for band, _, _ in LIFT_BANDS_DP}
+        for t in times:
+            discs = vtp.read_vtp(os.path.join(folder, series[1][t]), required=("radius_m", "fluid_force_npm"))
+            particles = vtp.read_vtp(os.path.join(folder, series[0][t]), required=("kind", "pressure_pa"))
+            radius, centre = discs["radius_m"], discs["points"][:, :2]
+            if len(radius) == 0:
+                fail("%s: %s holds no disc" % (folder, series[1][t]))
+            fluid = particles["kind"] == 0
+            xy, pressure = particles["points"][fluid, :2], particles["pressure_pa"][fluid].astype(float)
+            column = np.floor(xy[:, 0] / LIFT_COLUMN_M).astype(int)
+            column -= column.min()
+            top = np.full(column.max() + 1, -np.inf)
+            np.maximum.at(top, column, xy[:, 1])
+            depth = top[column] - xy[:, 1]
+            local_top = np.array([xy[np.abs(xy[:, 0] - c[0]) < r + 2 * dp, 1].max(initial=-np.inf)
+                                  for c, r in zip(centre, radius)])
+            buoyancies.append(rho * g_normal * submerged_area(radius, local_top + 0.5 * dp - (centre[:, 1] - radius)).sum())
+            lifts.append(float(discs["fluid_force_npm"][:, 1].sum()))
+            face_gap = (np.hypot(xy[:, None, 0] - centre[None, :, 0], xy[:, None, 1] - centre[None, :, 1])
+                        - radius[None, :]).min(axis=1) / dp
+            deep = depth > LIFT_DEEP_DP * dp
+            for band, low, high in LIFT_BANDS_DP:
+                inside = deep & (face_gap >= low) & (face_gap < high)
+                sums[band][0] += pressure[inside].sum()
+                sums[band][1] += rho * g_normal * depth[inside].sum()
+    except (ParamsError, vtp.VtpError) as e:
+        fail(str(e))
+    ratios = {band: (p_sum / h_sum if h_sum > 0 else math.nan) for band, (p_sum, h_sum) in sums.items()}
+    return len(times), len(radius), float(np.mean(lifts)), float(np.mean(buoyancies)), ratios
+
+
+def command_lift(args):
+    bands = [band for band, _, _ in LIFT_BANDS_DP]
+    print("run, snapshots, discs, fluid_lift_npm, submerged_buoyancy_npm, lift_share, "
+          + ", ".join("pressure_ratio_" + b for b in bands))
+    for folder in args.folders:
+        n, discs, fluid_lift, buoyancy, ratios = lift(folder, args.window[0], args.window[1])
+        print("%s, %d, %d, %.1f, %.1f, %.3f, %s" % (folder, n, discs, fluid_lift, buoyancy, fluid_lift / buoyancy,
+                                                   ", ".join("%.3f" % ratios[b] for b in bands)))
+    return 0
 
 
 def largest_density_deviation(folder):
@@ -684,6 +761,11 @@ def main():
     e.add_argument("--window-tolerance-s", type=cli_checks.non_negative, default=WINDOW_TOLERANCE_S,
                    help="how far, s, a row's averaging window may lie from A's first row's (default %g)"
                         % WINDOW_TOLERANCE_S)
+    f = sub.add_parser("lift", help="how much of their buoyancy the fluid gives the discs, from the snapshots")
+    f.add_argument("folders", nargs="+", type=cli_checks.folder, metavar="RUN_DIR",
+                   help="run folders with particle (run.pvd) and disc (boulders.pvd) snapshots")
+    f.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[6.0, 20.0],
+                   metavar=("START_S", "END_S"), help="the snapshots' window, s of flow (default 6 20)")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
@@ -696,12 +778,14 @@ def main():
         return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA, first_snapshot=False)
     if args.command == "unpark":
         return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
-    if args.command == "collect" and not args.window[1] > args.window[0]:
+    if args.command in ("collect", "lift") and not args.window[1] > args.window[0]:
         fail("--window: the end must come after the start")
     if args.command == "plot":
         return command_plot(args)
     if args.command == "compare":
         return command_compare(args)
+    if args.command == "lift":
+        return command_lift(args)
     return command_run(args) if args.command == "run" else command_collect(args)
 
 
