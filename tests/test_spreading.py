@@ -12,7 +12,8 @@ Explicit scheme, dp 5 mm (the coarse end, about 15 s on one core): its body's fr
 10 s, its first row at most 0.63 dp above the bed, no fluid ahead of the body below 0.5 dp (a film under the first
 row), and no fluid closer to the bed's face than the wall-face repulsion's 0.25 dp in any snapshot (the spreading
 page: +8.2 %, 0.605 dp, the one particle ahead of the body 1.7 dp ahead, the lowest at 0.315 dp; with the walls'
-no-penetration term read at the ghost node, +17.4 % and 0.667 dp, which the first two bounds catch).
+no-penetration term read at the ghost node, +17.4 % and 0.667 dp, which the first two bounds catch). The first
+row's height by the current's local depth (`spreading.py rows`) averages to the same height.
 
 usage: test_spreading.py SURGE SOURCE_DIR WORK_DIR"""
 import os
@@ -57,6 +58,19 @@ if check("the explicit spreading current at dp 5 mm runs to 10 s", r.returncode 
           "body %.4f m, model %.4f m (%+.4f)" % (body, model, body / model - 1), show_detail=True)
     check("explicit, at 10 s the first row at most 0.63 dp above the bed", height <= 0.63,
           "mean height %.3f dp" % height, show_detail=True)
+    last_t, last_name = vtp.read_pvd(os.path.join(run_dir, "run.pvd"))[-1]
+    last = vtp.read_vtp(os.path.join(run_dir, last_name), ("kind",), finite=True)
+    bands = spreading.first_row_by_depth(last["points"][last["kind"] == 0, :2], dp)
+    banded = sum(n * h for _, _, n, h in bands) / max(sum(n for _, _, n, _ in bands), 1)
+    check("explicit, the first row by the current's depth (rows) averages to the first row's height at %.2f s" % last_t,
+          bands and abs(banded - rows[10][4]) <= 1e-9 and all(low < high for low, high, _, _ in bands),
+          "bands %s, their mean %.3f dp, the first row %.3f dp" % (bands, banded, rows[10][4]), show_detail=True)
+    r = subprocess.run([sys.executable, os.path.join(source, "studies", "spreading", "spreading.py"), "rows", run_dir],
+                       capture_output=True, text=True, timeout=300)
+    printed = [line.split() for line in r.stdout.strip().split("\n")[2:]]
+    check("explicit, `spreading.py rows` prints the same bands", r.returncode == 0 and
+          [(l[0], int(l[1]), float(l[2])) for l in printed] == [("%g-%g" % (lo, hi), n, round(h, 3))
+                                                                 for lo, hi, n, h in bands], r.stdout + r.stderr[-500:])
     lowest, under_row = [], 0
     for t, name in vtp.read_pvd(os.path.join(run_dir, "run.pvd")):
         snap = vtp.read_vtp(os.path.join(run_dir, name), ("kind",), finite=True)

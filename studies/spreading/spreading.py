@@ -3,6 +3,7 @@
 model, and any film of fluid running ahead of it along the bed.
 
   studies/spreading/spreading.py measure RUN_DIR      # the front, snapshot by snapshot, against the model
+  studies/spreading/spreading.py rows RUN_DIR [--time-s T]   # the first row's height by the current's depth
   studies/spreading/spreading.py reference CASE_OR_RUN_DIR [--times-s 1,2,5,10,20]
 
 Model (docs/references.md): a creeping current on a horizontal bed, thin against its length, obeys
@@ -19,6 +20,11 @@ Measure, for each snapshot (x from the left wall's face, the bed's face at y = 0
          of the body (dp). A front that meets the bed has none or one; a film creeping ahead along the bed has many.
   row    the mean height above the bed of the fluid below 1 dp (the first row), in dp: 0.5 on the lattice.
 Prints each snapshot's toe and body against the model at that time and their differences from it.
+
+Rows, at the snapshot nearest T (default the last): the first row's mean height above the bed (dp) where the current
+is how deep: its depth in a column 1 dp wide is the highest fluid particle's height plus half a spacing, in bands of
+DEPTH_BANDS_DP; beside them the kernel's reach 2h in dp (h = C_h sqrt(2) dp), within which a particle's kernel meets
+the free surface.
 """
 import argparse
 import os
@@ -91,6 +97,45 @@ def front_of(points, x0, dp):
     return x.max(), body, int(film.sum()), reach, height
 
 
+DEPTH_BANDS_DP = (0, 3, 5, 7, 10, 15, np.inf)  # rows: the current's local depth, dp
+
+
+def first_row_by_depth(points, dp):
+    """[(depth band low, high (dp), first-row particles, their mean height above the bed (dp))] of one snapshot's
+    fluid positions (the bed's face at y = 0), bands without first-row particles left out"""
+    x, y = points[:, 0], points[:, 1]
+    column = np.floor(x / dp).astype(int)
+    column -= column.min()
+    top = np.full(column.max() + 1, -np.inf)
+    np.maximum.at(top, column, y)
+    depth_dp = top[column] / dp + 0.5
+    first_row = y < dp
+    bands = []
+    for low, high in zip(DEPTH_BANDS_DP[:-1], DEPTH_BANDS_DP[1:]):
+        inside = first_row & (depth_dp >= low) & (depth_dp < high)
+        if inside.any():
+            bands.append((low, high, int(inside.sum()), float(y[inside].mean() / dp)))
+    return bands
+
+
+def rows_command(folder, time_s):
+    params = RunParams(folder)
+    dp = params.positive("numerics", "dp_m")
+    reach_dp = 2 * params.positive("numerics", "ch") * np.sqrt(2)
+    snapshots = [(t, name) for t, name in vtp.read_pvd(os.path.join(folder, "run.pvd")) if t > 0]
+    if not snapshots:
+        raise ValueError("%s: no snapshot after t = 0" % folder)
+    t, name = min(snapshots, key=lambda e: abs(e[0] - time_s)) if time_s is not None else snapshots[-1]
+    s = vtp.read_vtp(os.path.join(folder, name), ("kind",), finite=True)
+    fluid = s["points"][s["kind"] == 0, :2]
+    if not len(fluid):
+        raise ValueError("%s: no fluid particles" % os.path.join(folder, name))
+    print("t = %.2f s; the kernel reaches 2h = %.2f dp" % (t, reach_dp))
+    print("current's depth (dp), first-row particles, their mean height above the bed (dp)")
+    for low, high, count, height in first_row_by_depth(fluid, dp):
+        print("%g-%g %d %.3f" % (low, high, count, height))
+
+
 def measure(folder):
     """[(t, toe, body, film count, film reach, first row's height, model front)] over the run's snapshots after
     t = 0"""
@@ -127,6 +172,10 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("measure").add_argument("run_dir")
+    rows = sub.add_parser("rows")
+    rows.add_argument("run_dir")
+    rows.add_argument("--time-s", type=cli_checks.non_negative, default=None,
+                      help="the snapshot nearest this time, s (default the last)")
     ref = sub.add_parser("reference")
     ref.add_argument("case")
     ref.add_argument("--times-s", type=times, default=[1.0, 2.0, 5.0, 10.0, 20.0])
@@ -137,6 +186,9 @@ def main():
             print("t (s), lubrication model's front (m), Huppert's similarity front (m)")
             for t, f in zip(args.times_s, lubrication_fronts(g, nu, x0, x1, depth, length, args.times_s)):
                 print("%g %.4f %.4f" % (t, f, similarity_front(g, nu, (x1 - x0) * depth, t)))
+            return 0
+        if args.command == "rows":
+            rows_command(args.run_dir, args.time_s)
             return 0
         rows = measure(args.run_dir)
     except (OSError, ValueError) as e:
