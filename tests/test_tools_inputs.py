@@ -251,6 +251,9 @@ ENSEMBLE = os.path.join(SOURCE, "studies", "debris_surge", "ensemble.py")
 for command in ("park", "unpark", "run"):
     expect("ensemble %s --parked-dir a file" % command, tool(ENSEMBLE, command, "--parked-dir",
                                                              path("run", "params.ini")), "--parked-dir", "not a folder")
+expect("ensemble lift: not a run folder", tool(ENSEMBLE, "lift", WORK), WORK, "params.ini")
+expect("ensemble lift: a run without disc snapshots", tool(ENSEMBLE, "lift", path("run")), "boulders.pvd")
+expect("ensemble lift --window 5 3", tool(ENSEMBLE, "lift", path("run"), "--window", "5", "3"), "--window")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
        "--runs-dir", "not a folder")
 
@@ -613,6 +616,8 @@ sloped = folder("sloped", RUN_FILES)
 write(os.path.join(sloped, "params.ini"), params_with(slope_deg="5"))
 expect("spreading reference: a sloped bed", tool(SP, "reference", sloped), "slope_deg")
 expect("spreading measure: a sloped bed", tool(SP, "measure", sloped), "slope_deg")
+expect("spreading rows: not a run folder", tool(SP, "rows", WORK), WORK)
+expect("spreading rows --time-s -1", tool(SP, "rows", path("run"), "--time-s", "-1"), "--time-s")
 
 # ---- 14. every tool that prints a table, into a reader that stopped early (| head): no traceback ----
 for name, *args in (("make_colormaps.py",), ("wall_contact.py", path("run"), "--after-s", "0.1"),

@@ -421,10 +421,10 @@ def lift(folder, start, stop):
 
 def command_lift(args):
     bands = [band for band, _, _ in LIFT_BANDS_DP]
+    rows = [(folder,) + lift(folder, args.window[0], args.window[1]) for folder in args.folders]
     print("run, snapshots, discs, fluid_lift_npm, submerged_buoyancy_npm, lift_share, "
           + ", ".join("pressure_ratio_" + b for b in bands))
-    for folder in args.folders:
-        n, discs, fluid_lift, buoyancy, ratios = lift(folder, args.window[0], args.window[1])
+    for folder, n, discs, fluid_lift, buoyancy, ratios in rows:
         print("%s, %d, %d, %.1f, %.1f, %.3f, %s" % (folder, n, discs, fluid_lift, buoyancy, fluid_lift / buoyancy,
                                                    ", ".join("%.3f" % ratios[b] for b in bands)))
     return 0
