@@ -31,7 +31,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
   - `lift` reads, from synthetic snapshots of a fluid lattice at hydrostatic pressure round a disc under the surface and
     one half out of it, the hydrostatic buoyancy of their submerged parts (the whole of the first, half the second)
     and the fluid's force on them over it, and round the first alone the pressure over the hydrostatic one touching
-    the disc, one row out and far from it (1, 1, 1; 0.5, 1, 1 with the touching fluid's pressure halved); a folder without particle
+    the disc, one row out and far from it (1, 1, 1; 0.5, 1, 1 with the touching fluid's pressure halved; -1, 1, 1
+    with it in tension, whose share of the fluid and lowest pressure it reads too); a folder without particle
     snapshots or without snapshots in the window is refused, named;
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
@@ -401,23 +402,28 @@ def write_lift_run(name, discs, touching_pressure_factor):
 
 def lift_row(out):
     rows = [line.split(", ") for line in out.strip().split("\n")[1:]]
-    return [float(v) for v in rows[0][1:]] if len(rows) == 1 and len(rows[0]) == 9 else []
+    return [float(v) for v in rows[0][1:]] if len(rows) == 1 and len(rows[0]) == 11 else []
 
 
 lift_run = write_lift_run("lift_run", (disc_a, disc_b), 1.0)
 lift_buoyancy = rho_g_normal * np.pi * (0.3 ** 2 + 0.25 ** 2 / 2)
 rc, out, err = tool("lift", lift_run, "--window", "6", "8")
 got = lift_row(out)
-check("lift: the hydrostatic buoyancy of the submerged parts (disc A whole, B half) and the fluid's force over it "
-      "(%s; buoyancy %.1f N/m)" % (got[:5], lift_buoyancy),
-      rc == 0 and len(got) == 8 and got[:3] == [1, 2, 4000.0] and abs(got[3] - lift_buoyancy) <= 1e-3 * lift_buoyancy
+check("lift: the hydrostatic buoyancy of the submerged parts (disc A whole, B half) and the fluid's force over it, "
+      "no fluid in tension (%s; buoyancy %.1f N/m)" % (got[:5] + got[8:], lift_buoyancy),
+      rc == 0 and len(got) == 10 and got[8:] == [0.0, 0.0] and got[:3] == [1, 2, 4000.0] and abs(got[3] - lift_buoyancy) <= 1e-3 * lift_buoyancy
       and abs(got[4] - 4000.0 / lift_buoyancy) <= 2e-3, out + err[-1000:])
-for factor in (1.0, 0.5):
-    rc, out, err = tool("lift", write_lift_run("lift_pressure", (disc_a,), factor), "--window", "6", "8")
+for factor in (1.0, 0.5, -1.0):
+    folder = write_lift_run("lift_pressure", (disc_a,), factor)
+    fluid = vtp.read_vtp(os.path.join(folder, "snap_000000001.vtp"), ("pressure_pa",))["pressure_pa"]
+    tension = ((fluid < 0).mean(), float(fluid.min())) if factor < 0 else (0.0, 0.0)
+    rc, out, err = tool("lift", folder, "--window", "6", "8")
     got = lift_row(out)
     check("lift: the fluid at hydrostatic pressure, that touching the disc times %g, reads %g touching, 1 one row out "
-          "and far (%s)" % (factor, factor, got[5:]), rc == 0 and len(got) == 8 and abs(got[5] - factor) <= 1e-3
-          and abs(got[6] - 1.0) <= 1e-3 and abs(got[7] - 1.0) <= 1e-3, out + err[-1000:])
+          "and far, and the share in tension and the lowest pressure (%s against %s)"
+          % (factor, factor, got[5:], tension), rc == 0 and len(got) == 10 and abs(got[5] - factor) <= 1e-3
+          and abs(got[6] - 1.0) <= 1e-3 and abs(got[7] - 1.0) <= 1e-3 and abs(got[8] - tension[0]) <= 5e-4
+          and abs(got[9] - tension[1]) <= 0.5, out + err[-1000:])
 rc, out, err = tool("lift", lift_run, "--window", "10", "12")
 check("lift: a window without snapshots is refused, the folder named",
       rc == 2 and "lift_run: no particle and disc snapshots" in err and "Traceback" not in err, out + err[-1000:])

@@ -72,7 +72,8 @@ times each disc's area below the local surface, the highest fluid particle withi
 plus half a spacing), their ratio (lift_share: 1 where the fluid round every disc is hydrostatic and at rest), and the
 fluid's pressure over the hydrostatic pressure under the local surface (the highest fluid particle in columns
 0.1 m wide), summed over the fluid more than 4 dp deep: touching the discs (within 1 dp of a disc's face), the next
-row (1-2 dp), and farther than 8 dp from every disc. A folder without both snapshot series, without discs, or with no
+row (1-2 dp), and farther than 8 dp from every disc; and the share of the fluid particles below 0 Pa (in tension) with
+the lowest pressure, over all the snapshots' fluid. A folder without both snapshot series, without discs, or with no
 snapshot pair in the window is refused, named.
 """
 import argparse
@@ -389,6 +390,7 @@ def lift(folder, start, stop):
         if not times:
             fail("%s: no particle and disc snapshots at the same time within %g-%g s" % (folder, start, stop))
         lifts, buoyancies, sums = [], [], {band: [0.0, 0.0] for band, _, _ in LIFT_BANDS_DP}
+        in_tension, particles_read, lowest_pa = 0, 0, math.inf
         for t in times:
             discs = vtp.read_vtp(os.path.join(folder, series[1][t]), required=("radius_m", "fluid_force_npm"))
             particles = vtp.read_vtp(os.path.join(folder, series[0][t]), required=("kind", "pressure_pa"))
@@ -397,6 +399,9 @@ def lift(folder, start, stop):
                 fail("%s: %s holds no disc" % (folder, series[1][t]))
             fluid = particles["kind"] == 0
             xy, pressure = particles["points"][fluid, :2], particles["pressure_pa"][fluid].astype(float)
+            in_tension += int((pressure < 0).sum())
+            particles_read += len(pressure)
+            lowest_pa = min(lowest_pa, float(pressure.min(initial=math.inf)))
             column = np.floor(xy[:, 0] / LIFT_COLUMN_M).astype(int)
             column -= column.min()
             top = np.full(column.max() + 1, -np.inf)
@@ -416,17 +421,20 @@ def lift(folder, start, stop):
     except (ParamsError, vtp.VtpError) as e:
         fail(str(e))
     ratios = {band: (p_sum / h_sum if h_sum > 0 else math.nan) for band, (p_sum, h_sum) in sums.items()}
-    return len(times), len(radius), float(np.mean(lifts)), float(np.mean(buoyancies)), ratios
+    return (len(times), len(radius), float(np.mean(lifts)), float(np.mean(buoyancies)), ratios,
+            in_tension / max(particles_read, 1), lowest_pa)
 
 
 def command_lift(args):
     bands = [band for band, _, _ in LIFT_BANDS_DP]
     rows = [(folder,) + lift(folder, args.window[0], args.window[1]) for folder in args.folders]
     print("run, snapshots, discs, fluid_lift_npm, submerged_buoyancy_npm, lift_share, "
-          + ", ".join("pressure_ratio_" + b for b in bands))
-    for folder, n, discs, fluid_lift, buoyancy, ratios in rows:
-        print("%s, %d, %d, %.1f, %.1f, %.3f, %s" % (folder, n, discs, fluid_lift, buoyancy, fluid_lift / buoyancy,
-                                                   ", ".join("%.3f" % ratios[b] for b in bands)))
+          + ", ".join("pressure_ratio_" + b for b in bands) + ", fluid_in_tension_share, lowest_pressure_pa")
+    for folder, n, discs, fluid_lift, buoyancy, ratios, tension_share, lowest_pa in rows:
+        print("%s, %d, %d, %.1f, %.1f, %.3f, %s, %.3f, %.0f" % (folder, n, discs, fluid_lift, buoyancy,
+                                                               fluid_lift / buoyancy,
+                                                               ", ".join("%.3f" % ratios[b] for b in bands),
+                                                               tension_share, lowest_pa))
     return 0
 
 
