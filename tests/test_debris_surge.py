@@ -32,7 +32,8 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     one half out of it, the hydrostatic buoyancy of their submerged parts (the whole of the first, half the second)
     and the fluid's force on them over it, and round the first alone the pressure over the hydrostatic one touching
     the disc, one row out and far from it (1, 1, 1; 0.5, 1, 1 with the touching fluid's pressure halved; -1, 1, 1
-    with it in tension, whose share of the fluid and lowest pressure it reads too); a folder without particle
+    with it in tension, whose share of the fluid and lowest pressure it reads too); a disc snapshot without forces
+    is skipped, a window with none that has them refused; a folder without particle
     snapshots or without snapshots in the window is refused, named;
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
@@ -424,6 +425,22 @@ for factor in (1.0, 0.5, -1.0):
           % (factor, factor, got[5:], tension), rc == 0 and len(got) == 10 and abs(got[5] - factor) <= 1e-3
           and abs(got[6] - 1.0) <= 1e-3 and abs(got[7] - 1.0) <= 1e-3 and abs(got[8] - tension[0]) <= 5e-4
           and abs(got[9] - tension[1]) <= 0.5, out + err[-1000:])
+# a second pair at 8 s whose disc forces are not known (NaN, as in a run's first disc snapshot)
+first = vtp.read_vtp(os.path.join(lift_run, "snap_000000001.vtp"), ("kind", "pressure_pa"))
+vtp.write_vtp(os.path.join(lift_run, "snap_000000002.vtp"), first["points"],
+              {"pressure_pa": first["pressure_pa"], "kind": first["kind"]}, 8.0, 2)
+vtp.write_vtp(os.path.join(lift_run, "boulders_000000002.vtp"), np.array([disc_a[0], disc_b[0]]),
+              {"radius_m": np.array([disc_a[1], disc_b[1]]), "fluid_force_npm": np.full((2, 3), np.nan)}, 8.0, 2)
+vtp.write_pvd(os.path.join(lift_run, "run.pvd"), [(7.0, "snap_000000001.vtp"), (8.0, "snap_000000002.vtp")])
+vtp.write_pvd(os.path.join(lift_run, "boulders.pvd"), [(7.0, "boulders_000000001.vtp"), (8.0, "boulders_000000002.vtp")])
+rc, out, err = tool("lift", lift_run, "--window", "6", "9")
+got = lift_row(out)
+check("lift: a disc snapshot without forces (a run's first) is skipped (%s)" % got[:3],
+      rc == 0 and got[:3] == [1, 2, 4000.0], out + err[-1000:])
+rc, out, err = tool("lift", lift_run, "--window", "7.5", "9")
+check("lift: a window whose disc snapshots carry no forces is refused, named",
+      rc == 2 and "lift_run: no disc snapshot within 7.5-9 s carries" in err and "Traceback" not in err,
+      out + err[-1000:])
 rc, out, err = tool("lift", lift_run, "--window", "10", "12")
 check("lift: a window without snapshots is refused, the folder named",
       rc == 2 and "lift_run: no particle and disc snapshots" in err and "Traceback" not in err, out + err[-1000:])

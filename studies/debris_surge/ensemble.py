@@ -73,8 +73,9 @@ plus half a spacing), their ratio (lift_share: 1 where the fluid round every dis
 fluid's pressure over the hydrostatic pressure under the local surface (the highest fluid particle in columns
 0.1 m wide), summed over the fluid more than 4 dp deep: touching the discs (within 1 dp of a disc's face), the next
 row (1-2 dp), and farther than 8 dp from every disc; and the share of the fluid particles below 0 Pa (in tension) with
-the lowest pressure, over all the snapshots' fluid. A folder without both snapshot series, without discs, or with no
-snapshot pair in the window is refused, named.
+the lowest pressure, over all the snapshots' fluid. Disc snapshots without the forces (a run's first) are skipped. A
+folder without both snapshot series, without discs, with a value that is not a number, or with no snapshot pair in the
+window that carries the forces is refused, named.
 """
 import argparse
 import csv
@@ -393,7 +394,10 @@ def lift(folder, start, stop):
         in_tension, particles_read, lowest_pa = 0, 0, math.inf
         for t in times:
             discs = vtp.read_vtp(os.path.join(folder, series[1][t]), required=("radius_m", "fluid_force_npm"))
-            particles = vtp.read_vtp(os.path.join(folder, series[0][t]), required=("kind", "pressure_pa"))
+            if not np.all(np.isfinite(discs["fluid_force_npm"])):
+                continue  # a run's first disc snapshot, written before any force acted
+            particles = vtp.read_vtp(os.path.join(folder, series[0][t]), required=("kind", "pressure_pa"),
+                                     finite=True)
             radius, centre = discs["radius_m"], discs["points"][:, :2]
             if len(radius) == 0:
                 fail("%s: %s holds no disc" % (folder, series[1][t]))
@@ -420,8 +424,10 @@ def lift(folder, start, stop):
                 sums[band][1] += rho * g_normal * depth[inside].sum()
     except (ParamsError, vtp.VtpError) as e:
         fail(str(e))
+    if not lifts:
+        fail("%s: no disc snapshot within %g-%g s carries the fluid's forces" % (folder, start, stop))
     ratios = {band: (p_sum / h_sum if h_sum > 0 else math.nan) for band, (p_sum, h_sum) in sums.items()}
-    return (len(times), len(radius), float(np.mean(lifts)), float(np.mean(buoyancies)), ratios,
+    return (len(lifts), len(radius), float(np.mean(lifts)), float(np.mean(buoyancies)), ratios,
             in_tension / max(particles_read, 1), lowest_pa)
 
 
