@@ -19,7 +19,7 @@
 
 /* Which wall a wall particle belongs to. WALL_CORNER is the bed under the upstream wall: it moves with the belt
  * (continuity sees no velocity jump along the bed) but mirrors no-slip about a fixed wall (it does not drag
- * fluid under the upstream wall); docs/method.md, "The belt-upstream-wall corner". */
+ * fluid under the upstream wall); docs/method.md, "The belt–upstream-wall corner". */
 enum { WALL_FIXED = 0, WALL_BOTTOM = 1, WALL_TOP = 2, WALL_BOULDER = 3, WALL_CORNER = 4, WALL_COUNT = 5 };
 
 #define SURGE_KERNEL_ROWS 13 /* rows under a flat surface whose kernel sums are kept: a kernel reaches 2 sqrt(2) C_h <= 11.4 rows (C_h <= 4) */

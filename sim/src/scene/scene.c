@@ -52,7 +52,7 @@ static void build_walls(const surge_params *p, particle_list *l)
             if (p->walls.upstream && x < xw && x > back_m) {
                 /* bed under the upstream wall: the belt-wall corner, mirrored through the corner point of the face
                  * above it (the front's, or the back's behind the middle of the wall); it moves with the belt but its
-                 * no-slip velocity is the fixed wall's (docs/method.md, "The belt-upstream-wall corner") */
+                 * no-slip velocity is the fixed wall's (docs/method.md, "The belt–upstream-wall corner") */
                 gx = x > xw - depth ? 2 * xw - x : 2 * back_m - x;
                 bed = WALL_CORNER;
             }
