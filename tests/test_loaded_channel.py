@@ -16,12 +16,12 @@ Checks: the run ends healthy; mu_eq/mu0 (eq. 19, the study's measure over 0.8-1 
 the largest density deviation over 0.5-1 s below 0.05.
 
 kicks: the dense end, phi 0.5 (seed 1, 239 discs), r/dp 3, the lubrication model off, 0.4 s at the scheme's own step
-(0.05 s) and 0.25 s at a fixed 0.01 s, a snapshot of the discs every 0.01 s ("Discs kicked apart in one step"). A
-fluid particle kept off two faces nearly back to back gave each disc its own push whole: two discs whose gap crossed
-0.9 dp were kicked apart by 0.07-0.09 m/s (own step) and 0.19 m/s (0.01 s) in one step and back in the next, where
-neighbouring discs differ by about 0.01 m/s. Checks: both runs end healthy; after the first step (the discs start
-from rest) no disc's velocity changes by more than 0.02 m/s from one snapshot to the next (measured 0.0074 and
-0.0062 m/s; 0.0868 and 0.1870 before the reactions were shared).
+(0.05 s) and 0.25 s at a fixed 0.01 s, a snapshot of the discs every 0.01 s (docs/method.md, "The implicit scheme",
+"Between two solids"). A fluid particle kept off two faces nearly back to back gave each disc its own push whole: two
+discs whose gap crossed 0.9 dp were kicked apart by 0.07-0.09 m/s (own step) and 0.19 m/s (0.01 s) in one step and
+back in the next, where neighbouring discs differ by about 0.01 m/s. Checks: both runs end healthy; after the first
+step (the discs start from rest) no disc's velocity changes by more than 0.02 m/s from one snapshot to the next
+(measured 0.0074 and 0.0062 m/s; 0.0868 and 0.1870 before the reactions were shared).
 
 packing: boulders.pack_fluid on a 0.3 m cut of the channel at phi 0.5, r/dp 4 (docs/boulders.md, "Placement"), at
 the start. Without it the lattice leaves out the sites within a quarter spacing of a disc, and the fluid is short of
