@@ -1,7 +1,7 @@
 #!/bin/sh
 # The state hash of every shipped case after a short run, with both schemes: a change meant to alter structure only
 # (not results) leaves this list identical. Usage: sh tools/case_hashes.sh [SURGE_BINARY] > hashes.txt
-# Hashes compare within one build and machine kind (docs/architecture.md, "Determinism and restart").
+# Hashes compare within one build and machine kind (docs/architecture.md, "Threads and determinism").
 set -e
 cd "$(dirname "$0")/.."
 surge=${1:-build/surge}

@@ -67,7 +67,7 @@ void implicit_check_report(const surge_sim *sim, FILE *out, int verbose, double 
         fprintf(out, "surge: warning: the implicit scheme with discs under 2.5 dp in radius (the smallest here is "
                         "%.1f dp): its incompressible step gives the fluid squeezed under a coarse disc no room, and "
                         "the debris surge stopped at dp = 0.066 m (1.5 dp) where it ran at 0.04 m (2.5 dp) "
-                        "(docs/validation/debris_surge.md, \"The implicit scheme with discs\"); dp <= %g m gives 2.5\n",
+                        "(docs/validation/debris_surge.md, \"Known failures\"); dp <= %g m gives 2.5\n",
                 d->smallest_boulder_radius_m / dp, d->smallest_boulder_radius_m / 2.5);
     warn_implicit_step(out, p, d);
     report_implicit_cost(out, verbose, p, d, entries, bytes);
