@@ -41,3 +41,17 @@ def finish():
         return 1
     print("all checks passed")
     return 0
+
+
+TEXT_SUFFIXES = (".c", ".h", ".py", ".md", ".txt", ".ini", ".cmake", ".sh", ".toml", ".csv")
+SKIP_DIRS = {".git", "build", "__pycache__", "runs"}
+
+
+def text_files(root, suffixes=TEXT_SUFFIXES):
+    """Every text file of the source tree at root whose name ends with one of suffixes (and the CMakeLists.txt files
+    and the extensionless scripts run and surgectl), skipping .git, build folders, caches and runs/."""
+    for folder, dirs, files in os.walk(root):
+        dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build")]
+        for name in files:
+            if name.endswith(suffixes) or name in ("CMakeLists.txt", "run", "surgectl"):
+                yield os.path.join(folder, name)

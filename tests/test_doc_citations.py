@@ -11,10 +11,9 @@ import os
 import re
 import sys
 
-from checks import check, finish
+from checks import check, finish, text_files
 
-TEXT_SUFFIXES = (".c", ".h", ".py", ".md", ".txt", ".ini", ".cmake", ".sh", ".toml")
-SKIP_DIRS = {".git", "build", "__pycache__", "runs"}
+DOC_SUFFIXES = (".c", ".h", ".py", ".md", ".txt", ".ini", ".cmake", ".sh", ".toml")  # not the data CSVs
 # PAGE.md, then one or more quoted titles separated by commas; C strings escape their quotes
 CITATION = re.compile(r'([\w./-]+\.md)\\?"?,\s*((?:\\?"[^"\\]{2,200}\\?"(?:,\s*)?)+)')
 TITLE = re.compile(r'\\?"([^"\\]{2,200})\\?"')
@@ -56,14 +55,6 @@ def broken_citations(root, relpath, text):
     return read, wrong
 
 
-def text_files(root):
-    for folder, dirs, files in os.walk(root):
-        dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build")]
-        for name in files:
-            if name.endswith(TEXT_SUFFIXES) or name in ("CMakeLists.txt", "run", "surgectl"):
-                yield os.path.join(folder, name)
-
-
 def main():
     root = os.path.abspath(sys.argv[1])
     # the check itself: a made-up title is caught, a real one (split over comment lines, in a C string) is not
@@ -72,7 +63,7 @@ def main():
     read, caught = broken_citations(root, "x.c", '(docs/architecture.md, \\"Threads and\n * determinism\\")')
     check("a citation of a real section passes", read == 1 and not caught, str(caught))
     read, wrong = 0, []
-    for path in text_files(root):
+    for path in text_files(root, DOC_SUFFIXES):
         if os.path.abspath(path) == os.path.abspath(__file__):
             continue  # its own examples
         with open(path, encoding="utf-8", errors="replace") as f:

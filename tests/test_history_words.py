@@ -9,22 +9,12 @@ import os
 import re
 import sys
 
-from checks import check, finish
+from checks import check, finish, text_files
 
 # the words, put together from parts so that this file does not hold them; \b keeps identifiers such as Python's
 # start_new_session out (an underscore is a word character)
 PERIOD, TRACKER = "sess" + "ion", "iss" + "ue"
 WORDS = re.compile(r"\b(%ss?|%s\s*#\s*\d+)\b" % (PERIOD, TRACKER), re.IGNORECASE)
-TEXT_SUFFIXES = (".c", ".h", ".py", ".md", ".txt", ".ini", ".cmake", ".sh", ".toml", ".csv")
-SKIP_DIRS = {".git", "build", "__pycache__", "runs"}
-
-
-def text_files(root):
-    for folder, dirs, files in os.walk(root):
-        dirs[:] = [d for d in dirs if d not in SKIP_DIRS and not d.startswith("build")]
-        for name in files:
-            if name.endswith(TEXT_SUFFIXES) or name in ("CMakeLists.txt", "run", "surgectl"):
-                yield os.path.join(folder, name)
 
 
 def main():
