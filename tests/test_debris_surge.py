@@ -35,6 +35,10 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     with it in tension, whose share of the fluid and lowest pressure it reads too); a disc snapshot without forces
     is skipped, a window with none that has them refused; a folder without particle
     snapshots or without snapshots in the window is refused, named;
+  - `shape` reads, from synthetic snapshots of a lattice block against the wall (1 m deep, then 0.5 m deep in one
+    snapshot and dry in the next), the mean profile column by column, the body's mean height (over the 5 m after the
+    ignored zone, or --body), the mean front from flow.csv and the discs' mean place; a window without snapshots, a
+    body outside the domain and a folder without particle snapshots are refused, named;
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
     errors from the seeds' spread, the members only one table has; a member twice, a value that is not a positive
@@ -448,6 +452,62 @@ os.remove(os.path.join(lift_run, "run.pvd"))
 rc, out, err = tool("lift", lift_run)
 check("lift: a folder without particle snapshots is refused, named",
       rc == 2 and "lift_run: no run.pvd" in err and "Traceback" not in err, out + err[-1000:])
+# shape: a lattice block against the upstream wall, 1 m deep over its first 8 m and 0.5 m deep over the next 4 m at
+# 7 s, the 0.5 m part gone at 8 s; two discs at 7 s; flow.csv's fronts 12, 11 and 8 m within the window
+shape_run = os.path.join(WORK, "shape_run")
+shutil.rmtree(shape_run, ignore_errors=True)
+os.makedirs(shape_run)
+shutil.copy(os.path.join(belt_member, "params.ini"), shape_run)
+wall_x = float(belt_params["walls"]["upstream_x_m"])
+ignore_m, column_m = float(belt_params["output"]["flow_ignore_m"]), float(belt_params["output"]["flow_column_m"])
+deep, shallow = round(1.0 / lift_dp), round(0.5 / lift_dp)  # rows; a column's surface is rows * dp
+
+
+def shape_block(length_m):
+    return np.array([[wall_x + (i + 0.5) * lift_dp, (j + 0.5) * lift_dp]
+                     for i in range(int(length_m / lift_dp)) for j in range(deep if (i + 0.5) * lift_dp < 8 else shallow)])
+
+
+for step, (time_s, length_m) in enumerate(((7.0, 12.0), (8.0, 8.0)), 1):
+    block = shape_block(length_m)
+    vtp.write_vtp(os.path.join(shape_run, "snap_%09d.vtp" % step), block, {"kind": np.zeros(len(block))}, time_s, step)
+vtp.write_pvd(os.path.join(shape_run, "run.pvd"), [(7.0, "snap_000000001.vtp"), (8.0, "snap_000000002.vtp")])
+vtp.write_vtp(os.path.join(shape_run, "boulders_000000001.vtp"), np.array([[wall_x + 3.0, 0.4], [wall_x + 5.0, 0.6]]),
+              {"radius_m": np.array([0.2, 0.3])}, 7.0, 1)
+vtp.write_pvd(os.path.join(shape_run, "boulders.pvd"), [(7.0, "boulders_000000001.vtp")])
+with open(os.path.join(shape_run, "flow.csv"), "w") as f:
+    f.write("time_s,front_from_wall_m\n6.5,20\n7,12\n7.5,11\n8,8\n8.5,20\n")
+body_columns = [(c + 0.5) * column_m for c in range(int(ignore_m / column_m), int((ignore_m + 5) / column_m))]
+deep_m, shallow_m = deep * lift_dp, shallow * lift_dp
+body_expected = np.mean([deep_m if x < 8 else 0.5 * shallow_m for x in body_columns])
+rc, out, err = tool("shape", shape_run, "--window", "6.9", "8.1", "--csv", os.path.join(WORK, "shape.csv"))
+rows = [line.split(", ") for line in out.strip().split("\n")[1:]]
+got = [float(v) for v in rows[0][3:]] if len(rows) == 1 and len(rows[0]) == 7 else []
+expected = [body_expected, 31.0 / 3.0, 4.0, 0.5]
+check("shape: the body's mean height over the 5 m after the ignored zone, the mean front (flow.csv) and the discs' "
+      "mean distance from the wall and height (%s against %s)" % (got, expected),
+      rc == 0 and len(got) == 4 and rows[0][1] == "2" and all(abs(a - b) <= 5e-3 for a, b in zip(got, expected)),
+      out + err[-1000:])
+with open(os.path.join(WORK, "shape.csv"), newline="") as f:
+    profile = {float(r["from_wall_m"]): float(list(r.values())[1]) for r in csv.DictReader(f)}
+want = {0.25: deep_m, 7.75: deep_m, 8.25: 0.5 * shallow_m, 11.75: 0.5 * shallow_m, 12.25: 0.0}
+check("shape: the mean profile, column by column: 1 m where both snapshots are deep, half of 0.5 m where one is dry, "
+      "0 beyond (%s)" % {x: profile.get(x) for x in want},
+      all(x in profile and abs(profile[x] - h) <= 1e-3 for x, h in want.items()), str(profile)[:500])
+rc, out, err = tool("shape", shape_run, "--window", "6.9", "7.1", "--body", "0", "4")
+rows = [line.split(", ") for line in out.strip().split("\n")[1:]]
+check("shape: --body picks the columns, one snapshot in a narrower window (%s)" % rows,
+      rc == 0 and len(rows) == 1 and rows[0][1] == "1" and abs(float(rows[0][3]) - deep_m) <= 1e-3, out + err[-1000:])
+rc, out, err = tool("shape", shape_run, "--window", "10", "12")
+check("shape: a window without snapshots is refused, the folder named",
+      rc == 2 and "shape_run: no particle snapshot within 10-12 s" in err and "Traceback" not in err, out + err[-1000:])
+rc, out, err = tool("shape", shape_run, "--body", "100", "200")
+check("shape: a body outside the domain is refused",
+      rc == 2 and "--body 100 200: no column" in err and "Traceback" not in err, out + err[-1000:])
+os.remove(os.path.join(shape_run, "run.pvd"))
+rc, out, err = tool("shape", shape_run)
+check("shape: a folder without particle snapshots is refused, named",
+      rc == 2 and "shape_run: no run.pvd" in err and "Traceback" not in err, out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

@@ -254,6 +254,9 @@ for command in ("park", "unpark", "run"):
 expect("ensemble lift: not a run folder", tool(ENSEMBLE, "lift", WORK), WORK, "params.ini")
 expect("ensemble lift: a run without disc snapshots", tool(ENSEMBLE, "lift", path("run")), "boulders.pvd")
 expect("ensemble lift --window 5 3", tool(ENSEMBLE, "lift", path("run"), "--window", "5", "3"), "--window")
+expect("ensemble shape: not a run folder", tool(ENSEMBLE, "shape", WORK), WORK, "params.ini")
+expect("ensemble shape --window 5 3", tool(ENSEMBLE, "shape", path("run"), "--window", "5", "3"), "--window")
+expect("ensemble shape --body 4 2", tool(ENSEMBLE, "shape", path("run"), "--body", "4", "2"), "--body")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
        "--runs-dir", "not a folder")
 

@@ -14,6 +14,7 @@ says more.
   studies/debris_surge/ensemble.py plot --csv FILE [--csv FILE ...] --png FILE
   studies/debris_surge/ensemble.py compare --csv A --csv B [--window-tolerance-s 0.5]
   studies/debris_surge/ensemble.py lift RUN_DIR [RUN_DIR ...] [--window 6 20]
+  studies/debris_surge/ensemble.py shape RUN_DIR [RUN_DIR ...] [--window 6 20] [--body START_M END_M] [--csv FILE]
   studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
@@ -76,6 +77,14 @@ row (1-2 dp), and farther than 8 dp from every disc; and the share of the fluid 
 the lowest pressure, over all the snapshots' fluid. Disc snapshots without the forces (a run's first) are skipped. A
 folder without both snapshot series, without discs, with a value that is not a number, or with no snapshot pair in the
 window that carries the forces is refused, named.
+shape: the surge's mean shape over the window, per run folder with particle snapshots (run.pvd): the height of the
+fluid's surface above the belt's face (the highest fluid particle plus half a spacing, 0 where a column is dry) in
+columns output.flow_column_m wide along the belt, by distance downstream of the upstream wall's face, averaged over
+the window's snapshots; the mean of that profile over the body (--body, m from the wall's face; default the 5 m
+after flow.csv's ignored zone, output.flow_ignore_m); the mean front (flow.csv's front_from_wall_m over the same
+window); and, from the disc snapshots at the same times where they exist, the mean distance of the disc centres from
+the wall's face and their mean height above the belt's face. --csv writes the profiles, one column per folder. A
+folder without particle snapshots in the window, or with a value that is not a number, is refused, named.
 """
 import argparse
 import csv
@@ -444,6 +453,82 @@ def command_lift(args):
     return 0
 
 
+def from_wall_m(params, x):
+    """The distance downstream of the upstream wall's face, around the period when the domain is periodic (as
+    flow.csv's)."""
+    d = x - params.real("walls", "upstream_x_m")
+    if params.flag("domain", "periodic_x"):
+        period = params.positive("domain", "length_m")
+        d = d - period * np.floor(d / period)
+    return d
+
+
+def shape(folder, start, stop, body):
+    """(snapshots, column width m, mean surface height per column m, body (start, end) m, mean height over the body
+    m, mean front m (nan without flow.csv rows in the window), mean disc distance from the wall m, mean disc centre
+    height m (nan without disc snapshots)): see `shape` in the module's text."""
+    try:
+        p = RunParams(folder)
+        dp, column_m = p.positive("numerics", "dp_m"), p.positive("output", "flow_column_m")
+        ignore_m, length_m = p.real("output", "flow_ignore_m"), p.positive("domain", "length_m")
+        body = body or (ignore_m, ignore_m + 5.0)
+        path = os.path.join(folder, "run.pvd")
+        if not os.path.isfile(path):
+            fail("%s: no run.pvd (shape reads the particle snapshots)" % folder)
+        snapshots = [(t, f) for t, f in vtp.read_pvd(path) if start <= t <= stop + 1e-9]
+        if not snapshots:
+            fail("%s: no particle snapshot within %g-%g s" % (folder, start, stop))
+        disc_path = os.path.join(folder, "boulders.pvd")
+        disc_files = dict(vtp.read_pvd(disc_path)) if os.path.isfile(disc_path) else {}
+        columns = int(math.ceil(length_m / column_m))
+        heights, disc_from_wall, disc_height = np.zeros(columns), [], []
+        for t, name in snapshots:
+            particles = vtp.read_vtp(os.path.join(folder, name), required=("kind",), finite=True)
+            xy = particles["points"][particles["kind"] == 0, :2]
+            distance = from_wall_m(p, xy[:, 0])
+            downstream = distance >= 0  # in a closed domain, fluid behind the wall is not the surge's
+            column = np.minimum((distance[downstream] / column_m).astype(int), columns - 1)
+            top = np.zeros(columns)
+            np.maximum.at(top, column, xy[downstream, 1] + 0.5 * dp)
+            heights += top / len(snapshots)
+            if t in disc_files:
+                discs = vtp.read_vtp(os.path.join(folder, disc_files[t]), required=("radius_m",), finite=True)
+                disc_from_wall.extend(from_wall_m(p, discs["points"][:, 0]))
+                disc_height.extend(discs["points"][:, 1])
+    except (ParamsError, vtp.VtpError) as e:
+        fail(str(e))
+    centres = (np.arange(columns) + 0.5) * column_m
+    in_body = (centres >= body[0]) & (centres < body[1])
+    if not in_body.any():
+        fail("--body %g %g: no column of %g m within it" % (body[0], body[1], column_m))
+    fronts = [float(r["front_from_wall_m"]) for r in study.read_rows(
+        TOOL, os.path.join(folder, "flow.csv"), {"time_s": float, "front_from_wall_m": float})
+        if start <= float(r["time_s"]) <= stop + 1e-9] if os.path.isfile(os.path.join(folder, "flow.csv")) else []
+    mean = lambda v: float(np.mean(v)) if len(v) else math.nan
+    return (len(snapshots), column_m, heights, body, float(heights[in_body].mean()), mean(fronts),
+            mean(disc_from_wall), mean(disc_height))
+
+
+def command_shape(args):
+    rows = [(folder,) + shape(folder, args.window[0], args.window[1], args.body) for folder in args.folders]
+    print("run, snapshots, body_from_wall_m, body_height_m, front_from_wall_m, disc_from_wall_m, disc_centre_height_m")
+    for folder, n, _, _, body, body_height, front, disc_x, disc_y in rows:
+        print("%s, %d, %g-%g, %.3f, %.2f, %.2f, %.3f" % (folder, n, body[0], body[1], body_height, front, disc_x,
+                                                         disc_y))
+    if args.csv:
+        widths = {r[2] for r in rows}
+        if len(widths) > 1:
+            fail("--csv: the folders' columns differ in width (output.flow_column_m %s)" % sorted(widths))
+        longest = max(len(r[3]) for r in rows)
+        with open(args.csv, "w", newline="") as f:
+            out = csv.writer(f)
+            out.writerow(["from_wall_m"] + ["height_m %s" % r[0] for r in rows])
+            for c in range(longest):
+                out.writerow(["%g" % ((c + 0.5) * rows[0][2])]
+                             + ["%.4f" % r[3][c] if c < len(r[3]) else "" for r in rows])
+    return 0
+
+
 def largest_density_deviation(folder):
     """The largest |rho/rho0 - 1| of the fluid over the run, as diagnostics.csv sampled it (its rows, every
     output.diagnostics_interval_s); nan without the file."""
@@ -780,6 +865,15 @@ def main():
                    help="run folders with particle (run.pvd) and disc (boulders.pvd) snapshots")
     f.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[6.0, 20.0],
                    metavar=("START_S", "END_S"), help="the snapshots' window, s of flow (default 6 20)")
+    h = sub.add_parser("shape", help="the surge's mean surface profile, front and disc positions, from the snapshots")
+    h.add_argument("folders", nargs="+", type=cli_checks.folder, metavar="RUN_DIR",
+                   help="run folders with particle snapshots (run.pvd)")
+    h.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[6.0, 20.0],
+                   metavar=("START_S", "END_S"), help="the snapshots' window, s of flow (default 6 20)")
+    h.add_argument("--body", type=cli_checks.non_negative, nargs=2, default=None, metavar=("START_M", "END_M"),
+                   help="where the body's mean height is taken, m downstream of the wall's face (default the 5 m "
+                        "after output.flow_ignore_m)")
+    h.add_argument("--csv", help="write the mean profiles to this CSV file, one column per folder")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
@@ -792,14 +886,18 @@ def main():
         return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA, first_snapshot=False)
     if args.command == "unpark":
         return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
-    if args.command in ("collect", "lift") and not args.window[1] > args.window[0]:
+    if args.command in ("collect", "lift", "shape") and not args.window[1] > args.window[0]:
         fail("--window: the end must come after the start")
+    if args.command == "shape" and args.body and not args.body[1] > args.body[0]:
+        fail("--body: the end must come after the start")
     if args.command == "plot":
         return command_plot(args)
     if args.command == "compare":
         return command_compare(args)
     if args.command == "lift":
         return command_lift(args)
+    if args.command == "shape":
+        return command_shape(args)
     return command_run(args) if args.command == "run" else command_collect(args)
 
 
