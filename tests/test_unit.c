@@ -934,6 +934,12 @@ static void twenty_eight_graded_discs(surge_params *p)
     p->boulders.count = 28;
 }
 
+static void twenty_eight_graded_discs_unpacked(surge_params *p)
+{
+    twenty_eight_graded_discs(p);
+    p->boulders.pack_fluid = 0;
+}
+
 static int test_c0_discs(void)
 {
     surge_sim *fluid = case_sim("debris_surge.ini", 0.1, NULL);
@@ -953,6 +959,17 @@ static int test_c0_discs(void)
     expect_below("c0_discs: with discs, |c0 / (10 (film surface speed + fall speed)) - 1|",
                  fabs(discs->derived.c0_mps / want_discs - 1), 1e-9);
     expect_below("c0_discs: numerics.c0_mps = 110 is kept, |c0 - 110| m/s", fabs(fixed->derived.c0_mps - 110), 1e-12);
+    /* the case packs the fluid around its discs (boulders.pack_fluid = true): it keeps the lattice sites next to the
+     * discs that the unpacked build leaves out */
+    surge_sim *unpacked = case_sim("debris_surge.ini", 0.066, twenty_eight_graded_discs_unpacked);
+    if (!unpacked)
+        return 1;
+    printf("c0_discs: 28 discs, fluid particles %d packed (the case's default), %d unpacked\n", discs->derived.fluid_count,
+           unpacked->derived.fluid_count);
+    expect_below("c0_discs: the case packs its fluid (pack_fluid false)", discs->params.boulders.pack_fluid ? 0 : 1, 0);
+    expect_below("c0_discs: packed fluid particles less unpacked (negative: the sites next to the discs kept)",
+                 unpacked->derived.fluid_count - discs->derived.fluid_count, -1);
+    surge_sim_destroy(unpacked);
     surge_sim_destroy(fluid);
     surge_sim_destroy(discs);
     surge_sim_destroy(fixed);
