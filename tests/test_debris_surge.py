@@ -39,6 +39,9 @@ Usage: test_debris_surge.py SURGE_BINARY SOURCE_DIR WORK_DIR
     snapshot and dry in the next), the mean profile column by column, the body's mean height (over the 5 m after the
     ignored zone, or --body), the mean front from flow.csv and the discs' mean place; a window without snapshots, a
     body outside the domain and a folder without particle snapshots are refused, named;
+  - `history` reads, from synthetic flow.csv files of known values (one run to 10 s, one to 7 s), the means of Fr
+    and mu_eq/mu0 over consecutive blocks, the first row's infinite mu_eq/mu0 left out and a block the shorter run did
+    not finish left empty, and draws them; a folder without flow.csv and a window no block fits are refused, named;
   - `compare` reads one table against another member by member (the members that asked for the same discs with the
     same seed, whatever their dp): the relative differences and their size in combined errors, the means' with the
     errors from the seeds' spread, the members only one table has; a member twice, a value that is not a positive
@@ -508,6 +511,41 @@ os.remove(os.path.join(shape_run, "run.pvd"))
 rc, out, err = tool("shape", shape_run)
 check("shape: a folder without particle snapshots is refused, named",
       rc == 2 and "shape_run: no run.pvd" in err and "Traceback" not in err, out + err[-1000:])
+# history: run A to 10 s (Fr 0.8; mu_eq/mu0 2 before 4 s, 3 after), run B to 7 s (Fr 0.6, mu_eq/mu0 = 1 + t), each
+# flow.csv's first row with mu_eq/mu0 inf as a run's is; blocks of 2 s: A 2, 2, 3, 3, 3; B 2, 3.75, 5.75, then none
+history_runs = []
+for name, end_s, mu in (("hist_a", 10.0, lambda t: 2.0 if t < 4 else 3.0), ("hist_b", 7.0, lambda t: 1.0 + t)):
+    folder = os.path.join(WORK, name)
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "flow.csv"), "w") as f:
+        f.write("time_s,froude,mu_eq_over_mu0\n")
+        for k in range(int(end_s / 0.5) + 1):
+            f.write("%g,%g,%s\n" % (0.5 * k, 0.8 if name == "hist_a" else 0.6, "inf" if k == 0 else "%g" % mu(0.5 * k)))
+    history_runs.append(folder)
+history_csv, history_png = os.path.join(WORK, "history.csv"), os.path.join(WORK, "history.png")
+rc, out, err = tool("history", *history_runs, "--window", "0", "10", "--csv", history_csv, "--png", history_png)
+got = [[float(v) if v else None for v in r] for r in list(csv.reader(open(history_csv)))[1:]] \
+    if os.path.isfile(history_csv) else []
+want = [[0, 2, 0.8, 2.0, 0.6, 2.0], [2, 4, 0.8, 2.0, 0.6, 3.75], [4, 6, 0.8, 3.0, 0.6, 5.75],
+        [6, 8, 0.8, 3.0, None, None], [8, 10, 0.8, 3.0, None, None]]
+check("history: 2 s block means of two runs, the infinite first row left out, the block the shorter run did not "
+      "finish empty (%s)" % got,
+      rc == 0 and len(got) == len(want) and all((a is None and b is None) or (a is not None and b is not None and
+                                                                              abs(a - b) <= 1e-4)
+                                                for g, w in zip(got, want) for a, b in zip(g, w))
+      and open(history_png, "rb").read(8) == b"\x89PNG\r\n\x1a\n", out + err[-1000:])
+rc, out, err = tool("history", history_runs[0], "--window", "1", "10", "--block-s", "3")
+rows = [l.split() for l in out.strip().split("\n")[1:]]
+check("history: --window and --block-s set the blocks, 1-4 s holding the rows 1-3.5 s (%s)" % rows,
+      rc == 0 and [r[0] for r in rows] == ["1.00-4.00", "4.00-7.00", "7.00-10.00"]
+      and [r[2] for r in rows] == ["2.000", "3.000", "3.000"] and rows[0][3] == "(6)", out + err[-1000:])
+os.makedirs(os.path.join(WORK, "hist_none"), exist_ok=True)
+for args, expected in (((os.path.join(WORK, "hist_none"),), "hist_none: no flow.csv"),
+                       ((history_runs[1], "--window", "20", "30"), "no block of 2 s fits"),
+                       ((history_runs[1], "--block-s", "0"), "expected a number > 0")):
+    rc, out, err = tool("history", *args)
+    check("history: refused, named (%s)" % expected, rc == 2 and expected in err and "Traceback" not in err,
+          out + err[-1000:])
 # a member whose flow.csv predates the boulders_ahead_of_front column is still collected, its count unknown (nan);
 # its folder named for a requested dp of 0.067 m that surge moved to one dividing the period (its params.ini says
 # 0.066 m), it is reported at the dp it ran with

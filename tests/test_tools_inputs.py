@@ -257,6 +257,12 @@ expect("ensemble lift --window 5 3", tool(ENSEMBLE, "lift", path("run"), "--wind
 expect("ensemble shape: not a run folder", tool(ENSEMBLE, "shape", WORK), WORK, "params.ini")
 expect("ensemble shape --window 5 3", tool(ENSEMBLE, "shape", path("run"), "--window", "5", "3"), "--window")
 expect("ensemble shape --body 4 2", tool(ENSEMBLE, "shape", path("run"), "--body", "4", "2"), "--body")
+expect("ensemble history --window 5 3", tool(ENSEMBLE, "history", path("run"), "--window", "5", "3"), "--window")
+expect("ensemble history: not a folder", tool(ENSEMBLE, "history", path("run", "params.ini")), "not a folder")
+garbage_flow = folder("garbage_flow")
+write(os.path.join(garbage_flow, "flow.csv"), "time_s,froude,mu_eq_over_mu0\n0,0,inf\n0.5,abc,2\n")
+expect("ensemble history: a flow.csv value that is not a number: file, line and column",
+       tool(ENSEMBLE, "history", garbage_flow), "flow.csv", "line 3", "froude")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
        "--runs-dir", "not a folder")
 

@@ -15,6 +15,8 @@ says more.
   studies/debris_surge/ensemble.py compare --csv A --csv B [--window-tolerance-s 0.5]
   studies/debris_surge/ensemble.py lift RUN_DIR [RUN_DIR ...] [--window 6 20]
   studies/debris_surge/ensemble.py shape RUN_DIR [RUN_DIR ...] [--window 6 20] [--body START_M END_M] [--csv FILE]
+  studies/debris_surge/ensemble.py history RUN_DIR [RUN_DIR ...] [--window 0 75] [--block-s 2] [--csv FILE]
+        [--png FILE]
   studies/debris_surge/ensemble.py list [--counts ...] [--phis ...] [--seeds ...] [--dp ...]
 
 run: the members are (count, seed) pairs, count 0 once (the fluid alone has no randomness), the others with seeds
@@ -85,6 +87,12 @@ after flow.csv's ignored zone, output.flow_ignore_m); the mean front (flow.csv's
 window); and, from the disc snapshots at the same times where they exist, the mean distance of the disc centres from
 the wall's face and their mean height above the belt's face. --csv writes the profiles, one column per folder. A
 folder without particle snapshots in the window, or with a value that is not a number, is refused, named.
+history: how Fr and mu_eq/mu0 move over a run, per run folder: their means over consecutive blocks of --block-s
+(default 2 s) from the window's start, each block the flow.csv rows at start <= t < end (the first row, before the
+flow moves, has mu_eq/mu0 infinite and is left out, as is any row that is not finite), a block only where the run
+reached its end; printed, written one row per block with two columns per folder (--csv; empty where a run did not
+reach the block) and drawn against time (--png): two runs that part over one window may run in step over the next,
+or their pulses against each other. A folder without flow.csv, or a window no block of any run fits, is refused.
 """
 import argparse
 import csv
@@ -529,6 +537,73 @@ def command_shape(args):
     return 0
 
 
+def history(folder, start, stop, block_s):
+    """[(block start, block end, rows, mean Fr, mean mu_eq/mu0)] of the run's flow.csv over the blocks of block_s
+    from start that end by stop and by the run's last row; rows that are not finite are left out."""
+    path = os.path.join(folder, "flow.csv")
+    if not os.path.isfile(path):
+        fail("%s: no flow.csv" % folder)
+    rows = [(float(r["time_s"]), float(r["froude"]), float(r["mu_eq_over_mu0"]))
+            for r in study.read_rows(TOOL, path, {"time_s": float, "froude": float, "mu_eq_over_mu0": float})]
+    end = min(stop, max(t for t, _, _ in rows))
+    blocks = []
+    for k in range(int(math.floor((end - start) / block_s + 1e-9))):
+        low, high = start + k * block_s, start + (k + 1) * block_s
+        chosen = [(fr, mu) for t, fr, mu in rows
+                  if low - 1e-9 <= t < high - 1e-9 and math.isfinite(fr) and math.isfinite(mu)]
+        if chosen:
+            blocks.append((low, high, len(chosen), sum(c[0] for c in chosen) / len(chosen),
+                           sum(c[1] for c in chosen) / len(chosen)))
+    return blocks
+
+
+def command_history(args):
+    runs = [(folder, {b[0]: b for b in history(folder, args.window[0], args.window[1], args.block_s)})
+            for folder in args.folders]
+    starts = sorted({s for _, blocks in runs for s in blocks})
+    if not starts:
+        fail("--window %g %g: no block of %g s fits in any run's flow.csv" % (args.window[0], args.window[1],
+                                                                           args.block_s))
+    names = [os.path.join(os.path.basename(os.path.dirname(os.path.abspath(f))), os.path.basename(os.path.abspath(f)))
+             for f, _ in runs]
+    print("block (s), then per run: Fr, mu_eq/mu0 (rows)  [%s]" % "; ".join(names))
+    table = []
+    for s in starts:
+        cells = [blocks.get(s) for _, blocks in runs]
+        high = next(c[1] for c in cells if c)
+        table.append((s, high, cells))
+        print("%7.2f-%-7.2f " % (s, high) + "  ".join("%6.3f %6.3f (%d)" % (c[3], c[4], c[2]) if c else "%17s" % "-"
+                                                      for c in cells))
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            out = csv.writer(f, lineterminator="\n")
+            out.writerow(["block_start_s", "block_end_s"]
+                         + [h for n in names for h in ("froude %s" % n, "mu_eq_over_mu0 %s" % n)])
+            for s, high, cells in table:
+                out.writerow(["%g" % s, "%g" % high]
+                             + [v for c in cells for v in (("%.4f" % c[3], "%.4f" % c[4]) if c else ("", ""))])
+    if args.png:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+        for k, name in enumerate(names):
+            xs = [[s, high] for s, high, cells in table if cells[k]]
+            for ax, column in ((axes[0], 3), (axes[1], 4)):
+                ys = [cells[k][column] for _, _, cells in table if cells[k]]
+                ax.plot([x for pair in xs for x in pair], [y for y in ys for _ in range(2)], color="C%d" % k,
+                        label=name)
+        axes[0].set_ylabel("Fr")
+        axes[1].set_ylabel("mu_eq / mu0")
+        axes[1].set_xlabel("time (s)")
+        axes[0].legend(fontsize=8)
+        fig.suptitle("debris surge: means over %g s blocks (flow.csv)" % args.block_s)
+        fig.tight_layout()
+        fig.savefig(args.png, dpi=100)
+        print("%s: wrote %s" % (TOOL, args.png))
+    return 0
+
+
 def largest_density_deviation(folder):
     """The largest |rho/rho0 - 1| of the fluid over the run, as diagnostics.csv sampled it (its rows, every
     output.diagnostics_interval_s); nan without the file."""
@@ -874,6 +949,13 @@ def main():
                    help="where the body's mean height is taken, m downstream of the wall's face (default the 5 m "
                         "after output.flow_ignore_m)")
     h.add_argument("--csv", help="write the mean profiles to this CSV file, one column per folder")
+    g = sub.add_parser("history", help="Fr and mu_eq/mu0 over consecutive blocks of time, run by run (flow.csv)")
+    g.add_argument("folders", nargs="+", type=cli_checks.folder, metavar="RUN_DIR", help="run folders with flow.csv")
+    g.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[0.0, 75.0],
+                   metavar=("START_S", "END_S"), help="the blocks' span, s of flow (default 0 75)")
+    g.add_argument("--block-s", type=cli_checks.positive, default=2.0, help="each block's length, s (default 2)")
+    g.add_argument("--csv", help="write the blocks' means to this CSV file, two columns per folder")
+    g.add_argument("--png", type=cli_checks.png_file, help="draw them against time to this PNG file")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
         args.counts = [] if args.phis else [0, 50, 100, 154]
@@ -886,7 +968,7 @@ def main():
         return study.park_command(TOOL, args.runs_dir, args.parked_dir, PARKED_EXTRA, first_snapshot=False)
     if args.command == "unpark":
         return study.unpark_command(TOOL, args.parked_dir, args.runs_dir)
-    if args.command in ("collect", "lift", "shape") and not args.window[1] > args.window[0]:
+    if args.command in ("collect", "lift", "shape", "history") and not args.window[1] > args.window[0]:
         fail("--window: the end must come after the start")
     if args.command == "shape" and args.body and not args.body[1] > args.body[0]:
         fail("--body: the end must come after the start")
@@ -898,6 +980,8 @@ def main():
         return command_lift(args)
     if args.command == "shape":
         return command_shape(args)
+    if args.command == "history":
+        return command_history(args)
     return command_run(args) if args.command == "run" else command_collect(args)
 
 
