@@ -263,6 +263,12 @@ garbage_flow = folder("garbage_flow")
 write(os.path.join(garbage_flow, "flow.csv"), "time_s,froude,mu_eq_over_mu0\n0,0,inf\n0.5,abc,2\n")
 expect("ensemble history: a flow.csv value that is not a number: file, line and column",
        tool(ENSEMBLE, "history", garbage_flow), "flow.csv", "line 3", "froude")
+expect("ensemble history --block-s 1e-6: too many blocks", tool(ENSEMBLE, "history", garbage_flow, "--block-s", "1e-6"),
+       "--block-s 1e-06", "more than 100000 blocks")
+good_flow = folder("good_flow")
+write(os.path.join(good_flow, "flow.csv"), "time_s,froude,mu_eq_over_mu0\n0,0,inf\n1,0.8,2\n2,0.8,2\n3,0.8,2\n")
+expect("ensemble history --csv in a missing folder", tool(ENSEMBLE, "history", good_flow, "--csv",
+                                                          path("no_such_folder", "h.csv")), "--csv", "cannot write it")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
        "--runs-dir", "not a folder")
 

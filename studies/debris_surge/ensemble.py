@@ -557,7 +557,13 @@ def history(folder, start, stop, block_s):
     return blocks
 
 
+HISTORY_MOST_BLOCKS = 100000  # history: more blocks than this is a --block-s typed wrong (0.0005 s over 75 s)
+
+
 def command_history(args):
+    if (args.window[1] - args.window[0]) / args.block_s > HISTORY_MOST_BLOCKS:
+        fail("--block-s %g: %g s of window would make more than %d blocks"
+             % (args.block_s, args.window[1] - args.window[0], HISTORY_MOST_BLOCKS))
     runs = [(folder, {b[0]: b for b in history(folder, args.window[0], args.window[1], args.block_s)})
             for folder in args.folders]
     starts = sorted({s for _, blocks in runs for s in blocks})
@@ -575,13 +581,16 @@ def command_history(args):
         print("%7.2f-%-7.2f " % (s, high) + "  ".join("%6.3f %6.3f (%d)" % (c[3], c[4], c[2]) if c else "%17s" % "-"
                                                       for c in cells))
     if args.csv:
-        with open(args.csv, "w", newline="") as f:
-            out = csv.writer(f, lineterminator="\n")
-            out.writerow(["block_start_s", "block_end_s"]
-                         + [h for n in names for h in ("froude %s" % n, "mu_eq_over_mu0 %s" % n)])
-            for s, high, cells in table:
-                out.writerow(["%g" % s, "%g" % high]
-                             + [v for c in cells for v in (("%.4f" % c[3], "%.4f" % c[4]) if c else ("", ""))])
+        try:
+            with open(args.csv, "w", newline="") as f:
+                out = csv.writer(f, lineterminator="\n")
+                out.writerow(["block_start_s", "block_end_s"]
+                             + [h for n in names for h in ("froude %s" % n, "mu_eq_over_mu0 %s" % n)])
+                for s, high, cells in table:
+                    out.writerow(["%g" % s, "%g" % high]
+                                 + [v for c in cells for v in (("%.4f" % c[3], "%.4f" % c[4]) if c else ("", ""))])
+        except OSError as e:
+            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
     if args.png:
         import matplotlib
         matplotlib.use("Agg")
