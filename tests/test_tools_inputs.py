@@ -267,8 +267,17 @@ expect("ensemble history --block-s 1e-6: too many blocks", tool(ENSEMBLE, "histo
        "--block-s 1e-06", "more than 100000 blocks")
 good_flow = folder("good_flow")
 write(os.path.join(good_flow, "flow.csv"), "time_s,froude,mu_eq_over_mu0\n0,0,inf\n1,0.8,2\n2,0.8,2\n3,0.8,2\n")
-expect("ensemble history --csv in a missing folder", tool(ENSEMBLE, "history", good_flow, "--csv",
-                                                          path("no_such_folder", "h.csv")), "--csv", "cannot write it")
+# a table written into a folder that does not exist, or onto a folder, is refused before any work; one that the
+# system refuses while it is written (/dev/full: no space left) is named too
+for command, run_args in (("history", [good_flow]), ("shape", [path("run")]), ("collect", ["--runs-dir", WORK])):
+    expect("ensemble %s --csv in a missing folder" % command,
+           tool(ENSEMBLE, command, *run_args, "--csv", path("no_such_folder", "t.csv")), "--csv", "no_such_folder")
+    expect("ensemble %s --csv a folder" % command, tool(ENSEMBLE, command, *run_args, "--csv", WORK), "--csv",
+           "is a folder")
+expect("ensemble history --csv that cannot be written", tool(ENSEMBLE, "history", good_flow, "--csv", "/dev/full"),
+       "--csv /dev/full", "cannot write it")
+expect("surge_drift --csv in a missing folder", tool("surge_drift.py", path("run"), "--csv",
+                                                     path("no_such_folder", "d.csv")), "--csv", "no_such_folder")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),
        "--runs-dir", "not a folder")
 

@@ -100,7 +100,7 @@ def main():
     parser.add_argument("--body-m", type=cli_checks.positive, default=7.0,
                         help="length of the body zone for the kernel sum, from --ignore-m (default 7 m)")
     parser.add_argument("--column-m", type=cli_checks.positive, default=0.5, help="column width (default 0.5 m)")
-    parser.add_argument("--csv", help="also write the rows to this CSV file")
+    parser.add_argument("--csv", type=cli_checks.csv_file, help="also write the rows to this CSV file")
     args = parser.parse_args()
     try:
         scales = run_scales(args.run_dir)
@@ -116,10 +116,13 @@ def main():
     for r in rows:
         print("%7.2f %7.3f %7.3f %7.3f %6.3f %7.3f %8.4f %5d %7.2f %9.4f" % r)
     if args.csv:
-        with open(args.csv, "w") as f:
-            f.write(",".join(COLUMNS) + "\n")
-            for r in rows:
-                f.write(",".join("%.6g" % v for v in r) + "\n")
+        try:
+            with open(args.csv, "w") as f:
+                f.write(",".join(COLUMNS) + "\n")
+                for r in rows:
+                    f.write(",".join("%.6g" % v for v in r) + "\n")
+        except OSError as e:
+            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
 
 
 if __name__ == "__main__":

@@ -94,6 +94,16 @@ def png_file(text):
     return text
 
 
+def csv_file(text):
+    """A CSV file to write: its folder exists and it is not itself a folder."""
+    parent = os.path.dirname(text) or "."
+    if not os.path.isdir(parent):
+        raise argparse.ArgumentTypeError("'%s': no folder '%s' to write it in" % (text, parent))
+    if os.path.isdir(text):
+        raise argparse.ArgumentTypeError("'%s' is a folder" % text)
+    return text
+
+
 def endpoint(text):
     """A ZeroMQ endpoint, TRANSPORT://ADDRESS; a bare port means tcp://127.0.0.1:PORT."""
     if text.isdigit():

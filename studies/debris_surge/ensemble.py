@@ -528,12 +528,15 @@ def command_shape(args):
         if len(widths) > 1:
             fail("--csv: the folders' columns differ in width (output.flow_column_m %s)" % sorted(widths))
         longest = max(len(r[3]) for r in rows)
-        with open(args.csv, "w", newline="") as f:
-            out = csv.writer(f)
-            out.writerow(["from_wall_m"] + ["height_m %s" % r[0] for r in rows])
-            for c in range(longest):
-                out.writerow(["%g" % ((c + 0.5) * rows[0][2])]
-                             + ["%.4f" % r[3][c] if c < len(r[3]) else "" for r in rows])
+        try:
+            with open(args.csv, "w", newline="") as f:
+                out = csv.writer(f)
+                out.writerow(["from_wall_m"] + ["height_m %s" % r[0] for r in rows])
+                for c in range(longest):
+                    out.writerow(["%g" % ((c + 0.5) * rows[0][2])]
+                                 + ["%.4f" % r[3][c] if c < len(r[3]) else "" for r in rows])
+        except OSError as e:
+            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
     return 0
 
 
@@ -704,11 +707,14 @@ def command_collect(args):
             r["froude_se"], r["mu_eq_over_mu0"], r["mu_eq_over_mu0_se"], r["boulders_on_belt"],
             r["boulders_on_belt_se"], r["end_s"], r["status"][:7], r["max_density_deviation"]))
     if args.csv:
-        with open(args.csv, "w", newline="") as f:
-            w = csv.DictWriter(f, fieldnames=COLUMNS)
-            w.writeheader()
-            for r in table:
-                w.writerow(r)
+        try:
+            with open(args.csv, "w", newline="") as f:
+                w = csv.DictWriter(f, fieldnames=COLUMNS)
+                w.writeheader()
+                for r in table:
+                    w.writerow(r)
+        except OSError as e:
+            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
     if args.png:
         box_plots(table, args.png, "the members of %s" % args.runs_dir)
     return 0
@@ -927,7 +933,7 @@ def main():
     c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0],
                    metavar=("START_S", "END_S"),
                    help="the averaging window, s of flow (default the paper's 20 75)")
-    c.add_argument("--csv", help="write the table to this CSV file")
+    c.add_argument("--csv", type=cli_checks.csv_file, help="write the table to this CSV file")
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     d = sub.add_parser("plot", help="box plots from tables that collect wrote")
     d.add_argument("--csv", action="append", required=True, metavar="FILE",
@@ -957,13 +963,13 @@ def main():
     h.add_argument("--body", type=cli_checks.non_negative, nargs=2, default=None, metavar=("START_M", "END_M"),
                    help="where the body's mean height is taken, m downstream of the wall's face (default the 5 m "
                         "after output.flow_ignore_m)")
-    h.add_argument("--csv", help="write the mean profiles to this CSV file, one column per folder")
+    h.add_argument("--csv", type=cli_checks.csv_file, help="write the mean profiles to this CSV file, one column per folder")
     g = sub.add_parser("history", help="Fr and mu_eq/mu0 over consecutive blocks of time, run by run (flow.csv)")
     g.add_argument("folders", nargs="+", type=cli_checks.folder, metavar="RUN_DIR", help="run folders with flow.csv")
     g.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[0.0, 75.0],
                    metavar=("START_S", "END_S"), help="the blocks' span, s of flow (default 0 75)")
     g.add_argument("--block-s", type=cli_checks.positive, default=2.0, help="each block's length, s (default 2)")
-    g.add_argument("--csv", help="write the blocks' means to this CSV file, two columns per folder")
+    g.add_argument("--csv", type=cli_checks.csv_file, help="write the blocks' means to this CSV file, two columns per folder")
     g.add_argument("--png", type=cli_checks.png_file, help="draw them against time to this PNG file")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
