@@ -276,6 +276,11 @@ for command, run_args in (("history", [good_flow]), ("shape", [path("run")]), ("
            "is a folder")
 expect("ensemble history --csv that cannot be written", tool(ENSEMBLE, "history", good_flow, "--csv", "/dev/full"),
        "--csv /dev/full", "cannot write it")
+expect("ensemble shape --csv that cannot be written", tool(ENSEMBLE, "shape", path("run"), "--window", "0", "5",
+                                                           "--body", "0", "1", "--csv", "/dev/full"),
+       "--csv /dev/full", "cannot write it")
+expect("surge_drift --csv that cannot be written", tool("surge_drift.py", path("run"), "--ignore-m", "0", "--csv",
+                                                        "/dev/full"), "--csv /dev/full", "cannot write it")
 expect("surge_drift --csv in a missing folder", tool("surge_drift.py", path("run"), "--csv",
                                                      path("no_such_folder", "d.csv")), "--csv", "no_such_folder")
 expect("ensemble park --runs-dir a file", tool(ENSEMBLE, "park", "--runs-dir", path("run", "params.ini")),

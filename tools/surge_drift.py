@@ -100,7 +100,7 @@ def main():
     parser.add_argument("--body-m", type=cli_checks.positive, default=7.0,
                         help="length of the body zone for the kernel sum, from --ignore-m (default 7 m)")
     parser.add_argument("--column-m", type=cli_checks.positive, default=0.5, help="column width (default 0.5 m)")
-    parser.add_argument("--csv", type=cli_checks.csv_file, help="also write the rows to this CSV file")
+    parser.add_argument("--csv", type=cli_checks.output_file, help="also write the rows to this CSV file")
     args = parser.parse_args()
     try:
         scales = run_scales(args.run_dir)

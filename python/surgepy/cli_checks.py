@@ -82,26 +82,21 @@ def folder(text):
     return text
 
 
+def output_file(text):
+    """A file to write (a CSV table): its folder exists and it is not itself a folder."""
+    parent = os.path.dirname(text) or "."
+    if not os.path.isdir(parent):
+        raise argparse.ArgumentTypeError("'%s': no folder '%s' to write it in" % (text, parent))
+    if os.path.isdir(text):
+        raise argparse.ArgumentTypeError("'%s' is a folder" % text)
+    return text
+
+
 def png_file(text):
     """A PNG file to write: its name ends in .png and its folder exists."""
-    parent = os.path.dirname(text) or "."
     if not text.lower().endswith(".png"):
         raise argparse.ArgumentTypeError("'%s' does not end in .png" % text)
-    if not os.path.isdir(parent):
-        raise argparse.ArgumentTypeError("'%s': no folder '%s' to write it in" % (text, parent))
-    if os.path.isdir(text):
-        raise argparse.ArgumentTypeError("'%s' is a folder" % text)
-    return text
-
-
-def csv_file(text):
-    """A CSV file to write: its folder exists and it is not itself a folder."""
-    parent = os.path.dirname(text) or "."
-    if not os.path.isdir(parent):
-        raise argparse.ArgumentTypeError("'%s': no folder '%s' to write it in" % (text, parent))
-    if os.path.isdir(text):
-        raise argparse.ArgumentTypeError("'%s' is a folder" % text)
-    return text
+    return output_file(text)
 
 
 def endpoint(text):

@@ -145,6 +145,15 @@ def fail(message):
     study.fail(TOOL, message)
 
 
+def write_csv(path, rows, lineterminator="\r\n"):
+    """Writes rows, the header first, to the CSV file path (--csv); a write the system refuses ends the tool, named."""
+    try:
+        with open(path, "w", newline="") as f:
+            csv.writer(f, lineterminator=lineterminator).writerows(rows)
+    except OSError as e:
+        fail("--csv %s: cannot write it (%s)" % (path, e.strerror or e))
+
+
 def counts_list(text):
     try:
         values = [int(v) for v in text.split(",") if v.strip()]
@@ -528,15 +537,9 @@ def command_shape(args):
         if len(widths) > 1:
             fail("--csv: the folders' columns differ in width (output.flow_column_m %s)" % sorted(widths))
         longest = max(len(r[3]) for r in rows)
-        try:
-            with open(args.csv, "w", newline="") as f:
-                out = csv.writer(f)
-                out.writerow(["from_wall_m"] + ["height_m %s" % r[0] for r in rows])
-                for c in range(longest):
-                    out.writerow(["%g" % ((c + 0.5) * rows[0][2])]
-                                 + ["%.4f" % r[3][c] if c < len(r[3]) else "" for r in rows])
-        except OSError as e:
-            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
+        write_csv(args.csv, [["from_wall_m"] + ["height_m %s" % r[0] for r in rows]]
+                  + [["%g" % ((c + 0.5) * rows[0][2])] + ["%.4f" % r[3][c] if c < len(r[3]) else "" for r in rows]
+                     for c in range(longest)])
     return 0
 
 
@@ -584,16 +587,11 @@ def command_history(args):
         print("%7.2f-%-7.2f " % (s, high) + "  ".join("%6.3f %6.3f (%d)" % (c[3], c[4], c[2]) if c else "%17s" % "-"
                                                       for c in cells))
     if args.csv:
-        try:
-            with open(args.csv, "w", newline="") as f:
-                out = csv.writer(f, lineterminator="\n")
-                out.writerow(["block_start_s", "block_end_s"]
-                             + [h for n in names for h in ("froude %s" % n, "mu_eq_over_mu0 %s" % n)])
-                for s, high, cells in table:
-                    out.writerow(["%g" % s, "%g" % high]
-                                 + [v for c in cells for v in (("%.4f" % c[3], "%.4f" % c[4]) if c else ("", ""))])
-        except OSError as e:
-            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
+        write_csv(args.csv, [["block_start_s", "block_end_s"]
+                             + [h for n in names for h in ("froude %s" % n, "mu_eq_over_mu0 %s" % n)]]
+                  + [["%g" % s, "%g" % high]
+                     + [v for c in cells for v in (("%.4f" % c[3], "%.4f" % c[4]) if c else ("", ""))]
+                     for s, high, cells in table], lineterminator="\n")
     if args.png:
         import matplotlib
         matplotlib.use("Agg")
@@ -707,14 +705,7 @@ def command_collect(args):
             r["froude_se"], r["mu_eq_over_mu0"], r["mu_eq_over_mu0_se"], r["boulders_on_belt"],
             r["boulders_on_belt_se"], r["end_s"], r["status"][:7], r["max_density_deviation"]))
     if args.csv:
-        try:
-            with open(args.csv, "w", newline="") as f:
-                w = csv.DictWriter(f, fieldnames=COLUMNS)
-                w.writeheader()
-                for r in table:
-                    w.writerow(r)
-        except OSError as e:
-            fail("--csv %s: cannot write it (%s)" % (args.csv, e.strerror or e))
+        write_csv(args.csv, [COLUMNS] + [[r.get(c, "") for c in COLUMNS] for r in table])
     if args.png:
         box_plots(table, args.png, "the members of %s" % args.runs_dir)
     return 0
@@ -933,7 +924,7 @@ def main():
     c.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[20.0, 75.0],
                    metavar=("START_S", "END_S"),
                    help="the averaging window, s of flow (default the paper's 20 75)")
-    c.add_argument("--csv", type=cli_checks.csv_file, help="write the table to this CSV file")
+    c.add_argument("--csv", type=cli_checks.output_file, help="write the table to this CSV file")
     c.add_argument("--png", type=cli_checks.png_file, help="draw the box plots to this PNG file")
     d = sub.add_parser("plot", help="box plots from tables that collect wrote")
     d.add_argument("--csv", action="append", required=True, metavar="FILE",
@@ -963,13 +954,13 @@ def main():
     h.add_argument("--body", type=cli_checks.non_negative, nargs=2, default=None, metavar=("START_M", "END_M"),
                    help="where the body's mean height is taken, m downstream of the wall's face (default the 5 m "
                         "after output.flow_ignore_m)")
-    h.add_argument("--csv", type=cli_checks.csv_file, help="write the mean profiles to this CSV file, one column per folder")
+    h.add_argument("--csv", type=cli_checks.output_file, help="write the mean profiles to this CSV file, one column per folder")
     g = sub.add_parser("history", help="Fr and mu_eq/mu0 over consecutive blocks of time, run by run (flow.csv)")
     g.add_argument("folders", nargs="+", type=cli_checks.folder, metavar="RUN_DIR", help="run folders with flow.csv")
     g.add_argument("--window", type=cli_checks.non_negative, nargs=2, default=[0.0, 75.0],
                    metavar=("START_S", "END_S"), help="the blocks' span, s of flow (default 0 75)")
     g.add_argument("--block-s", type=cli_checks.positive, default=2.0, help="each block's length, s (default 2)")
-    g.add_argument("--csv", type=cli_checks.csv_file, help="write the blocks' means to this CSV file, two columns per folder")
+    g.add_argument("--csv", type=cli_checks.output_file, help="write the blocks' means to this CSV file, two columns per folder")
     g.add_argument("--png", type=cli_checks.png_file, help="draw them against time to this PNG file")
     args = parser.parse_args()
     if args.command in ("run", "list") and args.counts is None:
