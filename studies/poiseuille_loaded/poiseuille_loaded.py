@@ -92,6 +92,7 @@ LAYER_BAND_M = 0.01
 DILUTE_PHI = 0.1  # Einstein-Brady holds up to about here
 RADIUS_M = 0.02  # the case's disc radius (boulders.radius_m): r/dp names a resolution
 REFERENCE_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded_reference.csv")
+RUNS_CSV = os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv")
 
 
 def fail(message):
@@ -788,6 +789,22 @@ def command_layers(args):
     return 0
 
 
+def add_run_selection(parser, default_scheme):
+    """The options of `report` and `seeds` that pick the CSV's runs by scheme, films, placement, c0 and delta."""
+    parser.add_argument("--scheme", choices=("explicit", "implicit"), default=default_scheme,
+                        help="the runs of this scheme (default %s)" % default_scheme)
+    parser.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
+    parser.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
+                        help="with --lubrication: the runs with this cut-off (default 1 dp)")
+    parser.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
+                        help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
+    parser.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
+                        help="with --lubrication: the runs with this contacts.lubrication_tangential (default sliding)")
+    parser.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
+    parser.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
+    parser.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -814,14 +831,14 @@ def main():
     run.add_argument("--pack-fluid", action="store_true", help="boulders.pack_fluid = true")
     run.add_argument("--budget-s", type=cli_checks.non_negative, default=0.0)
     run.add_argument("--runs-dir", type=cli_checks.folder, default=os.path.join(ROOT, "runs", "poiseuille_loaded"))
-    run.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    run.add_argument("--csv", default=RUNS_CSV)
     run.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     add = sub.add_parser("add")
     add.add_argument("run_dir", type=cli_checks.folder)
     add.add_argument("--wall-s", type=cli_checks.non_negative, default=float("nan"),
                      help="the run's wall time in seconds, where known (default nan)")
     add.add_argument("--threads", type=cli_checks.positive_int, default=1, help="the threads it ran on (default 1)")
-    add.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    add.add_argument("--csv", default=RUNS_CSV)
     meas = sub.add_parser("measure")
     meas.add_argument("run_dir")
     sub.add_parser("discs").add_argument("run_dir")
@@ -837,25 +854,15 @@ def main():
     ref.add_argument("--csv", default=REFERENCE_CSV)
     ref.add_argument("--surge", type=cli_checks.executable, default=os.path.join(ROOT, "build", "surge"))
     rep = sub.add_parser("report")
-    rep.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    rep.add_argument("--csv", default=RUNS_CSV)
     rep.add_argument("--png", type=cli_checks.png_file, default=None)
     rep.add_argument("--dp", type=cli_checks.positive, default=None, help="fit only the runs at this dp")
-    rep.add_argument("--scheme", choices=("explicit", "implicit"), default="explicit", help="the runs of this scheme")
-    rep.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
-    rep.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
-                     help="with --lubrication: the runs with this cut-off (default 1 dp)")
-    rep.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
-                     help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
-    rep.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
-                     help="with --lubrication: the runs with this contacts.lubrication_tangential (default sliding)")
-    rep.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
-    rep.add_argument("--c0", type=cli_checks.positive, default=None, help="fit only the runs with this c0")
-    rep.add_argument("--diffusion", type=cli_checks.number, default=None, help="fit only the runs with this delta")
+    add_run_selection(rep, default_scheme="explicit")
     rep.add_argument("--reference", default=REFERENCE_CSV)
     rep.add_argument("--seed", type=int, default=1,
                      help="the placement (boulders.seed) of the runs fitted; the reference is seed 1's")
     conv = sub.add_parser("convergence")
-    conv.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
+    conv.add_argument("--csv", default=RUNS_CSV)
     conv.add_argument("--png", type=cli_checks.png_file, default=None)
     conv.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
     conv.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
@@ -869,18 +876,8 @@ def main():
     conv.add_argument("--placement", choices=("both", "packed", "default"), default="both",
                       help="the runs with the fluid packed around the discs, at the default placement, or both")
     seeds = sub.add_parser("seeds")
-    seeds.add_argument("--csv", default=os.path.join(ROOT, "studies", "poiseuille_loaded", "data", "poiseuille_loaded.csv"))
-    seeds.add_argument("--scheme", choices=("explicit", "implicit"), default="implicit", help="the runs of this scheme")
-    seeds.add_argument("--lubrication", action="store_true", help="the runs with the lubrication model")
-    seeds.add_argument("--cutoff-dp", type=cli_checks.positive, default=1.0,
-                       help="with --lubrication: the runs with this cut-off (default 1 dp)")
-    seeds.add_argument("--resolved", choices=("cutoff", "measured"), default="cutoff",
-                       help="with --lubrication: the runs with this contacts.lubrication_resolved (default cutoff)")
-    seeds.add_argument("--tangential", choices=("sliding", "reynolds"), default="sliding",
-                       help="with --lubrication: the runs with this contacts.lubrication_tangential (default sliding)")
-    seeds.add_argument("--pack-fluid", action="store_true", help="the runs with the fluid packed around the discs")
-    seeds.add_argument("--c0", type=cli_checks.positive, default=None, help="only the runs with this c0")
-    seeds.add_argument("--diffusion", type=cli_checks.number, default=None, help="only the runs with this delta")
+    seeds.add_argument("--csv", default=RUNS_CSV)
+    add_run_selection(seeds, default_scheme="implicit")
     args = parser.parse_args()
     if args.command == "convergence":
         return command_convergence(args)
