@@ -44,6 +44,11 @@ Usage: test_boulders.py SURGE_BINARY SOURCE_DIR WORK_DIR GROUP
                   snapshots' per-disc forces (NaN at the start) sum to the disc's weight within 0.1 %, with both
                   schemes; the bed's is flow.csv's within 1 %, the fluid's the buoyancy within 5 % (+1.7 % measured;
                   the implicit scheme's film pressure carries 0.98 of the weight there, not tested).
+  GROUP implicit_halvings  a step taken again at half its length: a disc thrown at the bed of the settling tank
+                  (a/dp 5 and 10) and two discs thrown at each other squeeze the film past the density bound within
+                  one step; with no halvings the run stops on the kernel sum where that step ends and continues from
+                  its last good state at a quarter of the step; with the default every run goes through, every sample
+                  within the bound, the disc at rest over the bed.
   GROUP implicit_passes  the implicit scheme's passes with discs in a 0.3 m cut of the loaded channel at phi 0.5:
                   six passes combined by Anderson's acceleration (the default) bring the fluid's speed after five
                   steps within 4 % of 24 converged passes (+2.8 % measured; six plain passes +6.1 %).
@@ -790,6 +795,58 @@ def group_implicit_films_tangential():
           and "lubrication_tangential = sliding" in p.stderr, p.stderr[-500:])
 
 
+def thrown_in_tank(name, discs, extra=()):
+    """The settling tank (closed by its lid, density bound 0.1) with the implicit scheme and the discs of a list
+    ('x y r vx vy omega', comma-separated): (folder, process, command, largest density deviation of diagnostics.csv,
+    the times a step was halved)."""
+    out, p, cmd = surge(name, ["run", "boulder_settling.ini", "-s", "numerics.scheme=implicit", "-s",
+                               "boulders.list_m=" + discs, "-s", "output.snapshot_interval_s=0.01"] + list(extra))
+    rows = list(csv.DictReader(open(os.path.join(out, "diagnostics.csv")))) if os.path.exists(
+        os.path.join(out, "diagnostics.csv")) else []
+    largest = max((float(r["max_density_deviation"]) for r in rows), default=float("nan"))
+    halved = re.search(r"(\d+) times a step was taken again", p.stderr)
+    return out, p, cmd, largest, int(halved.group(1)) if halved else 0
+
+
+def group_implicit_halvings():
+    """A step taken again at half its length (implicit.step_halvings, docs/method.md, "Health monitor"): a disc
+    (a/dp 5) thrown at 2 m/s at the bed of the settling tank from 4 dp above it, a disc at a/dp 10 thrown the same
+    way, and two discs thrown at each other at 1 m/s each. At the scheme's own step each squeezes the film's
+    particles past the density bound (0.1) within one step: with no halvings the run stops there, on the kernel sum
+    at the positions that step ends at, and its last good state is that step's start, from which a quarter of the
+    step goes through (before, the check read the step's start and stopped a step late, from a state that already
+    held the compression). With the default halvings every run goes through, some steps halved, and no sample of
+    diagnostics.csv leaves the bound; the disc comes to rest over the bed."""
+    scenes = (("bed", "0.05 0.0225 0.0125 0 -2 0", ["-s", "time.end_s=0.2"]),
+              ("bed a/dp 10", "0.05 0.0225 0.0125 0 -2 0", ["-s", "numerics.dp_m=0.00125", "-s", "time.end_s=0.03"]),
+              ("pair", "0.03 0.12 0.0125 1 0 0, 0.07 0.12 0.0125 -1 0 0", ["-s", "time.end_s=0.05"]))
+    for label, discs, extra in scenes:
+        tag = label.replace(" ", "_").replace("/", "")
+        out, p, cmd, _, _ = thrown_in_tank("halvings_none_" + tag, discs, extra + ["-s", "implicit.step_halvings=0"])
+        check("halvings, %s: with none the run stops on the density where a step ends" % label,
+              p.returncode == 1 and "density far from rho0" in p.stderr and "where the step ends" in p.stderr,
+              cmd + "\n" + p.stderr[-1500:])
+        if label == "bed" and p.returncode == 1:
+            stop = float(re.search(r"step \d+, t = ([0-9.e+-]+) s", p.stderr).group(1))
+            again = subprocess.run([SURGE, "run", "--restart", os.path.join(out, "last_good.bin"), "-o",
+                                    os.path.join(WORK, "halvings_last_good"), "--overwrite", "--threads", "1", "-s",
+                                    "implicit.cfl=0.0625", "-s", "implicit.step_halvings=0", "-s",
+                                    "time.end_s=%r" % (4 * stop)], capture_output=True, text=True, timeout=300, env=ENV)
+            check("halvings, bed: from its last good state at a quarter of the step the run passes the stop (t = %g s)"
+                  % stop, again.returncode == 0, again.stderr[-1500:])
+        out, p, cmd, largest, halved = thrown_in_tank("halvings_" + tag, discs, extra)
+        print("halvings, %s: %d steps halved, largest density deviation %.4f" % (label, halved, largest))
+        check("halvings, %s: with the default the run goes through, some steps halved (%d), every sample within the "
+              "bound 0.1 (largest %.4f)" % (label, halved, largest),
+              p.returncode == 0 and halved > 0 and largest <= 0.1, cmd + "\n" + p.stderr[-1500:])
+        if label == "bed" and p.returncode == 0:
+            disc = boulder_series(out)[-1][1]
+            gap = disc["points"][0][1] - 0.0125
+            speed = float(np.hypot(*disc["velocity_mps"][0][:2]))
+            check("halvings, bed: the disc at rest over the bed at 0.2 s (gap %.4f m, 0 to 2 dp; speed %.2g m/s, "
+                  "below 0.01)" % (gap, speed), 0 < gap < 0.005 and speed < 0.01)
+
+
 def group_implicit_passes():
     """The implicit scheme's passes with discs (docs/method.md, "Boulders in the implicit scheme"): a 0.3 m cut of the
     loaded channel at phi 0.5, dp = r/3, five steps from rest at the scheme's own step. The fluid's mean speed after
@@ -853,5 +910,5 @@ def approach_over_film(out, p, target):
 
 {"gap_pressure": group_gap_pressure, "resting": group_resting, "implicit_films": group_implicit_films,
  "implicit_films_tangential": group_implicit_films_tangential,
- "implicit_films_measured": group_implicit_films_measured, "implicit_passes": group_implicit_passes, "implicit": group_implicit, "implicit_steps": group_implicit_steps, "scene": group_scene, "settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
+ "implicit_films_measured": group_implicit_films_measured, "implicit_passes": group_implicit_passes, "implicit_halvings": group_implicit_halvings, "implicit": group_implicit, "implicit_steps": group_implicit_steps, "scene": group_scene, "settling": group_settling, "couette": group_couette, "momentum": group_momentum, "stream": group_stream, "restart": group_restart, "inputs": group_inputs}[GROUP]()
 sys.exit(finish())

@@ -226,6 +226,10 @@ static int run_with_live_links(const cli *c, surge_sim *sim, const char *outdir,
     surge_run_result r = surge_run(sim, &opt, err, sizeof err);
     const int render_failed = close_live_links(&links, sim) != 0;
     const uint64_t hash = surge_sim_state_hash(sim);
+    const int64_t halvings = surge_sim_diagnostics(sim).step_halvings;
+    if (halvings > 0)
+        fprintf(stderr, "surge: %lld times a step was taken again at half its length (implicit.step_halvings; "
+                        "docs/method.md, \"Health monitor\")\n", (long long)halvings);
     surge_sim_destroy(sim);
     if (links.replay_error[0]) {
         fprintf(stderr, "surge: %s\nsurge: the run stopped there; its outputs are in %s\n", links.replay_error, outdir);

@@ -273,6 +273,13 @@ static const surge_param_info registry[] = {
      "smallest in the least-squares sense (0: each pass takes its own update; docs/method.md, \"Boulders in the "
      "implicit scheme\").",
      OFF(implicit.disc_pressure_history)},
+    {"implicit", "step_halvings", SURGE_PARAM_INT, "-", 4, 0, 20, true, NULL,
+     "Implicit scheme: a step that ends with a fluid particle compressed past the density bound "
+     "(health.max_density_deviation, read from the kernel sum at the positions the step ends at) or whose linear solve "
+     "does not converge is rolled back and taken again at half its length, at most this many times (down to 1/16 of the "
+     "step at 4); the next step starts from the full length again. 0: such a step stops the run. A run that never "
+     "meets either takes the same steps whatever this is (docs/method.md, \"Health monitor\").",
+     OFF(implicit.step_halvings)},
 
     {"boulders", "placement", SURGE_PARAM_ENUM, "-", SURGE_BOULDERS_NONE, 0, 4, false, "none|list|random|graded|file",
      "Rigid discs (boulders): none, the list in list_m, random non-overlapping discs up to solid_fraction, graded "

@@ -169,6 +169,8 @@ typedef struct surge_params {
         double pressure_relaxation; /* beta: p_n relaxed by p - beta (L p)/L_aa at each step under a free surface */
         int disc_pressure_passes;  /* with discs: passes of the viscous and pressure solves a step (Uzawa) */
         int disc_pressure_history; /* and the earlier passes each pass's pressure is combined from (Anderson; 0: none) */
+        int step_halvings;         /* a step that compresses past the density bound or whose solve fails is taken
+                                    * again at half its length, at most this many times (0: the run stops) */
     } implicit;
     struct {
         int placement;           /* surge_boulder_placement */

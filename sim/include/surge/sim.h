@@ -86,6 +86,8 @@ typedef struct surge_diagnostics {
     int32_t viscous_iterations;    /* and of the viscous solve */
     double pressure_residual;      /* relative residuals the solves reached */
     double viscous_residual;
+    int64_t step_halvings;         /* a scheme that retries steps: the times it took a step again at half the length
+                                    * since the simulation was created or read from a checkpoint (else 0) */
 } surge_diagnostics;
 
 surge_diagnostics surge_sim_diagnostics(const surge_sim *sim);

@@ -255,9 +255,14 @@ static void print_progress(const surge_sim *sim, double start_wall, double held_
     const double rate = elapsed > 0 ? steps / elapsed : 0;
     /* the last step may end past end_s (a step is not cut to land on it): then nothing is left */
     const double eta = t > start_time ? elapsed * fmax(0.0, end - t) / (t - start_time) : 0;
-    fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.4g steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d\n",
+    const int64_t halvings = surge_sim_diagnostics(sim).step_halvings;
+    char halved[48] = "";
+    if (halvings > 0)
+        snprintf(halved, sizeof halved, "  steps halved %lld times", (long long)halvings);
+    fprintf(stderr, "t = %.4f / %.4g s  step %lld  dt %.3g s  %.4g steps/s  %.3g particle-steps/s  ETA %02d:%02d:%02d%s\n",
             t, end, (long long)surge_sim_step_count(sim), surge_sim_last_dt(sim), rate,
-            rate * surge_sim_derived(sim)->fluid_count, (int)(eta / 3600), (int)fmod(eta / 60, 60), (int)fmod(eta, 60));
+            rate * surge_sim_derived(sim)->fluid_count, (int)(eta / 3600), (int)fmod(eta / 60, 60), (int)fmod(eta, 60),
+            halved);
 }
 
 /* The step-boundary callback; time spent in calls that hold the run (paused) is added to held_s. */

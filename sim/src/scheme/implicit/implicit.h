@@ -127,6 +127,13 @@ typedef struct implicit_work {
     double *pair_dvx, *pair_dvy, *pair_dx, *pair_dy; /* per fluid particle: what close pairs change (implicit_part_close_pairs) */
     double *r, *rhat, *p, *v, *s, *t, *y, *z, *partial; /* partial: two sums' blocks (krylov.c) */
     double *pressure_by_id;              /* per particle id: the fluid's pressure, the next step's p_n (checkpointed) */
+    /* a step taken again at half its length (step_retry.c) */
+    double *saved_by_id;                 /* the step's start: pressure_by_id, phi, psi, dvx and dvy by id, one after another */
+    size_t saved_capacity;               /* particles each of them holds */
+    int64_t *saved_contact_keys;         /* and the contact solver's warm start: keys, then lambda_n and lambda_t */
+    double *saved_lambdas;
+    int saved_contacts, saved_contact_capacity;
+    int64_t step_halvings;               /* the times a step was taken again at half its length (diagnostics) */
     /* the free surface's mirror images (surface_images.c) */
     uint8_t *imaged;                     /* per fluid particle: its kernel reaches the surface and sees images */
     int any_imaged;
@@ -305,5 +312,11 @@ int implicit_mixing_reserve(implicit_work *w, int depth, int nf);
 void implicit_mix_pressure(surge_sim *sim, int pass);
 /* coupling.c */
 void implicit_part_close_pairs(surge_sim *sim);
+/* step_retry.c: the solver's state at a step's start, kept (-1 when out of memory) and restored for a step taken
+ * again (-1 when out of memory); and, once the step has moved the particles, -1 with sim->health where a fluid
+ * particle's kernel sum there is compressed past the density bound (the step at `share` of its length) */
+int implicit_retry_save(surge_sim *sim);
+int implicit_retry_restore(surge_sim *sim);
+int implicit_end_compression(surge_sim *sim, double share);
 
 #endif

@@ -97,15 +97,15 @@ static inline __attribute__((always_inline)) void gradient_pairs(const surge_sim
         }
 }
 
-/* The step's start: its dt, the walls' velocities at its end (backward Euler; the discs' are unknowns of the solves),
+/* The step's start: its dt (`share` of the limits' when the step is taken again), the walls' velocities at its end (backward Euler; the discs' are unknowns of the solves),
  * the walls' normals and depths (the contact rule), the step's geometry, and the fluid's state saved for the
  * roll-back. The displacements since the list build (interaction_prepare) are the geometry's phase, up to the barrier
  * that ends their loop */
-static double begin_step(surge_sim *sim)
+static double begin_step(surge_sim *sim, double share)
 {
     surge_phase_times *t = &sim->phase_times;
     phase_begin(sim);
-    const double dt = implicit_dt(sim);
+    const double dt = share * implicit_dt(sim);
     sim->dt_s = dt;
     if (sim->step == 0 && sim->first_dt_s == 0)
         sim->first_dt_s = dt;
@@ -707,7 +707,9 @@ static void roll_back(surge_sim *sim, double t_n, int64_t step_n, int discs_move
     boundary_wall_speeds(sim, t_n);
 }
 
-static int implicit_step(surge_sim *sim)
+/* The step at `share` of its length: 0, or 1 where it ends compressed past the density bound or a solve failed (a
+ * step to take again shorter), or -1 (the run stops); rolled back to its start unless 0 */
+static int implicit_attempt(surge_sim *sim, double share)
 {
     implicit_work *w = implicit_of(sim);
     surge_phase_times *t = &sim->phase_times;
@@ -718,13 +720,14 @@ static int implicit_step(surge_sim *sim)
     if (lists != 0 || implicit_reserve_work(sim) != 0 ||
         implicit_mixing_reserve(w, sim->boulders.count > 0 ? sim->params.implicit.disc_pressure_history : 0,
                                 sim->count - sim->wall_count) != 0 ||
-        implicit_discs_films(sim) != 0) {
+        implicit_discs_films(sim) != 0 ||
+        (share == 1.0 && sim->params.implicit.step_halvings > 0 && implicit_retry_save(sim) != 0)) {
         sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = step_n + 1,
                                      .time_s = t_n};
         snprintf(sim->health.message, sizeof sim->health.message, "out of memory for the implicit scheme's arrays");
         return -1;
     }
-    const double dt = begin_step(sim);
+    const double dt = begin_step(sim, share);
     int discs_moved = 0, rc = 0;
     /* with discs, several passes of the viscous and pressure solves (disc_pressure_update), each pass's pressure
      * combined from the last passes' (pass_mixing.c) */
@@ -775,16 +778,42 @@ static int implicit_step(surge_sim *sim)
             }
         }
     }
+    int too_long = rc != 0 && sim->health.check == SURGE_CHECK_SOLVER;
     if (rc == 0) {
         sim->time_s = t_n + dt;
         sim->step = step_n + 1;
         phase_begin(sim);
-        rc = health_check(sim);
+        rc = implicit_end_compression(sim, share);
+        too_long = rc != 0;
+        if (rc == 0)
+            rc = health_check(sim);
         phase_end(sim, &t->update_s);
     }
     if (rc != 0)
         roll_back(sim, t_n, step_n, discs_moved);
-    return rc == 0 ? 0 : -1;
+    return rc == 0 ? 0 : too_long ? 1 : -1;
+}
+
+/* A step, taken again at half the length while it is too long (step_retry.c), at most implicit.step_halvings times */
+static int implicit_step(surge_sim *sim)
+{
+    implicit_work *w = implicit_of(sim);
+    double share = 1.0;
+    for (int halvings = 0;; halvings++, share *= 0.5) {
+        const int rc = implicit_attempt(sim, share);
+        if (rc <= 0)
+            return rc;
+        if (halvings == sim->params.implicit.step_halvings)
+            return -1;
+        if (implicit_retry_restore(sim) != 0) {
+            sim->health = (surge_health){.check = SURGE_CHECK_OUT_OF_MEMORY, .particle_id = -1, .step = sim->step + 1,
+                                         .time_s = sim->time_s};
+            snprintf(sim->health.message, sizeof sim->health.message, "out of memory restoring the contact solver's "
+                     "warm start for a step taken again");
+            return -1;
+        }
+        w->step_halvings++;
+    }
 }
 
 static double implicit_contact_reach_dp(const surge_params *p) { return p->implicit.contact_reach_dp; }
@@ -820,6 +849,7 @@ static void implicit_diagnostics(const surge_sim *sim, surge_diagnostics *d)
     const implicit_work *w = implicit_of(sim);
     d->pressure_iterations = w->pressure_iterations, d->viscous_iterations = w->viscous_iterations;
     d->pressure_residual = w->pressure_residual, d->viscous_residual = w->viscous_residual;
+    d->step_halvings = w->step_halvings;
 }
 
 /* A disc settling onto the bed with the films off, C_h 1.8: a/dp 4 below 1 h, a/dp 8 above, where the box's walls

@@ -117,7 +117,7 @@ void implicit_destroy(surge_sim *sim)
                       w->neumann_pa, w->density_rhs, w->phi_saved, w->divergence, w->density_dx, w->density_dy, w->pair_dvx, w->pair_dvy, w->pair_dx, w->pair_dy, w->phi_by_id, w->psi_by_id, w->dvx_by_id, w->dvy_by_id, w->pressure_by_id, w->rhs, w->x, w->offset, w->diag, w->r, w->rhat, w->p, w->v, w->s, w->t, w->y,
                       w->z, w->partial, w->imaged, w->fluid_iw, w->fluid_igx, w->fluid_igy, w->wall_iw, w->wall_igx,
                       w->wall_igy, w->wall_side, w->own_iw, w->own_igx, w->own_igy, w->wet_grad_x, w->wet_grad_y, w->mixing_x, w->mixing_g, w->mixing_f,
-                      w->mixing_dg, w->mixing_df};
+                      w->mixing_dg, w->mixing_df, w->saved_by_id, w->saved_contact_keys, w->saved_lambdas};
     for (size_t i = 0; i < sizeof arrays / sizeof arrays[0]; i++)
         free(arrays[i]);
     implicit_films_free(&w->film_blocks);
