@@ -15,11 +15,11 @@
 
 enum { SAVED_PRESSURE, SAVED_PHI, SAVED_PSI, SAVED_DVX, SAVED_DVY, SAVED_ARRAYS };
 
-static double **guess_arrays(implicit_work *w, double **arrays)
+/* The by-id arrays a step changes and the next one starts from */
+static void guess_arrays(implicit_work *w, double *arrays[SAVED_ARRAYS])
 {
     arrays[SAVED_PRESSURE] = w->pressure_by_id, arrays[SAVED_PHI] = w->phi_by_id, arrays[SAVED_PSI] = w->psi_by_id;
     arrays[SAVED_DVX] = w->dvx_by_id, arrays[SAVED_DVY] = w->dvy_by_id;
-    return arrays;
 }
 
 int implicit_retry_save(surge_sim *sim)
